@@ -1,0 +1,162 @@
+//! Writing images: 8-bit sRGB PNG (clamped) or 32-bit float linear OpenEXR, chosen by extension.
+//!
+//! Files are written to a temporary name in the destination folder and renamed over the target,
+//! so a crash or error never leaves a truncated image (and never destroys a previous one).
+
+use super::Image;
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("output `{0}`: unsupported extension (use .png or .exr)")]
+    Extension(String),
+    #[error("cannot write `{path}`: {message}")]
+    Write { path: String, message: String },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Exr,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => Err(OutputError::Extension(path.display().to_string())),
+        }
+    }
+}
+
+/// The sRGB transfer function applied to a linear value, clamped to [0, 1].
+#[inline]
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id()))
+}
+
+fn write_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError::Write { path: path.display().to_string(), message: e.to_string() }
+}
+
+/// Checks, before rendering, that `path` has a known extension and that its folder accepts a new
+/// file, by creating and removing the temporary file the final write will use.
+pub fn check_writable(path: &Path) -> Result<Format, OutputError> {
+    let format = Format::from_path(path)?;
+    if path.is_dir() {
+        return Err(write_err(path, "it is a directory"));
+    }
+    let tmp = temp_path(path);
+    fs::File::create(&tmp).map_err(|e| write_err(path, e))?;
+    let _ = fs::remove_file(&tmp);
+    Ok(format)
+}
+
+/// Writes `img` to `path` atomically (temporary file, then rename).
+pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
+    let format = Format::from_path(path)?;
+    let tmp = temp_path(path);
+    let result = match format {
+        Format::Png => write_png(img, &tmp),
+        Format::Exr => write_exr(img, &tmp),
+    }
+    .and_then(|_| fs::rename(&tmp, path).map_err(|e| write_err(path, e)));
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// 8-bit sRGB bytes of an image, row by row.
+pub fn srgb8(img: &Image) -> Vec<u8> {
+    img.pixels
+        .iter()
+        .flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8))
+        .collect()
+}
+
+fn write_png(img: &Image, path: &Path) -> Result<(), OutputError> {
+    let file = fs::File::create(path).map_err(|e| write_err(path, e))?;
+    let mut w = BufWriter::new(file);
+    let mut enc = png::Encoder::new(&mut w, img.width, img.height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let mut writer = enc.write_header().map_err(|e| write_err(path, e))?;
+    writer.write_image_data(&srgb8(img)).map_err(|e| write_err(path, e))?;
+    writer.finish().map_err(|e| write_err(path, e))?;
+    w.flush().map_err(|e| write_err(path, e))?;
+    w.get_ref().sync_all().map_err(|e| write_err(path, e))
+}
+
+fn write_exr(img: &Image, path: &Path) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    let w = img.width as usize;
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let c = img.pixels[pos.y() * w + pos.x()];
+        (c.x, c.y, c.z)
+    });
+    let image = exr::image::Image::from_channels((img.width as usize, img.height as usize), channels);
+    image.write().to_file(path).map_err(|e| write_err(path, e))
+}
+
+/// Reads an RGB(A) float EXR back (used by tests and reference comparisons).
+pub fn read_exr(path: &Path) -> Result<Image, OutputError> {
+    use exr::prelude::read_first_rgba_layer_from_file;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| {
+            let (w, h) = (res.width(), res.height());
+            super::Image::new(w as u32, h as u32)
+        },
+        |img: &mut super::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            img.set(pos.x() as u32, pos.y() as u32, glam::Vec3::new(r, g, b));
+        },
+    )
+    .map_err(|e| write_err(path, e))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_curve_endpoints_and_midpoint() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        assert!((linear_to_srgb(0.5) - 0.7354).abs() < 1e-3);
+        assert_eq!(linear_to_srgb(7.0), linear_to_srgb(1.0));
+        assert_eq!(linear_to_srgb(-1.0), 0.0);
+    }
+
+    #[test]
+    fn exr_round_trips_and_png_writes() {
+        let dir = std::env::temp_dir().join(format!("caustic-out-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let mut img = Image::new(5, 3);
+        img.set(4, 2, glam::Vec3::new(2.5, 0.25, 1e-3));
+        let exr = dir.join("a.exr");
+        write_image(&img, &exr).unwrap();
+        assert_eq!(read_exr(&exr).unwrap(), img);
+        let png = dir.join("a.png");
+        write_image(&img, &png).unwrap();
+        assert!(fs::metadata(&png).unwrap().len() > 0);
+        assert!(matches!(check_writable(&dir.join("x.jpg")), Err(OutputError::Extension(_))));
+        assert!(check_writable(&dir.join("missing-dir/x.png")).is_err());
+        // No temporary files left behind.
+        let leftovers = fs::read_dir(&dir).unwrap().filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp.")).count();
+        assert_eq!(leftovers, 0);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+}

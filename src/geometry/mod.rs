@@ -1,0 +1,11 @@
+//! Rays, bounding boxes, affine transforms and the surface hit record.
+
+mod aabb;
+mod hit;
+mod ray;
+mod transform;
+
+pub use aabb::Aabb;
+pub use hit::Hit;
+pub use ray::Ray;
+pub use transform::Transform;

@@ -1,0 +1,31 @@
+//! A ray `o + t d`. Directions are unit length wherever the renderer creates them.
+
+use crate::math::Vec3;
+use crate::math::float::offset_ray_origin;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub o: Vec3,
+    pub d: Vec3,
+}
+
+impl Ray {
+    #[inline]
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        Ray { o, d }
+    }
+
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.o + self.d * t
+    }
+
+    /// A ray leaving a surface point: the origin is pushed outside the point's error bound on the
+    /// side `d` leaves towards (`ng` is the geometric normal), then `bias` further along `d`
+    /// (the seed report's ray bias; the scene may set it, 0 disables it).
+    #[inline]
+    pub fn spawn(p: Vec3, p_error: Vec3, ng: Vec3, d: Vec3, bias: f32) -> Self {
+        let o = offset_ray_origin(p, p_error, ng, d) + d * bias;
+        Ray { o, d }
+    }
+}

@@ -1,0 +1,55 @@
+//! Integrators: turn a camera ray into radiance. The render loop is generic over `Integrator`,
+//! so each integrator's inner calls are monomorphised and inlined.
+
+pub mod whitted;
+
+pub use whitted::Whitted;
+
+use crate::geometry::Ray;
+use crate::math::Color;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// Rays traced, counted per tile and summed, so counting costs no atomics per ray.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayStats {
+    /// Camera and secondary rays.
+    pub rays: u64,
+    /// Shadow rays (each transparent surface crossed counts as one more).
+    pub shadow_rays: u64,
+}
+
+impl RayStats {
+    pub fn add(&mut self, o: &RayStats) {
+        self.rays += o.rays;
+        self.shadow_rays += o.shadow_rays;
+    }
+
+    pub fn total(&self) -> u64 {
+        self.rays + self.shadow_rays
+    }
+}
+
+pub trait Integrator: Sync {
+    /// Radiance arriving along `ray` (towards its origin). Must not allocate or lock.
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color;
+}
+
+/// Which integrator renders the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegratorKind {
+    /// Classic Whitted ray tracing with the seed report's Phong model.
+    #[default]
+    Whitted,
+}
+
+impl std::str::FromStr for IntegratorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "whitted" => Ok(IntegratorKind::Whitted),
+            _ => Err(format!("unknown integrator `{s}` (expected `whitted`)")),
+        }
+    }
+}

@@ -1,0 +1,145 @@
+//! Whitted ray tracing with the seed report's illumination model (eq. 1-8):
+//!
+//! I = k_a I_a + sum over lights of [k_d (N . L) + k_s (R . V)^n] L_light * visibility
+//!     + k_r S + k_t T
+//!
+//! with shadow rays for visibility, mirror reflection S (eq. 3), refraction T (eq. 4) with the
+//! normal flipped and the indices swapped when the ray leaves the object, total internal
+//! reflection sending everything into S, and Fresnel weights (eq. 5-8) for dielectrics.
+//! The medium outside every object is air (index 1).
+
+use super::{Integrator, RayStats};
+use crate::geometry::{Hit, Ray};
+use crate::material::MaterialKind;
+use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
+use crate::math::{Color, Vec3};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// Transparent surfaces a shadow ray may pass through before it counts as blocked.
+const MAX_SHADOW_CROSSINGS: usize = 16;
+
+pub struct Whitted {
+    /// Reflection/refraction bounces after the camera ray (the recursion depth limit).
+    pub max_depth: u32,
+}
+
+impl Integrator for Whitted {
+    fn radiance(&self, scene: &Scene, ray: &Ray, _sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        self.trace(scene, ray, 0, stats)
+    }
+}
+
+impl Whitted {
+    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, stats: &mut RayStats) -> Color {
+        stats.rays += 1;
+        let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
+            return scene.background;
+        };
+        let m = *scene.material(&hit);
+        let front = hit.is_front(ray.d);
+        // Normals on the side the ray arrives from: flipped when the ray is inside the object.
+        let (n, ng) = if front { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
+        let wo = -ray.d;
+
+        let mut c = m.color * scene.ambient * m.ka;
+        if m.kd > 0.0 || m.ks > 0.0 {
+            for light in &scene.lights {
+                let Some(ls) = light.sample(hit.p) else { continue };
+                let cos = n.dot(ls.wi);
+                if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+                    continue;
+                }
+                let vis = shadow_transmittance(scene, &hit, ls.wi, ls.dist, stats);
+                if vis == Color::ZERO {
+                    continue;
+                }
+                // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
+                let r = reflect(-ls.wi, n);
+                let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
+                c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.irradiance * vis;
+            }
+        }
+
+        if depth >= self.max_depth {
+            return c;
+        }
+        let reflected = |stats: &mut RayStats| {
+            let d = reflect(ray.d, n);
+            self.trace(scene, &scene.spawn(&hit, d), depth + 1, stats)
+        };
+        match m.kind {
+            MaterialKind::Diffuse => {}
+            MaterialKind::Reflective => {
+                if m.kr > 0.0 {
+                    c += m.kr * reflected(stats);
+                }
+            }
+            MaterialKind::Transparent => {
+                let eta = if front { m.ior } else { 1.0 / m.ior };
+                match refract(ray.d, n, eta) {
+                    Some(t) => {
+                        if m.kr > 0.0 {
+                            c += m.kr * reflected(stats);
+                        }
+                        if m.kt > 0.0 {
+                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, stats);
+                        }
+                    }
+                    // Total internal reflection: the reflection coefficient becomes 1.
+                    None => c += reflected(stats),
+                }
+            }
+            MaterialKind::Dielectric => {
+                let eta = if front { m.ior } else { 1.0 / m.ior };
+                let ks = fresnel_dielectric(n.dot(wo), eta);
+                c += ks * reflected(stats);
+                if ks < 1.0
+                    && let Some(t) = refract(ray.d, n, eta)
+                {
+                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, stats);
+                }
+            }
+        }
+        c
+    }
+}
+
+/// Fraction of a light's contribution that reaches `hit` along `wi` over distance `dist`.
+/// Opaque surfaces block it; with `transparent_shadows`, transparent surfaces pass k_t and
+/// dielectrics pass 1 - Fresnel reflectance at each crossing (refraction does not bend shadow
+/// rays, so glass casts a lighter shadow rather than a caustic, which photon mapping renders).
+pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> Color {
+    let mut ray = scene.spawn(hit, wi);
+    let target = hit.p + wi * dist;
+    let t_max = |ray: &Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
+    if !scene.transparent_shadows || !scene.any_transmissive {
+        stats.shadow_rays += 1;
+        return if scene.occluded(&ray, t_max(&ray)) { Color::ZERO } else { Color::ONE };
+    }
+    let mut atten = Color::ONE;
+    for _ in 0..MAX_SHADOW_CROSSINGS {
+        stats.shadow_rays += 1;
+        let tm = t_max(&ray);
+        if !(tm > 0.0) {
+            return atten;
+        }
+        let Some(h) = scene.intersect(&ray, tm) else { return atten };
+        let m = scene.material(&h);
+        let k = match m.kind {
+            MaterialKind::Transparent => m.kt,
+            MaterialKind::Dielectric => {
+                let front = h.is_front(wi);
+                let eta = if front { m.ior } else { 1.0 / m.ior };
+                1.0 - fresnel_dielectric(h.ng.dot(wi), eta)
+            }
+            _ => return Color::ZERO,
+        };
+        atten *= k;
+        if atten == Color::ZERO {
+            return atten;
+        }
+        ray = scene.spawn(&h, wi);
+    }
+    Color::ZERO
+}

@@ -1,0 +1,132 @@
+//! The `caustic` command line: parses arguments and hands them to the library.
+
+use anyhow::Result;
+use caustic::app::{AppError, RenderOptions, render_file};
+use caustic::integrator::IntegratorKind;
+use caustic::sampling::SamplerKind;
+use caustic::scene::Overrides;
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// caustic: a CPU ray tracer for light that bends and bounces.
+#[derive(Parser)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file to a PNG (8-bit sRGB) or EXR (32-bit float linear) image.
+    Render(RenderArgs),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Scene file (TOML; see docs/scene-format.md).
+    scene: PathBuf,
+    /// Output image, .png or .exr [default: the scene's name with .png, in the current folder].
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// Image width in pixels (overrides the scene).
+    #[arg(long, value_name = "W")]
+    width: Option<u32>,
+    /// Image height in pixels (overrides the scene).
+    #[arg(long, value_name = "H")]
+    height: Option<u32>,
+    /// Samples per pixel axis: N gives N x N jittered samples per pixel (overrides the scene).
+    #[arg(long, value_name = "N")]
+    spp_axis: Option<u32>,
+    /// Total samples per pixel, any count (overrides --spp-axis and the scene).
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// Recursion depth limit for reflection and refraction (overrides the scene).
+    #[arg(long, value_name = "D")]
+    max_depth: Option<u32>,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Seed of all random sampling; the same seed gives the same image on any thread count.
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// Integrator.
+    #[arg(long, value_name = "NAME")]
+    integrator: Option<IntegratorKind>,
+    /// Sample pattern: jittered or sobol.
+    #[arg(long, value_name = "NAME")]
+    sampler: Option<SamplerKind>,
+    /// Trace every ray through the pixel centre (only the lens is sampled).
+    #[arg(long)]
+    no_antialias: bool,
+    /// Stop starting new passes after this many seconds and write the image so far.
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f64>,
+    /// Rewrite the output image every this many seconds during the render.
+    #[arg(long, value_name = "SECONDS")]
+    checkpoint: Option<f64>,
+    /// No progress bar or summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn seconds(v: Option<f64>, name: &str) -> Result<Option<Duration>> {
+    match v {
+        None => Ok(None),
+        Some(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(Some(Duration::from_secs_f64(s))),
+        Some(s) => anyhow::bail!("--{name} must be a positive number of seconds, got {s}"),
+    }
+}
+
+fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
+    let opts = RenderOptions {
+        scene: args.scene,
+        output: args.output,
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            spp_axis: args.spp_axis,
+            spp: args.spp,
+            max_depth: args.max_depth,
+            seed: args.seed,
+            integrator: args.integrator,
+            sampler: args.sampler,
+            antialias: args.no_antialias.then_some(false),
+        },
+        threads: args.threads,
+        time_limit: seconds(args.time, "time")?,
+        checkpoint: seconds(args.checkpoint, "checkpoint")?,
+        quiet: args.quiet,
+    };
+    render_file(&opts, cancel)?;
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    static CANCEL: AtomicBool = AtomicBool::new(false);
+    // First Ctrl-C: finish the tiles in flight and write the image so far. Second: quit now.
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\nstopping: finishing the tiles in flight, then writing the image (Ctrl-C again to quit at once)");
+    });
+    let result = match cli.command {
+        Command::Render(args) => run(args, &CANCEL),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            if matches!(e.downcast_ref::<AppError>(), Some(AppError::Interrupted { .. })) {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+    }
+}

@@ -1,0 +1,77 @@
+//! Vector types (re-exported from glam), colours, orthonormal frames and small helpers.
+
+pub mod float;
+
+pub use glam::{Vec2, Vec3, Vec3A};
+
+/// Linear RGB radiance or reflectance. A plain `Vec3` keeps colour arithmetic SIMD-friendly and `Copy`.
+pub type Color = Vec3;
+
+/// Relative luminance of a linear sRGB colour (Rec. 709 weights).
+#[inline]
+pub fn luminance(c: Color) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// An orthonormal basis whose `z` axis is a given unit normal; used to map local sample
+/// directions (z up) into world space.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub x: Vec3,
+    pub y: Vec3,
+    pub z: Vec3,
+}
+
+impl Frame {
+    /// Builds a frame around unit vector `n` without branches on its orientation
+    /// (Duff et al. 2017, "Building an orthonormal basis, revisited").
+    pub fn from_z(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let x = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let y = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Frame { x, y, z: n }
+    }
+
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.x * v.x + self.y * v.y + self.z * v.z
+    }
+
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
+    }
+}
+
+/// True when every component is finite (no NaN, no infinity).
+#[inline]
+pub fn is_finite3(v: Vec3) -> bool {
+    v.is_finite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_for_any_normal() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.4, 0.866).normalize(),
+            Vec3::new(1e-7, 0.0, -1.0).normalize(),
+        ] {
+            let f = Frame::from_z(n);
+            assert!((f.x.length() - 1.0).abs() < 1e-5);
+            assert!((f.y.length() - 1.0).abs() < 1e-5);
+            assert!(f.x.dot(f.y).abs() < 1e-5);
+            assert!(f.x.dot(n).abs() < 1e-5);
+            assert!(f.y.dot(n).abs() < 1e-5);
+            let v = Vec3::new(0.2, -0.5, 0.7);
+            assert!(f.to_local(f.to_world(v)).abs_diff_eq(v, 1e-5));
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Per-pixel sample generators: stratified jitter (the seed report's sampler) and Owen-scrambled
+//! Sobol (Burley 2020, via `sobol_burley`).
+//!
+//! A `Sampler` is created for one (pixel, sample index) and hands out the sample's dimensions in a
+//! fixed order: the pixel position, the lens position, then anything the integrator asks for.
+//! Its state depends only on (seed, pixel, index), so images do not depend on thread count or on
+//! how samples are split into passes.
+
+use super::{Rng32, hash_seed, permutation_element};
+use glam::Vec2;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// N x N jittered strata for the pixel and (in a shuffled order) for the lens.
+    #[default]
+    Jittered,
+    /// Owen-scrambled Sobol points, each 2-D pair independently shuffled.
+    Sobol,
+}
+
+impl std::str::FromStr for SamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "jittered" => Ok(SamplerKind::Jittered),
+            "sobol" => Ok(SamplerKind::Sobol),
+            _ => Err(format!("unknown sampler `{s}` (expected `jittered` or `sobol`)")),
+        }
+    }
+}
+
+pub struct Sampler {
+    kind: SamplerKind,
+    rng: Rng32,
+    pixel_seed: u64,
+    index: u32,
+    /// Strata per axis for the jittered sampler.
+    strata: u32,
+    /// Which 2-D pair is next (0 = pixel, 1 = lens, ...).
+    pair: u32,
+}
+
+/// Sobol dimensions available per seed; sample indices beyond 2^16 move on to a fresh seed.
+const SOBOL_INDEX_BITS: u32 = 16;
+
+impl Sampler {
+    /// The sampler for sample `index` of pixel (x, y). `strata` is N for N x N jittered strata
+    /// (indices at or beyond N^2 are plain uniform samples).
+    pub fn new(kind: SamplerKind, seed: u64, x: u32, y: u32, index: u32, strata: u32) -> Self {
+        let pixel_seed = hash_seed(&[seed, x as u64, y as u64]);
+        Sampler {
+            kind,
+            rng: Rng32::new(hash_seed(&[pixel_seed, index as u64])),
+            pixel_seed,
+            index,
+            strata: strata.max(1),
+            pair: 0,
+        }
+    }
+
+    /// Position within the pixel, in [0,1)^2.
+    pub fn pixel(&mut self) -> Vec2 {
+        debug_assert_eq!(self.pair, 0, "pixel() must be the first request");
+        self.next_pair(true)
+    }
+
+    /// Position on the lens, in [0,1)^2, stratified like the pixel samples but decorrelated from
+    /// them (a different permutation of the strata, or an independently shuffled Sobol pair).
+    pub fn lens(&mut self) -> Vec2 {
+        self.next_pair(true)
+    }
+
+    /// A further 2-D sample for the integrator.
+    pub fn next_2d(&mut self) -> Vec2 {
+        self.next_pair(false)
+    }
+
+    pub fn next_1d(&mut self) -> f32 {
+        self.next_2d().x
+    }
+
+    /// The plain random stream of this pixel sample, for decisions that need no stratification.
+    pub fn rng(&mut self) -> &mut Rng32 {
+        &mut self.rng
+    }
+
+    fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
+        let pair = self.pair;
+        self.pair += 1;
+        match self.kind {
+            SamplerKind::Jittered => {
+                let n2 = self.strata * self.strata;
+                if stratified_pair && self.index < n2 {
+                    // Pair 0 uses the strata in order; later pairs a per-pixel permutation, so
+                    // pixel and lens strata are not matched one to one (Suffern ch. 5 shuffles).
+                    let s = if pair == 0 {
+                        self.index
+                    } else {
+                        permutation_element(self.index, n2, (hash_seed(&[self.pixel_seed, pair as u64]) >> 32) as u32)
+                    };
+                    let (sx, sy) = (s % self.strata, s / self.strata);
+                    let j = self.rng.uniform2();
+                    let inv = 1.0 / self.strata as f32;
+                    Vec2::new(((sx as f32 + j.x) * inv).min(ONE_MINUS_EPS), ((sy as f32 + j.y) * inv).min(ONE_MINUS_EPS))
+                } else {
+                    self.rng.uniform2()
+                }
+            }
+            SamplerKind::Sobol => {
+                let block = self.index >> SOBOL_INDEX_BITS;
+                let i = self.index & ((1 << SOBOL_INDEX_BITS) - 1);
+                let s = (hash_seed(&[self.pixel_seed, pair as u64, block as u64]) >> 32) as u32;
+                Vec2::new(
+                    sobol_burley::sample(i, 0, s).min(ONE_MINUS_EPS),
+                    sobol_burley::sample(i, 1, s).min(ONE_MINUS_EPS),
+                )
+            }
+        }
+    }
+}
+
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_stratified(kind: SamplerKind, n: u32, lens: bool) {
+        for (x, y) in [(0, 0), (17, 3), (500, 900)] {
+            let mut seen = vec![false; (n * n) as usize];
+            for i in 0..n * n {
+                let mut s = Sampler::new(kind, 42, x, y, i, n);
+                let mut p = s.pixel();
+                if lens {
+                    p = s.lens();
+                }
+                assert!(p.x >= 0.0 && p.x < 1.0 && p.y >= 0.0 && p.y < 1.0);
+                let cell = (p.y * n as f32) as u32 * n + (p.x * n as f32) as u32;
+                assert!(!seen[cell as usize], "{kind:?} n={n} lens={lens}: two samples in cell {cell}");
+                seen[cell as usize] = true;
+            }
+        }
+    }
+
+    #[test]
+    fn jittered_pixel_and_lens_samples_are_stratified() {
+        for n in [1, 2, 3, 5, 8] {
+            check_stratified(SamplerKind::Jittered, n, false);
+            check_stratified(SamplerKind::Jittered, n, true);
+        }
+    }
+
+    #[test]
+    fn sobol_first_n2_points_are_stratified() {
+        for n in [2, 4, 8, 16] {
+            check_stratified(SamplerKind::Sobol, n, false);
+            check_stratified(SamplerKind::Sobol, n, true);
+        }
+    }
+
+    #[test]
+    fn lens_is_decorrelated_from_pixel() {
+        // Over many pixels the lens stratum must not equal the pixel stratum for every sample.
+        let n = 4;
+        let mut same = 0;
+        let mut total = 0;
+        for x in 0..50 {
+            for i in 0..n * n {
+                let mut s = Sampler::new(SamplerKind::Jittered, 1, x, 0, i, n);
+                let p = s.pixel();
+                let l = s.lens();
+                let cell = |q: Vec2| (q.y * n as f32) as u32 * n + (q.x * n as f32) as u32;
+                same += (cell(p) == cell(l)) as u32;
+                total += 1;
+            }
+        }
+        assert!(same < total / 4, "{same} of {total} lens samples share the pixel stratum");
+    }
+
+    #[test]
+    fn samplers_are_deterministic() {
+        let a: Vec<Vec2> = (0..8).map(|i| Sampler::new(SamplerKind::Sobol, 3, 4, 5, i, 2).next_2d()).collect();
+        let b: Vec<Vec2> = (0..8).map(|i| Sampler::new(SamplerKind::Sobol, 3, 4, 5, i, 2).next_2d()).collect();
+        assert_eq!(a, b);
+    }
+}

@@ -1,0 +1,134 @@
+//! Validating value types for scene files: each rejects what cannot render (NaN, infinity,
+//! negative sizes, zero-length directions) while deserializing, so the TOML reader attaches the
+//! exact line and column of the bad value to the error.
+
+use crate::math::Vec3;
+use serde::de::{Deserialize, Deserializer, Error};
+
+fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    let v = f64::deserialize(d)?;
+    if !v.is_finite() {
+        return Err(D::Error::custom(format!("expected a finite number, found {v}")));
+    }
+    if v.abs() > f32::MAX as f64 {
+        return Err(D::Error::custom(format!("number {v} is too large")));
+    }
+    Ok(v as f32)
+}
+
+/// Any finite number.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Finite(pub f32);
+impl<'de> Deserialize<'de> for Finite {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        finite(d).map(Finite)
+    }
+}
+
+/// A finite number > 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Positive(pub f32);
+impl<'de> Deserialize<'de> for Positive {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(d)?;
+        if v > 0.0 { Ok(Positive(v)) } else { Err(D::Error::custom(format!("expected a positive number, found {v}"))) }
+    }
+}
+
+/// A finite number >= 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonNegative(pub f32);
+impl<'de> Deserialize<'de> for NonNegative {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(d)?;
+        if v >= 0.0 { Ok(NonNegative(v)) } else { Err(D::Error::custom(format!("expected a number >= 0, found {v}"))) }
+    }
+}
+
+/// A number in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unit(pub f32);
+impl<'de> Deserialize<'de> for Unit {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = finite(d)?;
+        if (0.0..=1.0).contains(&v) { Ok(Unit(v)) } else { Err(D::Error::custom(format!("expected a number from 0 to 1, found {v}"))) }
+    }
+}
+
+fn vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+    let a = <[f64; 3]>::deserialize(d)?;
+    if let Some(bad) = a.iter().find(|v| !v.is_finite() || v.abs() > f32::MAX as f64) {
+        return Err(D::Error::custom(format!("expected three finite numbers, found {bad}")));
+    }
+    Ok(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32))
+}
+
+/// A point or offset: three finite numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point(pub Vec3);
+impl<'de> Deserialize<'de> for Point {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        vec3(d).map(Point)
+    }
+}
+
+/// A direction: three finite numbers, not all zero; normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Direction(pub Vec3);
+impl<'de> Deserialize<'de> for Direction {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = vec3(d)?;
+        let n = v.normalize_or_zero();
+        if n == Vec3::ZERO || !n.is_finite() {
+            return Err(D::Error::custom("expected a direction, found a zero-length vector"));
+        }
+        Ok(Direction(n))
+    }
+}
+
+/// An RGB colour: three finite numbers >= 0, or one number for grey.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rgb(pub Vec3);
+impl<'de> Deserialize<'de> for Rgb {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Grey(f64),
+            Rgb([f64; 3]),
+        }
+        let raw = Raw::deserialize(d)
+            .map_err(|_| D::Error::custom("expected a colour: [r, g, b] or a single number"))?;
+        let a = match raw {
+            Raw::Grey(g) => [g; 3],
+            Raw::Rgb(a) => a,
+        };
+        if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
+            return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
+        }
+        Ok(Rgb(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+    }
+}
+
+/// A per-axis or uniform scale: one number or three, none zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scale(pub Vec3);
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Uniform(f64),
+            Axes([f64; 3]),
+        }
+        let raw = Raw::deserialize(d).map_err(|_| D::Error::custom("expected a scale: a number or [x, y, z]"))?;
+        let a = match raw {
+            Raw::Uniform(s) => [s; 3],
+            Raw::Axes(a) => a,
+        };
+        if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v == 0.0 || v.abs() > f32::MAX as f64) {
+            return Err(D::Error::custom(format!("scale factors must be finite and non-zero, found {bad}")));
+        }
+        Ok(Scale(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+    }
+}

@@ -1,0 +1,104 @@
+//! The scene as the renderer sees it (geometry in a BVH, materials, lights, camera), and the
+//! loader that builds it from a scene file.
+
+mod de;
+pub mod error;
+pub mod load;
+
+pub use error::SceneError;
+pub use load::{Overrides, load_scene, load_scene_str};
+
+use crate::accel::Bvh;
+use crate::camera::Camera;
+use crate::geometry::{Aabb, Hit, Ray};
+use crate::light::Light;
+use crate::material::Material;
+use crate::math::Color;
+use crate::shape::{Plane, TriangleMesh};
+
+pub struct Scene {
+    pub bvh: Bvh,
+    /// Unbounded planes, tested after the BVH, with their material index.
+    pub planes: Vec<(Plane, u32)>,
+    pub meshes: Vec<TriangleMesh>,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    pub background: Color,
+    /// Ambient light I_a of seed eq. 1.
+    pub ambient: Color,
+    /// Extra offset of spawned rays along their direction (seed report's bias), in scene units.
+    pub ray_bias: f32,
+    /// Whether transparent objects let (attenuated) light through to shadow rays.
+    pub transparent_shadows: bool,
+    /// Some material transmits light (so shadow rays must look for transparent surfaces).
+    pub any_transmissive: bool,
+}
+
+impl Scene {
+    /// Bounds of all bounded geometry (planes excluded).
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.bounds()
+    }
+
+    /// Closest hit in (0, t_max).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let mut closest = t_max;
+        let mut best = None;
+        if let Some((i, h)) = self.bvh.intersect(ray, t_max) {
+            closest = h.t;
+            best = Some((i, h));
+        }
+        let mut best_plane = None;
+        for (k, (plane, _)) in self.planes.iter().enumerate() {
+            if let Some(h) = plane.intersect(ray, closest) {
+                closest = h.t;
+                best_plane = Some((k, h));
+            }
+        }
+        if let Some((k, h)) = best_plane {
+            let (plane, material) = &self.planes[k];
+            let sp = plane.surface(ray, &h);
+            return Some(Hit {
+                t: h.t,
+                p: sp.p,
+                p_error: sp.p_error,
+                ng: sp.ng,
+                ns: sp.ns,
+                material: *material,
+                prim: u32::MAX - k as u32,
+            });
+        }
+        let (i, h) = best?;
+        let prim = &self.bvh.prims[i as usize];
+        let sp = prim.shape.surface(ray, &h, &self.meshes);
+        Some(Hit {
+            t: h.t,
+            p: sp.p,
+            p_error: sp.p_error,
+            ng: sp.ng,
+            ns: sp.ns,
+            material: prim.material,
+            prim: i,
+        })
+    }
+
+    /// True when anything blocks the ray in (0, t_max).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.planes.iter().any(|(p, _)| p.intersect(ray, t_max).is_some()) || self.bvh.occluded(ray, t_max)
+    }
+
+    /// A ray leaving hit `h` in direction `d`.
+    #[inline]
+    pub fn spawn(&self, h: &Hit, d: crate::math::Vec3) -> Ray {
+        Ray::spawn(h.p, h.p_error, h.ng, d, self.ray_bias)
+    }
+
+    #[inline]
+    pub fn material(&self, h: &Hit) -> &Material {
+        &self.materials[h.material as usize]
+    }
+}

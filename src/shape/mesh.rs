@@ -1,0 +1,193 @@
+//! Triangle meshes: indexed vertex arrays, loaded from OBJ files or generated procedurally.
+
+use super::Triangle;
+use crate::geometry::Transform;
+use crate::math::Vec3;
+use std::path::Path;
+
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, when the file gave them (or a generator computed them).
+    pub normals: Option<Vec<Vec3>>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// Why a mesh could not be loaded; the scene loader adds the scene file and line.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    #[error("cannot read mesh file `{path}`: {message}")]
+    Load { path: String, message: String },
+    #[error("mesh file `{path}`: {message}")]
+    Invalid { path: String, message: String },
+}
+
+impl TriangleMesh {
+    /// Loads every object of an OBJ file into one triangulated mesh. Faces with more than three
+    /// vertices are fanned; smooth normals are used when the file has them for every vertex.
+    pub fn load_obj(path: &Path) -> Result<Self, MeshError> {
+        let shown = path.display().to_string();
+        let opts = tobj::LoadOptions {
+            single_index: true,
+            triangulate: true,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| MeshError::Load {
+            path: shown.clone(),
+            message: e.to_string(),
+        })?;
+        let mut mesh = TriangleMesh::default();
+        let mut all_normals = true;
+        for m in &models {
+            let base = mesh.positions.len() as u32;
+            let m = &m.mesh;
+            if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+                return Err(MeshError::Invalid {
+                    path: shown,
+                    message: "positions or indices are not in triples".into(),
+                });
+            }
+            let n_verts = m.positions.len() / 3;
+            mesh.positions.extend(m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
+            if m.normals.len() == m.positions.len() {
+                let normals = mesh.normals.get_or_insert_with(Vec::new);
+                normals.extend(m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
+            } else {
+                all_normals = false;
+            }
+            for c in m.indices.chunks_exact(3) {
+                if c.iter().any(|&i| i as usize >= n_verts) {
+                    return Err(MeshError::Invalid {
+                        path: shown,
+                        message: format!("face refers to vertex {} of {n_verts}", c.iter().max().unwrap_or(&0) + 1),
+                    });
+                }
+                mesh.indices.push([base + c[0], base + c[1], base + c[2]]);
+            }
+        }
+        if !all_normals {
+            mesh.normals = None;
+        }
+        if mesh.indices.is_empty() {
+            return Err(MeshError::Invalid { path: shown, message: "no triangles".into() });
+        }
+        if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(MeshError::Invalid {
+                path: shown,
+                message: format!("vertex {} is not finite", bad + 1),
+            });
+        }
+        Ok(mesh)
+    }
+
+    /// A (p, q) torus knot: a tube of radius `tube` swept along a knot that winds p times around
+    /// the axis of a torus of radius `radius` and q times through its hole. It has
+    /// 2 * segments * sides triangles and smooth normals, a mesh made by code with no download.
+    pub fn torus_knot(p: u32, q: u32, radius: f32, tube: f32, segments: u32, sides: u32) -> Self {
+        let (pf, qf) = (p as f32, q as f32);
+        let curve = |s: f32| {
+            let phi = s * std::f32::consts::TAU;
+            let r = radius * (0.6 + 0.4 * (qf * phi).cos());
+            Vec3::new(r * (pf * phi).cos(), radius * 0.4 * (qf * phi).sin(), r * (pf * phi).sin())
+        };
+        let mut positions = Vec::with_capacity((segments * sides) as usize);
+        let mut normals = Vec::with_capacity(positions.capacity());
+        for i in 0..segments {
+            let s = i as f32 / segments as f32;
+            let c = curve(s);
+            let ds = 1e-4;
+            let tangent = (curve(s + ds) - curve(s - ds)).normalize();
+            let side = tangent.cross(c + tangent).normalize_or(tangent.any_orthonormal_vector());
+            let side = (side - tangent * side.dot(tangent)).normalize();
+            let up = tangent.cross(side);
+            for j in 0..sides {
+                let a = j as f32 / sides as f32 * std::f32::consts::TAU;
+                let n = side * a.cos() + up * a.sin();
+                positions.push(c + n * tube);
+                normals.push(n);
+            }
+        }
+        let mut indices = Vec::with_capacity((2 * segments * sides) as usize);
+        for i in 0..segments {
+            let i1 = (i + 1) % segments;
+            for j in 0..sides {
+                let j1 = (j + 1) % sides;
+                let v = |a: u32, b: u32| a * sides + b;
+                indices.push([v(i, j), v(i1, j), v(i1, j1)]);
+                indices.push([v(i, j), v(i1, j1), v(i, j1)]);
+            }
+        }
+        TriangleMesh {
+            positions,
+            normals: Some(normals),
+            indices,
+        }
+    }
+
+    /// The mesh with positions and normals moved by `t`.
+    pub fn transformed(mut self, t: &Transform) -> Self {
+        for p in &mut self.positions {
+            *p = t.point(*p);
+        }
+        if let Some(ns) = &mut self.normals {
+            for n in ns {
+                *n = t.normal(*n).normalize_or_zero();
+            }
+        }
+        self
+    }
+
+    /// Interpolated, normalised vertex normal; `None` without normals or where they cancel.
+    #[inline]
+    pub fn shading_normal(&self, tri: usize, b0: f32, b1: f32, b2: f32) -> Option<Vec3> {
+        let ns = self.normals.as_ref()?;
+        let [i0, i1, i2] = *self.indices.get(tri)?;
+        let n = ns[i0 as usize] * b0 + ns[i1 as usize] * b1 + ns[i2 as usize] * b2;
+        let n = n.normalize_or_zero();
+        (n != Vec3::ZERO).then_some(n)
+    }
+
+    /// The mesh's triangles for the BVH, tagged with `mesh_id`; zero-area triangles are skipped
+    /// (they can never be hit and would only slow traversal). Returns them and the skipped count.
+    pub fn triangles(&self, mesh_id: u32) -> (Vec<Triangle>, usize) {
+        let mut out = Vec::with_capacity(self.indices.len());
+        let mut skipped = 0;
+        for (k, idx) in self.indices.iter().enumerate() {
+            let p = idx.map(|i| self.positions[i as usize]);
+            let t = Triangle { p, mesh: mesh_id, index: k as u32 };
+            if t.area() > 0.0 {
+                out.push(t);
+            } else {
+                skipped += 1;
+            }
+        }
+        (out, skipped)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn torus_knot_counts_and_closed_normals() {
+        let m = TriangleMesh::torus_knot(2, 3, 1.0, 0.2, 100, 12);
+        assert_eq!(m.indices.len(), 2 * 100 * 12);
+        assert_eq!(m.positions.len(), 100 * 12);
+        let ns = m.normals.as_ref().unwrap();
+        assert!(ns.iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
+        let (tris, skipped) = m.triangles(0);
+        assert_eq!(skipped, 0);
+        // Face normals agree with the outward vertex normals.
+        let agree = tris
+            .iter()
+            .filter(|t| {
+                let fng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
+                let vn = m.shading_normal(t.index as usize, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0).unwrap();
+                fng.dot(vn) > 0.0
+            })
+            .count();
+        assert!(agree == tris.len() || agree == 0, "inconsistent winding: {agree} of {}", tris.len());
+    }
+}

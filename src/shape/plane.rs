@@ -1,0 +1,51 @@
+//! Infinite plane through a point with a normal. Unbounded, so it lives outside the BVH.
+
+use super::{PrimHit, SurfacePoint};
+use crate::geometry::Ray;
+use crate::math::Vec3;
+use crate::math::float::gamma;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub point: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+}
+
+impl Plane {
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let denom = self.normal.dot(ray.d);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = self.normal.dot(self.point - ray.o) / denom;
+        (t > 0.0 && t < t_max).then_some(PrimHit { t, u: 0.0, v: 0.0 })
+    }
+
+    pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
+        let p = ray.at(h.t);
+        // Project onto the plane: the remaining error is that of one dot product and subtraction.
+        let p = p - self.normal * self.normal.dot(p - self.point);
+        let p_error = gamma(6) * (p.abs() + self.point.abs());
+        SurfacePoint { p, p_error, ng: self.normal, ns: self.normal }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_hit_parallel_behind() {
+        let pl = Plane { point: Vec3::new(0.0, -1.0, 0.0), normal: Vec3::Y };
+        let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0));
+        assert!((pl.intersect(&r, f32::INFINITY).unwrap().t - 1.0).abs() < 1e-6);
+        assert!(pl.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
+        assert!(pl.intersect(&Ray::new(Vec3::ZERO, Vec3::Y), f32::INFINITY).is_none());
+        // From below, through the back face.
+        let r = Ray::new(Vec3::new(0.0, -2.0, 0.0), Vec3::Y);
+        assert!((pl.intersect(&r, f32::INFINITY).unwrap().t - 1.0).abs() < 1e-6);
+        assert!(pl.intersect(&r, 0.5).is_none());
+    }
+}
