@@ -5,6 +5,7 @@
 pub mod accel;
 pub mod camera;
 pub mod app;
+pub mod bench;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

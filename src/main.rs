@@ -23,6 +23,18 @@ struct Cli {
 enum Command {
     /// Render a scene file to a PNG (8-bit sRGB) or EXR (32-bit float linear) image.
     Render(RenderArgs),
+    /// Render the built-in benchmark scenes and print rays per second.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Runs of each benchmark; the best is reported.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    repeats: u32,
 }
 
 #[derive(clap::Args)]
@@ -105,6 +117,16 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
     Ok(())
 }
 
+fn bench(args: BenchArgs) -> Result<()> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = args.threads {
+        anyhow::ensure!(n > 0, "--threads must be at least 1");
+        builder = builder.num_threads(n);
+    }
+    builder.build()?.install(|| caustic::bench::run_all(args.repeats.max(1)));
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     static CANCEL: AtomicBool = AtomicBool::new(false);
@@ -117,6 +139,7 @@ fn main() -> ExitCode {
     });
     let result = match cli.command {
         Command::Render(args) => run(args, &CANCEL),
+        Command::Bench(args) => bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

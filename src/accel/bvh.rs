@@ -7,15 +7,15 @@
 use crate::geometry::{Aabb, Ray};
 use crate::math::float::gamma;
 use crate::math::{Vec3, Vec3A};
-use crate::shape::{PrimHit, Primitive, RayShear};
+use crate::shape::{CompactShape, PrimHit, Primitive, RayShear};
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
 /// Subtrees smaller than this are built on the current thread.
 const PARALLEL_THRESHOLD: usize = 4096;
-const STACK_SIZE: usize = 96;
+const STACK_SIZE: usize = 64;
 /// Depth below which splits are by count, keeping any tree shallower than `STACK_SIZE`.
-const MEDIAN_DEPTH: usize = 40;
+const MEDIAN_DEPTH: usize = 32;
 
 /// A flattened node: leaf when `count > 0` (`offset` = first primitive), interior otherwise
 /// (`offset` = index of the second child, `axis` = split axis).
@@ -31,6 +31,9 @@ struct Node {
 
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// Intersection data in leaf order (hot), parallel to `prims`.
+    shapes: Vec<CompactShape>,
+    /// Full primitives in leaf order, read once per closest hit.
     pub prims: Vec<Primitive>,
 }
 
@@ -65,26 +68,31 @@ fn build(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode {
         return leaf;
     }
     let cb = prims.iter().fold(Aabb::EMPTY, |b, p| b.grow(p.centroid));
-    let axis = cb.max_axis();
-    let (lo, hi) = (cb.min[axis], cb.max[axis]);
-    let median = |prims: &mut [BuildPrim]| {
+    let longest = cb.max_axis();
+    let median = |prims: &mut [BuildPrim], axis: usize| {
         prims.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         n / 2
     };
-
-    let mid = if hi <= lo || depth >= MEDIAN_DEPTH {
+    if cb.min[longest] >= cb.max[longest] || depth >= MEDIAN_DEPTH {
         // No plane separates the centroids (or the tree is already deep): split by count.
         if n <= MAX_LEAF {
             return leaf;
         }
-        median(prims)
-    } else {
+        let mid = median(prims, longest);
+        return interior(prims, offset, depth, bounds, mid, longest);
+    }
+    // Binned SAH on all three axes; keep the cheapest plane.
+    let mut best = (f32::INFINITY, 0usize, 0usize);
+    for axis in 0..3 {
+        let (lo, hi) = (cb.min[axis], cb.max[axis]);
+        if hi <= lo {
+            continue;
+        }
         let scale = BINS as f32 / (hi - lo);
-        let bin_of = |c: Vec3| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
         let mut counts = [0usize; BINS];
         let mut boxes = [Aabb::EMPTY; BINS];
         for p in prims.iter() {
-            let b = bin_of(p.centroid);
+            let b = (((p.centroid[axis] - lo) * scale) as usize).min(BINS - 1);
             counts[b] += 1;
             boxes[b] = boxes[b].union(p.bounds);
         }
@@ -99,7 +107,6 @@ fn build(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode {
             right_count[i] = rc;
         }
         let (mut lb, mut lc) = (Aabb::EMPTY, 0);
-        let mut best = (f32::INFINITY, 0);
         for i in 1..BINS {
             lb = lb.union(boxes[i - 1]);
             lc += counts[i - 1];
@@ -108,25 +115,38 @@ fn build(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode {
             }
             let cost = lb.half_area() * lc as f32 + right_area[i] * right_count[i] as f32;
             if cost < best.0 {
-                best = (cost, i);
+                best = (cost, axis, i);
             }
         }
-        // Cost relative to a leaf, with traversal costing as much as one intersection.
-        let split_cost = 1.0 + best.0 / bounds.half_area().max(f32::MIN_POSITIVE);
-        if n <= MAX_LEAF && split_cost >= n as f32 {
-            return leaf;
-        }
-        let mut i = 0;
-        if best.1 > 0 {
-            for j in 0..n {
-                if bin_of(prims[j].centroid) < best.1 {
-                    prims.swap(i, j);
-                    i += 1;
-                }
+    }
+    // Cost relative to a leaf, with traversal costing as much as one intersection.
+    let split_cost = 1.0 + best.0 / bounds.half_area().max(f32::MIN_POSITIVE);
+    if n <= MAX_LEAF && split_cost >= n as f32 {
+        return leaf;
+    }
+    let mut mid = 0;
+    if best.0.is_finite() {
+        let axis = best.1;
+        let (lo, hi) = (cb.min[axis], cb.max[axis]);
+        let scale = BINS as f32 / (hi - lo);
+        for j in 0..n {
+            if ((((prims[j].centroid[axis] - lo) * scale) as usize).min(BINS - 1)) < best.2 {
+                prims.swap(mid, j);
+                mid += 1;
             }
         }
-        if i == 0 || i == n { median(prims) } else { i }
-    };
+    }
+    let mut axis = best.1;
+    if mid == 0 || mid == n {
+        mid = median(prims, longest);
+        axis = longest;
+    }
+    interior(prims, offset, depth, bounds, mid, axis)
+}
+
+/// Splits `prims` at `mid` and builds both halves (in parallel when large).
+fn interior(prims: &mut [BuildPrim], offset: usize, depth: usize, bounds: Aabb, mid: usize, axis: usize) -> BuildNode {
+    let n = prims.len();
     let (left, right) = prims.split_at_mut(mid);
     let (l, r) = if n > PARALLEL_THRESHOLD {
         rayon::join(|| build(left, offset, depth + 1), || build(right, offset + mid, depth + 1))
@@ -204,8 +224,9 @@ impl Bvh {
             nodes.reserve(2 * build_prims.len() / MAX_LEAF + 1);
             flatten(&root, &mut nodes);
         }
-        let ordered = build_prims.iter().map(|b| prims[b.index as usize]).collect();
-        Bvh { nodes, prims: ordered }
+        let ordered: Vec<Primitive> = build_prims.iter().map(|b| prims[b.index as usize]).collect();
+        let shapes = ordered.iter().map(|p| p.shape.compact()).collect();
+        Bvh { nodes, shapes, prims: ordered }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -235,7 +256,7 @@ impl Bvh {
                 if node.count > 0 {
                     let first = node.offset as usize;
                     for i in first..first + node.count as usize {
-                        if let Some(h) = self.prims[i].shape.intersect(ray, &shear, closest) {
+                        if let Some(h) = self.shapes[i].intersect(ray, &shear, closest) {
                             closest = h.t;
                             best = Some((i as u32, h));
                         }
@@ -278,8 +299,8 @@ impl Bvh {
             if br.hits(node, t_max) {
                 if node.count > 0 {
                     let first = node.offset as usize;
-                    for p in &self.prims[first..first + node.count as usize] {
-                        if p.shape.intersect(ray, &shear, t_max).is_some() {
+                    for p in &self.shapes[first..first + node.count as usize] {
+                        if p.intersect(ray, &shear, t_max).is_some() {
                             return true;
                         }
                     }

@@ -255,13 +255,18 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     }
     let lens_radius = camera_desc.lens_radius.map_or(0.0, |r| r.0);
     let antialias = overrides.antialias.or(render.antialias).unwrap_or(true);
-    let spp_axis = overrides.spp_axis.or(render.spp_axis);
-    let spp_given = overrides.spp.or(render.spp);
+    // A sample count on the command line replaces both of the file's (`--spp-axis 2` means 4
+    // samples even where the file says `spp = 16`).
+    let cli_samples = overrides.spp.is_some() || overrides.spp_axis.is_some();
+    let spp_axis = if cli_samples { overrides.spp_axis } else { render.spp_axis };
+    let spp_given = if cli_samples { overrides.spp } else { render.spp };
     let (spp, strata) = match (spp_given, spp_axis) {
         (Some(spp), _) => (spp, spp_axis.unwrap_or((spp as f64).sqrt() as u32)),
         (None, Some(n)) => (n.saturating_mul(n), n),
         // The seed report's default for a lens without anti-aliasing: 8 x 8 lens samples.
         (None, None) if !antialias && lens_radius > 0.0 => (64, 8),
+        // Without anti-aliasing or a lens every sample would be the same ray.
+        (None, None) if !antialias => (1, 1),
         (None, None) => (4, 2),
     };
     if spp == 0 || strata == 0 || strata > 4096 {
@@ -368,7 +373,11 @@ impl<'a> Cx<'a> {
 
     fn toml(&self, e: toml::de::Error) -> SceneError {
         let span = e.span().unwrap_or(0..0);
-        self.at(span, e.message().trim_end().to_string())
+        let mut message = e.message().trim_end().to_string();
+        if message.contains("wanted exactly 1 element") {
+            message.push_str(" (each transform entry holds one operation: translate, rotate or scale)");
+        }
+        self.at(span, message)
     }
 
     fn de<'i, T: Deserialize<'i>>(&self, v: Spanned<DeValue<'i>>) -> Result<T, SceneError> {

@@ -9,9 +9,9 @@ mod triangle;
 
 pub use mesh::TriangleMesh;
 pub use plane::Plane;
-pub use quad::Quad;
+pub use quad::{Quad, intersect_quad};
 pub use sphere::Sphere;
-pub use triangle::{RayShear, Triangle};
+pub use triangle::{RayShear, Triangle, intersect_triangle};
 
 use crate::geometry::{Aabb, Ray};
 use crate::math::Vec3;
@@ -41,6 +41,27 @@ pub enum Shape {
     Quad(Quad),
 }
 
+/// Only what intersection needs, 40 bytes: the BVH keeps these in leaf order so a leaf of four
+/// primitives spans few cache lines; everything else about a primitive is read after the hit.
+#[derive(Clone, Copy, Debug)]
+pub enum CompactShape {
+    Sphere(Sphere),
+    Triangle([Vec3; 3]),
+    /// Corner and two edges.
+    Quad([Vec3; 3]),
+}
+
+impl CompactShape {
+    #[inline(always)]
+    pub fn intersect(&self, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
+        match self {
+            CompactShape::Sphere(s) => s.intersect(ray, t_max),
+            CompactShape::Triangle(p) => intersect_triangle(p, ray, shear, t_max),
+            CompactShape::Quad([p0, e1, e2]) => intersect_quad(*p0, *e1, *e2, ray, t_max),
+        }
+    }
+}
+
 /// A shape with its material: one element of the BVH.
 #[derive(Clone, Copy, Debug)]
 pub struct Primitive {
@@ -49,6 +70,14 @@ pub struct Primitive {
 }
 
 impl Shape {
+    pub fn compact(&self) -> CompactShape {
+        match self {
+            Shape::Sphere(s) => CompactShape::Sphere(*s),
+            Shape::Triangle(t) => CompactShape::Triangle(t.p),
+            Shape::Quad(q) => CompactShape::Quad([q.p0, q.e1, q.e2]),
+        }
+    }
+
     #[inline]
     pub fn bounds(&self) -> Aabb {
         match self {
@@ -58,7 +87,7 @@ impl Shape {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
         match self {
             Shape::Sphere(s) => s.intersect(ray, t_max),

@@ -13,8 +13,6 @@ pub struct Quad {
     pub e2: Vec3,
     /// Unit normal, e1 x e2 normalised.
     pub n: Vec3,
-    /// e1 x e2 / |e1 x e2|^2: turns a cross product into plane coordinates.
-    w: Vec3,
 }
 
 impl Quad {
@@ -30,7 +28,6 @@ impl Quad {
             e1,
             e2,
             n: c / l2.sqrt(),
-            w: c / l2,
         })
     }
 
@@ -42,23 +39,9 @@ impl Quad {
         self.e1.cross(self.e2).length()
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let denom = self.n.dot(ray.d);
-        if denom == 0.0 {
-            return None;
-        }
-        let t = self.n.dot(self.p0 - ray.o) / denom;
-        if !(t > 0.0 && t < t_max) {
-            return None;
-        }
-        let q = ray.at(t) - self.p0;
-        let u = self.w.dot(q.cross(self.e2));
-        let v = self.w.dot(self.e1.cross(q));
-        if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
-            return None;
-        }
-        Some(PrimHit { t, u, v })
+        intersect_quad(self.p0, self.e1, self.e2, ray, t_max)
     }
 
     pub fn surface(&self, h: &PrimHit) -> SurfacePoint {
@@ -68,6 +51,28 @@ impl Quad {
         let p_error = gamma(6) * (self.p0.abs() + a.abs() + b.abs());
         SurfacePoint { p, p_error, ng: self.n, ns: self.n }
     }
+}
+
+/// Ray-parallelogram test from the corner and edges alone (the BVH keeps only these).
+#[inline(always)]
+pub fn intersect_quad(p0: Vec3, e1: Vec3, e2: Vec3, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+    let c = e1.cross(e2);
+    let denom = c.dot(ray.d);
+    if denom == 0.0 {
+        return None;
+    }
+    let t = c.dot(p0 - ray.o) / denom;
+    if !(t > 0.0 && t < t_max) {
+        return None;
+    }
+    let q = ray.at(t) - p0;
+    let inv = 1.0 / c.length_squared();
+    let u = c.dot(q.cross(e2)) * inv;
+    let v = c.dot(e1.cross(q)) * inv;
+    if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+        return None;
+    }
+    Some(PrimHit { t, u, v })
 }
 
 #[cfg(test)]

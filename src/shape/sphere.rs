@@ -26,7 +26,7 @@ impl Sphere {
     /// Nearest root in (0, t_max). The discriminant is computed from the distance of the centre to
     /// the ray line, which stays accurate for small spheres far from the origin (pbrt-v4 / Ray
     /// Tracing Gems ch. 7), and the far root comes from c/q to avoid cancellation.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         let f = ray.o - self.center;
         let a = ray.d.length_squared();

@@ -55,15 +55,6 @@ pub struct Triangle {
     pub index: u32,
 }
 
-/// a*b - c*d with one rounding error less (Kahan's algorithm using fused multiply-add).
-#[inline]
-fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
-    let cd = c * d;
-    let err = (-c).mul_add(d, cd);
-    let dop = a.mul_add(b, -cd);
-    dop + err
-}
-
 impl Triangle {
     pub fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> Self {
         Triangle {
@@ -81,64 +72,9 @@ impl Triangle {
         0.5 * (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).length()
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, s: &RayShear, t_max: f32) -> Option<PrimHit> {
-        // Translate to the ray origin, permute so z is the dominant axis, then shear.
-        let tr = |p: Vec3| {
-            let q = p - ray.o;
-            let (x, y, z) = (q[s.kx], q[s.ky], q[s.kz]);
-            (x + s.sx * z, y + s.sy * z, z)
-        };
-        let (x0, y0, z0) = tr(self.p[0]);
-        let (x1, y1, z1) = tr(self.p[1]);
-        let (x2, y2, z2) = tr(self.p[2]);
-
-        let mut e0 = difference_of_products(x1, y2, y1, x2);
-        let mut e1 = difference_of_products(x2, y0, y2, x0);
-        let mut e2 = difference_of_products(x0, y1, y0, x1);
-        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
-            let (x0, y0, x1, y1, x2, y2) = (x0 as f64, y0 as f64, x1 as f64, y1 as f64, x2 as f64, y2 as f64);
-            e0 = (x1 * y2 - y1 * x2) as f32;
-            e1 = (x2 * y0 - y2 * x0) as f32;
-            e2 = (x0 * y1 - y0 * x1) as f32;
-        }
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
-            return None;
-        }
-        let det = e0 + e1 + e2;
-        if det == 0.0 {
-            return None;
-        }
-        let (z0, z1, z2) = (z0 * s.sz, z1 * s.sz, z2 * s.sz);
-        let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
-        if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
-            return None;
-        }
-        if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
-            return None;
-        }
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-
-        // Reject t that cannot be told from zero given the rounding error (pbrt-v4 eq. 6.26ff).
-        let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
-        let delta_z = gamma(3) * max_zt;
-        let max_xt = x0.abs().max(x1.abs()).max(x2.abs());
-        let max_yt = y0.abs().max(y1.abs()).max(y2.abs());
-        let delta_x = gamma(5) * (max_xt + max_zt);
-        let delta_y = gamma(5) * (max_yt + max_zt);
-        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t =
-            3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t {
-            return None;
-        }
-        Some(PrimHit {
-            t,
-            u: e1 * inv_det,
-            v: e2 * inv_det,
-        })
+        intersect_triangle(&self.p, ray, s, t_max)
     }
 
     pub fn surface(&self, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
@@ -163,6 +99,70 @@ impl Triangle {
         }
         SurfacePoint { p, p_error, ng, ns }
     }
+}
+
+/// The watertight test on three vertices (shared by `Triangle` and the BVH's compact leaves).
+#[inline(always)]
+pub fn intersect_triangle(p: &[Vec3; 3], ray: &Ray, s: &RayShear, t_max: f32) -> Option<PrimHit> {
+    // Translate to the ray origin, permute so z is the dominant axis, then shear.
+    let tr = |p: Vec3| {
+        let q = p - ray.o;
+        let (x, y, z) = (q[s.kx], q[s.ky], q[s.kz]);
+        (x + s.sx * z, y + s.sy * z, z)
+    };
+    let (x0, y0, z0) = tr(p[0]);
+    let (x1, y1, z1) = tr(p[1]);
+    let (x2, y2, z2) = tr(p[2]);
+
+    // Plain products, not fused: the edge function of an edge shared by two triangles is then
+    // exactly the negation of its neighbour's, so the two always agree on which side a ray
+    // passes (and software FMA would be slow on CPUs built without it).
+    let mut e0 = x1 * y2 - y1 * x2;
+    let mut e1 = x2 * y0 - y2 * x0;
+    let mut e2 = x0 * y1 - y0 * x1;
+    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+        let (x0, y0, x1, y1, x2, y2) = (x0 as f64, y0 as f64, x1 as f64, y1 as f64, x2 as f64, y2 as f64);
+        e0 = (x1 * y2 - y1 * x2) as f32;
+        e1 = (x2 * y0 - y2 * x0) as f32;
+        e2 = (x0 * y1 - y0 * x1) as f32;
+    }
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    let (z0, z1, z2) = (z0 * s.sz, z1 * s.sz, z2 * s.sz);
+    let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+
+    // Reject t that cannot be told from zero given the rounding error (pbrt-v4 eq. 6.26ff).
+    let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
+    let delta_z = gamma(3) * max_zt;
+    let max_xt = x0.abs().max(x1.abs()).max(x2.abs());
+    let max_yt = y0.abs().max(y1.abs()).max(y2.abs());
+    let delta_x = gamma(5) * (max_xt + max_zt);
+    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+    let delta_t =
+        3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    if t <= delta_t {
+        return None;
+    }
+    Some(PrimHit {
+        t,
+        u: e1 * inv_det,
+        v: e2 * inv_det,
+    })
 }
 
 #[cfg(test)]

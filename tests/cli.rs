@@ -1,0 +1,113 @@
+//! The command-line program: help, error reporting, exit codes, time budgets and Ctrl-C.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn caustic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_caustic"))
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
+}
+
+/// Decodes a PNG fully, failing on a truncated or corrupt file.
+fn png_size(path: &Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    (info.width, info.height)
+}
+
+#[test]
+fn help_documents_every_option() {
+    let out = caustic().args(["render", "--help"]).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for opt in [
+        "--output", "--width", "--height", "--spp-axis", "--spp", "--max-depth", "--threads", "--seed", "--integrator",
+        "--sampler", "--time", "--checkpoint", "--quiet", "--no-antialias",
+    ] {
+        assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
+    }
+    assert!(caustic().arg("--help").output().unwrap().status.success());
+}
+
+#[test]
+fn bad_scene_exits_nonzero_with_location() {
+    let dir = common::scratch("cli-bad");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"sphere\"\nradius = -2\n").unwrap();
+    let out = caustic().arg("render").arg(&bad).arg("-o").arg(dir.join("x.png")).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.toml:6:10") && err.contains("positive"), "{err}");
+    assert!(!dir.join("x.png").exists(), "an image was written for a failed render");
+}
+
+#[test]
+fn unwritable_output_fails_before_rendering() {
+    let start = Instant::now();
+    let out = caustic()
+        .arg("render")
+        .arg(scene("06-fresnel-glass.toml"))
+        .args(["--spp", "100000", "-o", "/nonexistent-dir/x.png"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(start.elapsed() < Duration::from_secs(5), "the render ran before the output was checked");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/x.png"));
+    let out = caustic().arg("render").arg(scene("06-fresnel-glass.toml")).args(["-o", "x.jpg"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".png or .exr"));
+}
+
+#[test]
+fn time_budget_stops_and_writes_a_valid_image() {
+    let dir = common::scratch("cli-time");
+    let png = dir.join("t.png");
+    let start = Instant::now();
+    let out = caustic()
+        .arg("render")
+        .arg(scene("06-fresnel-glass.toml"))
+        .args(["--width", "160", "--height", "120", "--time", "2", "--quiet", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let took = start.elapsed();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Passes aim at 0.5 s and are cut to what the budget has left, so allow one pass beyond it
+    // plus process start-up.
+    assert!(took < Duration::from_millis(3500), "took {took:?}");
+    assert!(took >= Duration::from_secs(2), "stopped early: {took:?}");
+    assert_eq!(png_size(&png), (160, 120));
+}
+
+#[test]
+fn sigint_writes_the_image_so_far_and_exits_nonzero() {
+    let dir = common::scratch("cli-int");
+    let png = dir.join("i.png");
+    // Leave a previous image in place: it must be replaced by a complete new one, never truncated.
+    std::fs::write(&png, b"old").unwrap();
+    let child = caustic()
+        .arg("render")
+        .arg(scene("06-fresnel-glass.toml"))
+        .args(["--width", "200", "--height", "150", "--spp", "1000000", "-o"])
+        .arg(&png)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("interrupted") && err.contains("samples per pixel"), "{err}");
+    assert_eq!(png_size(&png), (200, 150));
+}

@@ -1,0 +1,161 @@
+//! The Whitted integrator against analytic values: irradiance under a point light, shadows,
+//! mirrors and glass.
+
+mod common;
+
+use caustic::geometry::Ray;
+use caustic::integrator::{Integrator, RayStats, Whitted};
+use caustic::math::{Color, Vec3};
+use caustic::sampling::{Sampler, SamplerKind};
+
+fn radiance(s: &caustic::scene::load::LoadedScene, ray: Ray, depth: u32) -> Color {
+    let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, 0, 1);
+    Whitted { max_depth: depth }.radiance(&s.scene, &ray, &mut sampler, &mut RayStats::default())
+}
+
+const PLANE_UNDER_LIGHT: &str = r#"
+[camera]
+eye = [0, 5, 5]
+look_at = [0, 0, 0]
+[materials.white]
+type = "diffuse"
+color = [1, 0.5, 0.25]
+ka = 0
+kd = 0.7
+[[lights]]
+type = "point"
+position = [1, 3, -0.5]
+intensity = 10
+[[objects]]
+type = "plane"
+material = "white"
+"#;
+
+#[test]
+fn diffuse_plane_receives_kd_i_cos_over_d2() {
+    let s = common::scene(PLANE_UNDER_LIGHT);
+    let light = Vec3::new(1.0, 3.0, -0.5);
+    for target in [Vec3::new(0.0, 0.0, 0.0), Vec3::new(-2.0, 0.0, 1.5), Vec3::new(3.0, 0.0, -4.0)] {
+        let eye = Vec3::new(0.3, 2.0, 4.0);
+        let ray = Ray::new(eye, (target - eye).normalize());
+        let c = radiance(&s, ray, 0);
+        let to_light = light - target;
+        let d2 = to_light.length_squared();
+        let cos = to_light.normalize().y;
+        let expected = Vec3::new(1.0, 0.5, 0.25) * 0.7 * 10.0 * cos / d2;
+        assert!(
+            (c - expected).abs().max_element() <= 1e-4 * expected.max_element(),
+            "at {target}: {c} vs {expected}"
+        );
+    }
+}
+
+#[test]
+fn shadow_ray_blocked_and_unblocked() {
+    let text = format!(
+        "{PLANE_UNDER_LIGHT}\n[[objects]]\ntype = \"sphere\"\ncenter = [0.5, 1.5, -0.25]\nradius = 0.3\nmaterial = \"white\"\n"
+    );
+    let s = common::scene(&text);
+    let eye = Vec3::new(0.0, 2.0, 4.0);
+    // The sphere sits halfway between the light and the origin: the origin is in shadow.
+    let shadowed = radiance(&s, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 0);
+    assert_eq!(shadowed, Color::ZERO);
+    // A point off to the side sees the light.
+    let lit_target = Vec3::new(-2.0, 0.0, 1.5);
+    let lit = radiance(&s, Ray::new(eye, (lit_target - eye).normalize()), 0);
+    assert!(lit.x > 0.1, "{lit}");
+    // A blocker beyond the light does not cast a shadow.
+    let beyond = format!(
+        "{PLANE_UNDER_LIGHT}\n[[objects]]\ntype = \"sphere\"\ncenter = [1.5, 4.5, -0.75]\nradius = 0.3\nmaterial = \"white\"\n"
+    );
+    let s2 = common::scene(&beyond);
+    let c = radiance(&s2, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 0);
+    assert!(c.x > 0.1, "a sphere behind the light shadowed the floor: {c}");
+}
+
+#[test]
+fn mirror_reflects_background_weighted_by_kr() {
+    let s = common::scene(
+        r#"
+[render]
+background = [0.2, 0.4, 0.6]
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.mirror]
+type = "reflective"
+kd = 0
+ka = 0
+kr = 0.75
+[[objects]]
+type = "quad"
+corner = [-1, -1, 0]
+edge1 = [2, 0, 0]
+edge2 = [0, 2, 0]
+material = "mirror"
+"#,
+    );
+    let c = radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 3);
+    assert!((c - Vec3::new(0.2, 0.4, 0.6) * 0.75).abs().max_element() < 1e-6, "{c}");
+    // At depth 0 the recursion is cut: no reflection.
+    assert_eq!(radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 0), Color::ZERO);
+}
+
+#[test]
+fn glass_sphere_passes_background_by_fresnel_and_conserves_energy() {
+    // A clear dielectric sphere against a uniform background: along the axis the ray crosses two
+    // surfaces at normal incidence, each reflecting 4%. With a uniform background everything
+    // reflected or transmitted ends at the background, so the total must equal it (to the
+    // depth limit).
+    let s = common::scene(
+        r#"
+[render]
+background = [1, 1, 1]
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[[objects]]
+type = "sphere"
+radius = 1
+material = "glass"
+"#,
+    );
+    for y in [0.0f32, 0.3, 0.7, 0.95, 0.999] {
+        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 40);
+        assert!((c - Vec3::ONE).abs().max_element() < 1e-3, "offset {y}: {c}");
+    }
+}
+
+#[test]
+fn total_internal_reflection_leaves_no_black_ring() {
+    // Transparent with fixed coefficients kr + kt = 1 in a uniform white background: with the seed's
+    // fix (k_s = 1 under TIR) every path ends in the background and the sphere is invisible.
+    let s = common::scene(
+        r#"
+[render]
+background = [1, 1, 1]
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.glass]
+type = "transparent"
+ior = 1.5
+kr = 0.2
+kt = 0.8
+[[objects]]
+type = "sphere"
+radius = 1
+material = "glass"
+"#,
+    );
+    let mut darkest = 1.0f32;
+    for i in 0..200 {
+        let y = i as f32 / 200.0;
+        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 60);
+        darkest = darkest.min(c.x);
+    }
+    assert!(darkest > 0.99, "darkest pixel {darkest}: a ring from total internal reflection");
+}
