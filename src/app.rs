@@ -65,10 +65,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     if let Some(n) = opts.threads {
         builder = builder.num_threads(n);
     }
-    let pool = builder.build().map_err(|e| AppError::Threads {
-        threads: opts.threads.unwrap_or(0),
-        message: e.to_string(),
-    })?;
+    let pool = builder
+        .build()
+        .map_err(|e| AppError::Threads { threads: opts.threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
         let loaded = load_scene(&opts.scene, &opts.overrides)?;
         let info = &loaded.info;
@@ -79,7 +78,11 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                 opts.scene.display(),
                 info.primitives,
                 info.triangles,
-                if info.degenerate_triangles > 0 { format!(", {} degenerate skipped", info.degenerate_triangles) } else { String::new() },
+                if info.degenerate_triangles > 0 {
+                    format!(", {} degenerate skipped", info.degenerate_triangles)
+                } else {
+                    String::new()
+                },
                 loaded.scene.planes.len(),
                 loaded.scene.lights.len(),
                 info.bvh_nodes,
@@ -94,15 +97,15 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             // A time budget without a sample count renders until the time is up.
             settings.spp = u32::MAX;
         }
-        let checkpoint = |img: &crate::film::Image, spp: u32| {
-            match write_image(img, &output) {
-                Ok(()) => log(opts.quiet, format_args!("checkpoint: wrote {} ({spp} spp)", output.display())),
-                Err(e) => eprintln!("warning: checkpoint failed: {e}"),
-            }
+        let checkpoint = |img: &crate::film::Image, spp: u32| match write_image(img, &output) {
+            Ok(()) => log(opts.quiet, format_args!("checkpoint: wrote {} ({spp} spp)", output.display())),
+            Err(e) => eprintln!("warning: checkpoint failed: {e}"),
         };
         let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
         let (image, stats) = match loaded.integrator {
-            IntegratorKind::Whitted => render(&loaded.scene, &Whitted { max_depth: loaded.max_depth }, &settings, &control),
+            IntegratorKind::Whitted => {
+                render(&loaded.scene, &Whitted { max_depth: loaded.max_depth }, &settings, &control)
+            }
         };
         write_image(&image, &output)?;
         if stats.nonfinite_samples > 0 {

@@ -40,6 +40,7 @@ pub enum ViewPlane {
 impl Camera {
     /// A camera at `eye` looking at `look_at`. The caller guarantees `eye != look_at`, `up` not
     /// parallel to the view direction and a valid view plane (the scene loader checks these).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         eye: Vec3,
         look_at: Vec3,
@@ -169,10 +170,8 @@ mod tests {
                 let l = concentric_disk(u) * r_lens;
                 let p = l + (Vec2::ZERO - l) * (f / z);
                 let ps = p * (c.d / f);
-                let raster = Vec2::new(
-                    ps.x / c.pixel_size + 0.5 * c.width as f32,
-                    0.5 * c.height as f32 - ps.y / c.pixel_size,
-                );
+                let raster =
+                    Vec2::new(ps.x / c.pixel_size + 0.5 * c.width as f32, 0.5 * c.height as f32 - ps.y / c.pixel_size);
                 let ray = c.generate_ray(raster, u);
                 let to_q = q - ray.o;
                 let miss = (to_q - ray.d * to_q.dot(ray.d)).length();

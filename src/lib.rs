@@ -2,10 +2,14 @@
 //!
 //! See `ARCHITECTURE.md` for the map of modules and what each may depend on.
 
+// `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it is also true for NaN, which is exactly
+// what input validation and degenerate-geometry checks must reject.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accel;
-pub mod camera;
 pub mod app;
 pub mod bench;
+pub mod camera;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

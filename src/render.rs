@@ -51,12 +51,15 @@ impl RenderStats {
     }
 }
 
+/// Receives the image so far and its samples per pixel.
+pub type CheckpointFn<'a> = &'a (dyn Fn(&Image, u32) + Sync);
+
 /// Hooks into a running render.
 pub struct RenderControl<'a> {
     /// Set (e.g. by Ctrl-C) to stop after the tiles in flight.
     pub cancel: &'a AtomicBool,
     /// Receives the current image every `checkpoint` interval.
-    pub on_checkpoint: Option<&'a (dyn Fn(&Image, u32) + Sync)>,
+    pub on_checkpoint: Option<CheckpointFn<'a>>,
 }
 
 /// Renders `scene` with `integrator`. Runs on the current rayon pool (the caller chooses the

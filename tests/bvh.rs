@@ -67,7 +67,10 @@ fn degenerate_inputs_build() {
     let one = Bvh::build(vec![s]);
     assert!((one.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).unwrap().1.t - 2.0).abs() < 1e-6);
     let same: Vec<Primitive> = (0..1000)
-        .map(|i| Primitive { shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0 + i as f32 * 1e-3)), material: i })
+        .map(|i| Primitive {
+            shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0 + i as f32 * 1e-3)),
+            material: i,
+        })
         .collect();
     let bvh = Bvh::build(same);
     let (i, h) = bvh.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).unwrap();

@@ -29,8 +29,20 @@ fn help_documents_every_option() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     for opt in [
-        "--output", "--width", "--height", "--spp-axis", "--spp", "--max-depth", "--threads", "--seed", "--integrator",
-        "--sampler", "--time", "--checkpoint", "--quiet", "--no-antialias",
+        "--output",
+        "--width",
+        "--height",
+        "--spp-axis",
+        "--spp",
+        "--max-depth",
+        "--threads",
+        "--seed",
+        "--integrator",
+        "--sampler",
+        "--time",
+        "--checkpoint",
+        "--quiet",
+        "--no-antialias",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }
@@ -41,7 +53,11 @@ fn help_documents_every_option() {
 fn bad_scene_exits_nonzero_with_location() {
     let dir = common::scratch("cli-bad");
     let bad = dir.join("bad.toml");
-    std::fs::write(&bad, "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"sphere\"\nradius = -2\n").unwrap();
+    std::fs::write(
+        &bad,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"sphere\"\nradius = -2\n",
+    )
+    .unwrap();
     let out = caustic().arg("render").arg(&bad).arg("-o").arg(dir.join("x.png")).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);

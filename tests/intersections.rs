@@ -42,7 +42,10 @@ fn box_hit_miss_inside_tangent_behind() {
 
 #[test]
 fn mirrored_box_keeps_outward_normals() {
-    let s = common::scene(&BOX.replace("max = [1, 2, 3]", "max = [1, 2, 3]\ntransform = [{ scale = [-1, 1, 1] }, { rotate = { axis = [0, 1, 0], degrees = 90 } }]"))
+    let s = common::scene(&BOX.replace(
+        "max = [1, 2, 3]",
+        "max = [1, 2, 3]\ntransform = [{ scale = [-1, 1, 1] }, { rotate = { axis = [0, 1, 0], degrees = 90 } }]",
+    ))
     .scene;
     for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
         let h = s.intersect(&Ray::new(d * 20.0, -d), f32::INFINITY).unwrap();

@@ -36,7 +36,9 @@ fn same_seed_gives_identical_image_on_1_and_2_threads() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/06-fresnel-glass.toml");
     let a = render_with_threads(&path, 1, &o);
     let b = render_with_threads(&path, 2, &o);
-    assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+    assert!(
+        a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+    );
     // A different seed changes the jitter, so the image differs: the test can fail.
     let c = render_with_threads(&path, 2, &Overrides { seed: Some(8), ..o.clone() });
     assert_ne!(a, c);
@@ -58,7 +60,8 @@ fn every_bundled_scene_renders_to_png_and_exr_without_nan() {
                 quiet: true,
                 ..Default::default()
             };
-            let summary = render_file(&opts, &AtomicBool::new(false)).unwrap_or_else(|e| panic!("{}: {e}", scene.display()));
+            let summary =
+                render_file(&opts, &AtomicBool::new(false)).unwrap_or_else(|e| panic!("{}: {e}", scene.display()));
             assert_eq!(summary.stats.nonfinite_samples, 0, "{stem}");
             assert!(std::fs::metadata(&output).unwrap().len() > 0);
             if ext == "exr" {

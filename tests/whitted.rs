@@ -43,10 +43,7 @@ fn diffuse_plane_receives_kd_i_cos_over_d2() {
         let d2 = to_light.length_squared();
         let cos = to_light.normalize().y;
         let expected = Vec3::new(1.0, 0.5, 0.25) * 0.7 * 10.0 * cos / d2;
-        assert!(
-            (c - expected).abs().max_element() <= 1e-4 * expected.max_element(),
-            "at {target}: {c} vs {expected}"
-        );
+        assert!((c - expected).abs().max_element() <= 1e-4 * expected.max_element(), "at {target}: {c} vs {expected}");
     }
 }
 

@@ -153,11 +153,7 @@ fn interior(prims: &mut [BuildPrim], offset: usize, depth: usize, bounds: Aabb, 
     } else {
         (build(left, offset, depth + 1), build(right, offset + mid, depth + 1))
     };
-    BuildNode::Interior {
-        bounds,
-        axis,
-        children: Box::new([l, r]),
-    }
+    BuildNode::Interior { bounds, axis, children: Box::new([l, r]) }
 }
 
 fn flatten(node: &BuildNode, nodes: &mut Vec<Node>) {
@@ -189,11 +185,7 @@ impl BoxRay {
     #[inline]
     fn new(ray: &Ray) -> Self {
         let d = Vec3A::from(ray.d);
-        BoxRay {
-            o: Vec3A::from(ray.o),
-            inv_d: d.recip(),
-            neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
-        }
+        BoxRay { o: Vec3A::from(ray.o), inv_d: d.recip(), neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0] }
     }
 
     /// Slab test; the far distance is widened by 2 gamma(3) so rounding never drops a box the

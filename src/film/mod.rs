@@ -94,12 +94,7 @@ impl Image {
     /// Root-mean-square difference per channel value against `other` (same size).
     pub fn rmse(&self, other: &Image) -> f64 {
         assert_eq!((self.width, self.height), (other.width, other.height));
-        let s: f64 = self
-            .pixels
-            .iter()
-            .zip(&other.pixels)
-            .map(|(a, b)| (*a - *b).as_dvec3().length_squared())
-            .sum();
+        let s: f64 = self.pixels.iter().zip(&other.pixels).map(|(a, b)| (*a - *b).as_dvec3().length_squared()).sum();
         (s / (3 * self.pixels.len()).max(1) as f64).sqrt()
     }
 }

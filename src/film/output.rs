@@ -79,10 +79,7 @@ pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
 
 /// 8-bit sRGB bytes of an image, row by row.
 pub fn srgb8(img: &Image) -> Vec<u8> {
-    img.pixels
-        .iter()
-        .flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8))
-        .collect()
+    img.pixels.iter().flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8)).collect()
 }
 
 fn write_png(img: &Image, path: &Path) -> Result<(), OutputError> {
@@ -155,7 +152,10 @@ mod tests {
         assert!(matches!(check_writable(&dir.join("x.jpg")), Err(OutputError::Extension(_))));
         assert!(check_writable(&dir.join("missing-dir/x.png")).is_err());
         // No temporary files left behind.
-        let leftovers = fs::read_dir(&dir).unwrap().filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp.")).count();
+        let leftovers = fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp."))
+            .count();
         assert_eq!(leftovers, 0);
         fs::remove_dir_all(&dir).unwrap();
     }

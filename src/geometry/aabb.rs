@@ -16,10 +16,7 @@ impl Default for Aabb {
 
 impl Aabb {
     /// The empty box: the identity of `union`.
-    pub const EMPTY: Aabb = Aabb {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
 
     pub fn from_points(points: &[Vec3]) -> Self {
         points.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))
@@ -27,18 +24,12 @@ impl Aabb {
 
     #[inline]
     pub fn grow(self, p: Vec3) -> Self {
-        Aabb {
-            min: self.min.min(p),
-            max: self.max.max(p),
-        }
+        Aabb { min: self.min.min(p), max: self.max.max(p) }
     }
 
     #[inline]
     pub fn union(self, o: Aabb) -> Self {
-        Aabb {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
     #[inline]
@@ -48,11 +39,7 @@ impl Aabb {
 
     #[inline]
     pub fn extent(&self) -> Vec3 {
-        if self.is_empty() {
-            Vec3::ZERO
-        } else {
-            self.max - self.min
-        }
+        if self.is_empty() { Vec3::ZERO } else { self.max - self.min }
     }
 
     #[inline]

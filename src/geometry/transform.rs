@@ -17,10 +17,7 @@ impl Default for Transform {
 }
 
 impl Transform {
-    pub const IDENTITY: Transform = Transform {
-        m: Mat4::IDENTITY,
-        normal_m: Mat3::IDENTITY,
-    };
+    pub const IDENTITY: Transform = Transform { m: Mat4::IDENTITY, normal_m: Mat3::IDENTITY };
 
     pub fn from_mat4(m: Mat4) -> Self {
         let normal_m = Mat3::from_mat4(m).inverse().transpose();
@@ -33,10 +30,7 @@ impl Transform {
 
     /// Rotation by `degrees` about unit `axis`, counter-clockwise looking down the axis.
     pub fn rotate(axis: Vec3, degrees: f32) -> Self {
-        Self::from_mat4(Mat4::from_quat(Quat::from_axis_angle(
-            axis.normalize(),
-            degrees.to_radians(),
-        )))
+        Self::from_mat4(Mat4::from_quat(Quat::from_axis_angle(axis.normalize(), degrees.to_radians())))
     }
 
     pub fn scale(s: Vec3) -> Self {
@@ -67,11 +61,7 @@ impl Transform {
     /// Scale factors along the three axes if the linear part is a rotation times a scale
     /// (lengths of the transformed basis vectors).
     pub fn axis_scales(&self) -> Vec3 {
-        Vec3::new(
-            self.vector(Vec3::X).length(),
-            self.vector(Vec3::Y).length(),
-            self.vector(Vec3::Z).length(),
-        )
+        Vec3::new(self.vector(Vec3::X).length(), self.vector(Vec3::Y).length(), self.vector(Vec3::Z).length())
     }
 
     /// True when the linear part is invertible and finite.

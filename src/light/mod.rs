@@ -36,11 +36,9 @@ impl Light {
                 let dist = d2.sqrt();
                 Some(LightSample { wi: v / dist, dist, irradiance: intensity / d2 })
             }
-            Light::Directional { direction, irradiance } => Some(LightSample {
-                wi: -direction,
-                dist: f32::INFINITY,
-                irradiance,
-            }),
+            Light::Directional { direction, irradiance } => {
+                Some(LightSample { wi: -direction, dist: f32::INFINITY, irradiance })
+            }
         }
     }
 }

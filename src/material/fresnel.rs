@@ -88,7 +88,10 @@ mod tests {
                     assert!(t.dot(n) < 0.0);
                     assert!(t.dot(i.cross(n)).abs() < 1e-4);
                     let sin_t = t.cross(n).length();
-                    assert!((n1 * sin_i - n2 * sin_t).abs() < 1e-5 * n1.max(n2) * 4.0, "Snell: {n1} {sin_i} vs {n2} {sin_t}");
+                    assert!(
+                        (n1 * sin_i - n2 * sin_t).abs() < 1e-5 * n1.max(n2) * 4.0,
+                        "Snell: {n1} {sin_i} vs {n2} {sin_t}"
+                    );
                     tested += 1;
                 }
                 None => assert!(n1 * sin_i > n2 * 0.9999, "TIR reported below the critical angle"),

@@ -25,9 +25,7 @@ pub fn mix64(mut x: u64) -> u64 {
 /// Hashes a list of integers into one 64-bit seed; order matters.
 #[inline]
 pub fn hash_seed(parts: &[u64]) -> u64 {
-    parts
-        .iter()
-        .fold(0x9e37_79b9_7f4a_7c15u64, |h, &p| mix64(h ^ mix64(p.wrapping_add(0x632b_e59b_d9b4_e019))))
+    parts.iter().fold(0x9e37_79b9_7f4a_7c15u64, |h, &p| mix64(h ^ mix64(p.wrapping_add(0x632b_e59b_d9b4_e019))))
 }
 
 /// The renderer's random number generator: PCG32, small and fast.

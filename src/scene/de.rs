@@ -51,7 +51,11 @@ pub struct Unit(pub f32);
 impl<'de> Deserialize<'de> for Unit {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = finite(d)?;
-        if (0.0..=1.0).contains(&v) { Ok(Unit(v)) } else { Err(D::Error::custom(format!("expected a number from 0 to 1, found {v}"))) }
+        if (0.0..=1.0).contains(&v) {
+            Ok(Unit(v))
+        } else {
+            Err(D::Error::custom(format!("expected a number from 0 to 1, found {v}")))
+        }
     }
 }
 
@@ -97,8 +101,8 @@ impl<'de> Deserialize<'de> for Rgb {
             Grey(f64),
             Rgb([f64; 3]),
         }
-        let raw = Raw::deserialize(d)
-            .map_err(|_| D::Error::custom("expected a colour: [r, g, b] or a single number"))?;
+        let raw =
+            Raw::deserialize(d).map_err(|_| D::Error::custom("expected a colour: [r, g, b] or a single number"))?;
         let a = match raw {
             Raw::Grey(g) => [g; 3],
             Raw::Rgb(a) => a,

@@ -12,13 +12,7 @@ pub enum SceneError {
         source: std::io::Error,
     },
     #[error("{path}:{line}:{column}: {message}\n{snippet}")]
-    At {
-        path: String,
-        line: usize,
-        column: usize,
-        message: String,
-        snippet: String,
-    },
+    At { path: String, line: usize, column: usize, message: String, snippet: String },
     #[error("{path}: {message}")]
     File { path: String, message: String },
 }

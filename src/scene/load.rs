@@ -66,10 +66,8 @@ pub struct LoadInfo {
 }
 
 pub fn load_scene(path: &Path, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-        path: path.display().to_string(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     load_scene_str(&text, &path.display().to_string(), &base, overrides)
 }
@@ -106,9 +104,8 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         Some(v) => cx.de(v)?,
         None => RenderDesc::default(),
     };
-    let camera_value = sections
-        .remove("camera")
-        .ok_or_else(|| cx.at(doc_span.start..doc_span.start, "missing [camera] section"))?;
+    let camera_value =
+        sections.remove("camera").ok_or_else(|| cx.at(doc_span.start..doc_span.start, "missing [camera] section"))?;
     let camera_span = camera_value.span();
     let camera_desc: CameraDesc = cx.de(camera_value)?;
 
@@ -161,7 +158,11 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                     known.sort();
                     cx.at(
                         name.span(),
-                        format!("no material named `{}` (defined: {})", name.get_ref(), if known.is_empty() { "none".into() } else { known.join(", ") }),
+                        format!(
+                            "no material named `{}` (defined: {})",
+                            name.get_ref(),
+                            if known.is_empty() { "none".into() } else { known.join(", ") }
+                        ),
                     )
                 })?,
             };
@@ -198,7 +199,9 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                     let min = d.min.map_or(Vec3::splat(-1.0), |p| p.0);
                     let max = d.max.map_or(Vec3::splat(1.0), |p| p.0);
                     if !(min.cmplt(max).all()) {
-                        return Err(cx.at(table_span, format!("box `min` {min} must be below `max` {max} on every axis")));
+                        return Err(
+                            cx.at(table_span, format!("box `min` {min} must be below `max` {max} on every axis"))
+                        );
                     }
                     for (c, e1, e2) in box_faces(min, max) {
                         let q = transformed_quad(&transform, c, e1, e2)
@@ -208,7 +211,10 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                 }
                 "mesh" | "torus_knot" => {
                     let mesh = if kind == "mesh" {
-                        let file = d.file.as_ref().ok_or_else(|| cx.at(table_span.clone(), "a mesh needs `file` (an OBJ file)"))?;
+                        let file = d
+                            .file
+                            .as_ref()
+                            .ok_or_else(|| cx.at(table_span.clone(), "a mesh needs `file` (an OBJ file)"))?;
                         let path = cx.base.join(file.get_ref());
                         TriangleMesh::load_obj(&path).map_err(|e| cx.at(file.span(), e.to_string()))?
                     } else {
@@ -220,7 +226,14 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                         if p == 0 || q == 0 || p > 1000 || q > 1000 {
                             return Err(cx.at(table_span, "torus_knot p and q must be from 1 to 1000"));
                         }
-                        TriangleMesh::torus_knot(p, q, d.radius.map_or(1.0, |r| r.0), d.tube.map_or(0.25, |t| t.0), segments, sides)
+                        TriangleMesh::torus_knot(
+                            p,
+                            q,
+                            d.radius.map_or(1.0, |r| r.0),
+                            d.tube.map_or(0.25, |t| t.0),
+                            segments,
+                            sides,
+                        )
                     };
                     let mut mesh = mesh.transformed(&transform);
                     if transform.m.determinant() < 0.0 {
@@ -250,7 +263,9 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE || width as u64 * height as u64 > MAX_PIXELS {
         return Err(SceneError::File {
             path: name.to_string(),
-            message: format!("image size {width} x {height} is out of range (each side 1 to {MAX_SIDE}, at most {MAX_PIXELS} pixels)"),
+            message: format!(
+                "image size {width} x {height} is out of range (each side 1 to {MAX_SIDE}, at most {MAX_PIXELS} pixels)"
+            ),
         });
     }
     let lens_radius = camera_desc.lens_radius.map_or(0.0, |r| r.0);
@@ -272,12 +287,17 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     if spp == 0 || strata == 0 || strata > 4096 {
         return Err(SceneError::File {
             path: name.to_string(),
-            message: format!("samples per pixel must be at least 1 (got spp {spp}, samples per axis {strata}; at most 4096 per axis)"),
+            message: format!(
+                "samples per pixel must be at least 1 (got spp {spp}, samples per axis {strata}; at most 4096 per axis)"
+            ),
         });
     }
     let max_depth = overrides.max_depth.or(render.max_depth).unwrap_or(5);
     if max_depth > 1000 {
-        return Err(SceneError::File { path: name.to_string(), message: format!("max_depth {max_depth} is too large (at most 1000)") });
+        return Err(SceneError::File {
+            path: name.to_string(),
+            message: format!("max_depth {max_depth} is too large (at most 1000)"),
+        });
     }
 
     let camera = camera_desc.build(&cx, camera_span, width, height)?;
@@ -413,7 +433,9 @@ impl<'a> Cx<'a> {
             return Err(self.at(ty_span, format!("`type` must be a string, one of: {}", names.join(", "))));
         };
         let Some((kind, allowed)) = kinds.iter().find(|k| k.0 == ty_str) else {
-            return Err(self.at(ty_span, format!("unknown {what} type `{ty_str}`; expected one of: {}", names.join(", "))));
+            return Err(
+                self.at(ty_span, format!("unknown {what} type `{ty_str}`; expected one of: {}", names.join(", ")))
+            );
         };
         for key in table.keys() {
             let k: &DeString = key.get_ref();
@@ -435,10 +457,8 @@ const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior"]),
 ];
 
-const LIGHT_KINDS: &[(&str, &[&str])] = &[
-    ("point", &["position", "color", "intensity"]),
-    ("directional", &["direction", "color", "intensity"]),
-];
+const LIGHT_KINDS: &[(&str, &[&str])] =
+    &[("point", &["position", "color", "intensity"]), ("directional", &["direction", "color", "intensity"])];
 
 const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("sphere", &["material", "transform", "center", "radius"]),
@@ -493,7 +513,9 @@ impl CameraDesc {
         }
         let view = match (self.fov, self.view_distance) {
             (Some(_), Some(_)) => return Err(cx.at(span, "give either `fov` or `view_distance`, not both")),
-            (Some(f), None) if f.0 >= 180.0 => return Err(cx.at(span, format!("fov must be below 180 degrees, got {}", f.0))),
+            (Some(f), None) if f.0 >= 180.0 => {
+                return Err(cx.at(span, format!("fov must be below 180 degrees, got {}", f.0)));
+            }
             (Some(f), None) => ViewPlane::Fov(f.0),
             (None, Some(d)) => ViewPlane::Distance(d.0),
             (None, None) => ViewPlane::Fov(45.0),

@@ -74,15 +74,7 @@ impl Scene {
         let (i, h) = best?;
         let prim = &self.bvh.prims[i as usize];
         let sp = prim.shape.surface(ray, &h, &self.meshes);
-        Some(Hit {
-            t: h.t,
-            p: sp.p,
-            p_error: sp.p_error,
-            ng: sp.ng,
-            ns: sp.ns,
-            material: prim.material,
-            prim: i,
-        })
+        Some(Hit { t: h.t, p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, material: prim.material, prim: i })
     }
 
     /// True when anything blocks the ray in (0, t_max).

@@ -27,16 +27,9 @@ impl TriangleMesh {
     /// vertices are fanned; smooth normals are used when the file has them for every vertex.
     pub fn load_obj(path: &Path) -> Result<Self, MeshError> {
         let shown = path.display().to_string();
-        let opts = tobj::LoadOptions {
-            single_index: true,
-            triangulate: true,
-            ignore_points: true,
-            ignore_lines: true,
-        };
-        let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| MeshError::Load {
-            path: shown.clone(),
-            message: e.to_string(),
-        })?;
+        let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+        let (models, _materials) =
+            tobj::load_obj(path, &opts).map_err(|e| MeshError::Load { path: shown.clone(), message: e.to_string() })?;
         let mut mesh = TriangleMesh::default();
         let mut all_normals = true;
         for m in &models {
@@ -73,10 +66,7 @@ impl TriangleMesh {
             return Err(MeshError::Invalid { path: shown, message: "no triangles".into() });
         }
         if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(MeshError::Invalid {
-                path: shown,
-                message: format!("vertex {} is not finite", bad + 1),
-            });
+            return Err(MeshError::Invalid { path: shown, message: format!("vertex {} is not finite", bad + 1) });
         }
         Ok(mesh)
     }
@@ -118,11 +108,7 @@ impl TriangleMesh {
                 indices.push([v(i, j), v(i1, j1), v(i, j1)]);
             }
         }
-        TriangleMesh {
-            positions,
-            normals: Some(normals),
-            indices,
-        }
+        TriangleMesh { positions, normals: Some(normals), indices }
     }
 
     /// The mesh with positions and normals moved by `t`.

@@ -23,12 +23,7 @@ impl Quad {
         if !(l2 > 0.0) || !l2.is_finite() {
             return None;
         }
-        Some(Quad {
-            p0,
-            e1,
-            e2,
-            n: c / l2.sqrt(),
-        })
+        Some(Quad { p0, e1, e2, n: c / l2.sqrt() })
     }
 
     pub fn bounds(&self) -> Aabb {

@@ -17,10 +17,7 @@ impl Sphere {
     }
 
     pub fn bounds(&self) -> Aabb {
-        Aabb {
-            min: self.center - Vec3::splat(self.radius),
-            max: self.center + Vec3::splat(self.radius),
-        }
+        Aabb { min: self.center - Vec3::splat(self.radius), max: self.center + Vec3::splat(self.radius) }
     }
 
     /// Nearest root in (0, t_max). The discriminant is computed from the distance of the centre to

@@ -35,14 +35,7 @@ impl RayShear {
         let kx = (kz + 1) % 3;
         let ky = (kx + 1) % 3;
         let dz = ray.d[kz];
-        RayShear {
-            kx,
-            ky,
-            kz,
-            sx: -ray.d[kx] / dz,
-            sy: -ray.d[ky] / dz,
-            sz: 1.0 / dz,
-        }
+        RayShear { kx, ky, kz, sx: -ray.d[kx] / dz, sy: -ray.d[ky] / dz, sz: 1.0 / dz }
     }
 }
 
@@ -57,11 +50,7 @@ pub struct Triangle {
 
 impl Triangle {
     pub fn new(p0: Vec3, p1: Vec3, p2: Vec3) -> Self {
-        Triangle {
-            p: [p0, p1, p2],
-            mesh: u32::MAX,
-            index: 0,
-        }
+        Triangle { p: [p0, p1, p2], mesh: u32::MAX, index: 0 }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -153,16 +142,11 @@ pub fn intersect_triangle(p: &[Vec3; 3], ray: &Ray, s: &RayShear, t_max: f32) ->
     let delta_y = gamma(5) * (max_yt + max_zt);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-    let delta_t =
-        3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+    let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
     if t <= delta_t {
         return None;
     }
-    Some(PrimHit {
-        t,
-        u: e1 * inv_det,
-        v: e2 * inv_det,
-    })
+    Some(PrimHit { t, u: e1 * inv_det, v: e2 * inv_det })
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use caustic::scene::{Overrides, load_scene_str, load::LoadedScene};
+use caustic::scene::{Overrides, load::LoadedScene, load_scene_str};
 use std::path::Path;
 
 /// Loads a scene from TOML text (mesh paths relative to the crate root).
