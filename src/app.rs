@@ -102,9 +102,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             Err(e) => eprintln!("warning: checkpoint failed: {e}"),
         };
         let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
-        let (image, stats) = match loaded.integrator {
+        let (image, stats) = match loaded.integrator.kind {
             IntegratorKind::Whitted => {
-                render(&loaded.scene, &Whitted { max_depth: loaded.max_depth }, &settings, &control)
+                render(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
             }
         };
         write_image(&image, &output)?;

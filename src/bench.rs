@@ -52,7 +52,7 @@ pub fn primary_rays(s: &LoadedScene) -> (u64, u64, Duration) {
 pub fn whitted_render(s: &LoadedScene) -> RenderStats {
     let cancel = AtomicBool::new(false);
     let control = RenderControl { cancel: &cancel, on_checkpoint: None };
-    render(&s.scene, &Whitted { max_depth: s.max_depth }, &s.settings, &control).1
+    render(&s.scene, &Whitted::new(&s.integrator), &s.settings, &control).1
 }
 
 /// Prints a line, ignoring a closed stdout (e.g. piped into `head`).

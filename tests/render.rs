@@ -27,7 +27,7 @@ fn render_with_threads(path: &std::path::Path, threads: usize, o: &Overrides) ->
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let cancel = AtomicBool::new(false);
     let control = RenderControl { cancel: &cancel, on_checkpoint: None };
-    pool.install(|| render(&loaded.scene, &Whitted { max_depth: loaded.max_depth }, &loaded.settings, &control).0)
+    pool.install(|| render(&loaded.scene, &Whitted::new(&loaded.integrator), &loaded.settings, &control).0)
 }
 
 #[test]

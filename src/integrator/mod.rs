@@ -35,6 +35,22 @@ pub trait Integrator: Sync {
     fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color;
 }
 
+/// Everything that configures an integrator, from the scene file and the command line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntegratorConfig {
+    pub kind: IntegratorKind,
+    /// Depth limit: reflection/refraction recursion (Whitted, photon) or path length (path).
+    pub max_depth: u32,
+    /// Shadow rays per area light at each shading point (Whitted and photon mapping).
+    pub light_samples: u32,
+}
+
+impl Default for IntegratorConfig {
+    fn default() -> Self {
+        IntegratorConfig { kind: IntegratorKind::Whitted, max_depth: 5, light_samples: 16 }
+    }
+}
+
 /// Which integrator renders the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -22,16 +22,22 @@ const MAX_SHADOW_CROSSINGS: usize = 16;
 pub struct Whitted {
     /// Reflection/refraction bounces after the camera ray (the recursion depth limit).
     pub max_depth: u32,
+    /// Shadow rays per area light at each shading point.
+    pub area_samples: u32,
 }
 
 impl Integrator for Whitted {
-    fn radiance(&self, scene: &Scene, ray: &Ray, _sampler: &mut Sampler, stats: &mut RayStats) -> Color {
-        self.trace(scene, ray, 0, stats)
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        self.trace(scene, ray, 0, sampler, stats)
     }
 }
 
 impl Whitted {
-    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, stats: &mut RayStats) -> Color {
+    pub fn new(c: &super::IntegratorConfig) -> Self {
+        Whitted { max_depth: c.max_depth, area_samples: c.light_samples }
+    }
+
+    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
         stats.rays += 1;
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
             return scene.background;
@@ -43,36 +49,44 @@ impl Whitted {
         let wo = -ray.d;
 
         let mut c = m.color * scene.ambient * m.ka;
+        if m.is_emitter() && front {
+            c += m.emission;
+        }
         if m.kd > 0.0 || m.ks > 0.0 {
             for light in &scene.lights {
-                let Some(ls) = light.sample(hit.p) else { continue };
-                let cos = n.dot(ls.wi);
-                if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
-                    continue;
+                // Delta lights need one sample; area lights are averaged over several.
+                let n_samples = if light.is_delta() { 1 } else { self.area_samples.max(1) };
+                for _ in 0..n_samples {
+                    let u = sampler.rng().uniform2();
+                    let Some(ls) = light.sample(hit.p, u) else { continue };
+                    let cos = n.dot(ls.wi);
+                    if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
+                        continue;
+                    }
+                    let vis = shadow_transmittance(scene, &hit, ls.wi, ls.dist, stats);
+                    if vis == Color::ZERO {
+                        continue;
+                    }
+                    // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
+                    let r = reflect(-ls.wi, n);
+                    let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
+                    c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.irradiance * vis / n_samples as f32;
                 }
-                let vis = shadow_transmittance(scene, &hit, ls.wi, ls.dist, stats);
-                if vis == Color::ZERO {
-                    continue;
-                }
-                // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
-                let r = reflect(-ls.wi, n);
-                let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
-                c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.irradiance * vis;
             }
         }
 
         if depth >= self.max_depth {
             return c;
         }
-        let reflected = |stats: &mut RayStats| {
+        let reflected = |sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.trace(scene, &scene.spawn(&hit, d), depth + 1, stats)
+            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats)
         };
         match m.kind {
             MaterialKind::Diffuse => {}
             MaterialKind::Reflective => {
                 if m.kr > 0.0 {
-                    c += m.kr * reflected(stats);
+                    c += m.kr * reflected(sampler, stats);
                 }
             }
             MaterialKind::Transparent => {
@@ -80,24 +94,24 @@ impl Whitted {
                 match refract(ray.d, n, eta) {
                     Some(t) => {
                         if m.kr > 0.0 {
-                            c += m.kr * reflected(stats);
+                            c += m.kr * reflected(sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, stats);
+                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
-                    None => c += reflected(stats),
+                    None => c += reflected(sampler, stats),
                 }
             }
             MaterialKind::Dielectric => {
                 let eta = if front { m.ior } else { 1.0 / m.ior };
                 let ks = fresnel_dielectric(n.dot(wo), eta);
-                c += ks * reflected(stats);
+                c += ks * reflected(sampler, stats);
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, stats);
+                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
                 }
             }
         }
@@ -111,6 +125,8 @@ impl Whitted {
 /// rays, so glass casts a lighter shadow rather than a caustic, which photon mapping renders).
 pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> Color {
     let mut ray = scene.spawn(hit, wi);
+    // Stop just short of the light so a light's own surface does not shadow it.
+    let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
     let target = hit.p + wi * dist;
     let t_max = |ray: &Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
     if !scene.transparent_shadows || !scene.any_transmissive {

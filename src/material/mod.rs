@@ -2,6 +2,7 @@
 //! Phong specular k_s with exponent n, mirror reflection k_r, transmission k_t with an index of
 //! refraction, and the four kinds the report mixes in one scene.
 
+pub mod bsdf;
 pub mod fresnel;
 
 use crate::math::Color;
@@ -34,6 +35,10 @@ pub struct Material {
     pub kt: f32,
     /// Index of refraction of the inside of the object (Transparent, Dielectric).
     pub ior: f32,
+    /// Radiance emitted from the front side (area lights only).
+    pub emission: Color,
+    /// The area light this material belongs to (`u32::MAX` for none).
+    pub light: u32,
 }
 
 impl Default for Material {
@@ -48,11 +53,23 @@ impl Default for Material {
             kr: 0.0,
             kt: 0.0,
             ior: 1.5,
+            emission: Color::ZERO,
+            light: u32::MAX,
         }
     }
 }
 
 impl Material {
+    /// The material of an area light's surface: black, emitting `radiance`.
+    pub fn emitter(radiance: Color, light: u32) -> Self {
+        Material { color: Color::ZERO, ka: 0.0, kd: 0.0, emission: radiance, light, ..Material::default() }
+    }
+
+    #[inline]
+    pub fn is_emitter(&self) -> bool {
+        self.light != u32::MAX
+    }
+
     /// True when light passes through the surface (refraction happens).
     #[inline]
     pub fn transmits(&self) -> bool {

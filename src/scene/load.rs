@@ -11,8 +11,8 @@ use super::{Scene, SceneError};
 use crate::accel::Bvh;
 use crate::camera::{Camera, ViewPlane};
 use crate::geometry::Transform;
-use crate::integrator::IntegratorKind;
-use crate::light::Light;
+use crate::integrator::{IntegratorConfig, IntegratorKind};
+use crate::light::{Emitter, Light};
 use crate::material::{Material, MaterialKind};
 use crate::math::{Color, Vec3};
 use crate::render::RenderSettings;
@@ -50,8 +50,7 @@ pub struct Overrides {
 pub struct LoadedScene {
     pub scene: Scene,
     pub settings: RenderSettings,
-    pub integrator: IntegratorKind,
-    pub max_depth: u32,
+    pub integrator: IntegratorConfig,
     pub info: LoadInfo,
 }
 
@@ -127,17 +126,15 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         }
     }
 
-    // Lights.
-    let mut lights = Vec::new();
+    // Lights are read now and built after the objects: area lights add primitives, and
+    // directional lights need the scene's bounds.
+    let mut light_descs = Vec::new();
     if let Some(v) = sections.remove("lights") {
         for value in cx.array(v, "lights")? {
+            let span = value.span();
             let (kind, value) = cx.tagged(value, "light", LIGHT_KINDS)?;
             let d: LightDesc = cx.de(value)?;
-            let power = d.color.map_or(Color::ONE, |c| c.0) * d.intensity.map_or(1.0, |i| i.0);
-            lights.push(match kind {
-                "point" => Light::Point { position: d.position.map_or(Vec3::ZERO, |p| p.0), intensity: power },
-                _ => Light::Directional { direction: d.direction.map_or(-Vec3::Y, |p| p.0), irradiance: power },
-            });
+            light_descs.push((kind, d, span));
         }
     }
 
@@ -257,6 +254,76 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         }
     }
 
+    // Area lights become emitting primitives with a material of their own.
+    let mut lights = Vec::new();
+    for (kind, d, span) in &light_descs {
+        let power = d.color.map_or(Color::ONE, |c| c.0) * d.intensity.map_or(1.0, |i| i.0);
+        let light_index = lights.len() as u32;
+        lights.push(match *kind {
+            "point" => Light::Point { position: d.position.map_or(Vec3::ZERO, |p| p.0), intensity: power },
+            "spot" => {
+                let position = d.position.map_or(Vec3::ZERO, |p| p.0);
+                let direction = match (d.direction, d.look_at) {
+                    (Some(_), Some(_)) => return Err(cx.at(span.clone(), "give either `direction` or `look_at`, not both")),
+                    (Some(dir), None) => dir.0,
+                    (None, Some(t)) => (t.0 - position).try_normalize().ok_or_else(|| {
+                        cx.at(span.clone(), "spot light `look_at` is the light's own position")
+                    })?,
+                    (None, None) => -Vec3::Y,
+                };
+                let angle = d.angle.map_or(30.0, |a| a.0);
+                let falloff = d.falloff.map_or(angle * 0.75, |a| a.0);
+                if angle > 90.0 || falloff > angle {
+                    return Err(cx.at(span.clone(), format!("spot light needs falloff <= angle <= 90 degrees (got falloff {falloff}, angle {angle})")));
+                }
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity: power,
+                    cos_total: angle.to_radians().cos(),
+                    cos_falloff: falloff.to_radians().cos(),
+                }
+            }
+            "directional" => Light::Directional {
+                direction: d.direction.map_or(-Vec3::Y, |p| p.0),
+                irradiance: power,
+                scene_center: Vec3::ZERO,
+                scene_radius: 0.0,
+            },
+            _ => {
+                let transform = transform_of(&d.transform, &cx, span.clone())?;
+                let material = materials.len() as u32;
+                materials.push(Material::emitter(power, light_index));
+                material_names.push(format!("(area light {})", light_index + 1));
+                let prim = prims.len() as u32;
+                let emitter = match d.shape.as_deref().unwrap_or("quad") {
+                    "quad" => {
+                        // Default: a 1 x 1 square facing down, as a ceiling light.
+                        let corner = d.corner.map_or(Vec3::new(-0.5, 0.0, -0.5), |p| p.0);
+                        let e1 = d.edge1.map_or(Vec3::new(1.0, 0.0, 0.0), |p| p.0);
+                        let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, 1.0), |p| p.0);
+                        let q = transformed_quad(&transform, corner, e1, e2)
+                            .ok_or_else(|| cx.at(span.clone(), "area light quad edges are parallel or zero: it has no area"))?;
+                        prims.push(Primitive { shape: Shape::Quad(q), material });
+                        Emitter::Quad(q)
+                    }
+                    "sphere" => {
+                        if !transform.is_similarity() {
+                            return Err(cx.at(span.clone(), "a spherical light can only be translated, rotated and scaled uniformly"));
+                        }
+                        let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
+                        let radius = d.radius.map_or(0.5, |r| r.0) * transform.axis_scales().x;
+                        let s = Sphere::new(center, radius);
+                        prims.push(Primitive { shape: Shape::Sphere(s), material });
+                        Emitter::Sphere(s)
+                    }
+                    other => return Err(cx.at(span.clone(), format!("unknown area light shape `{other}`; expected quad or sphere"))),
+                };
+                Light::Area { emitter, radiance: power, prim }
+            }
+        });
+    }
+
     // Settings: scene values, then command-line overrides, then checks.
     let width = overrides.width.unwrap_or(render.width.unwrap_or(640));
     let height = overrides.height.unwrap_or(render.height.unwrap_or(480));
@@ -308,6 +375,15 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     info.bvh_nodes = bvh.node_count();
     let bounds = bvh.bounds();
     let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };
+    let (scene_center, scene_radius) = if bounds.is_empty() { (Vec3::ZERO, 1.0) } else { bounds.bounding_sphere() };
+    for l in &mut lights {
+        if let Light::Directional { scene_center: c, scene_radius: r, .. } = l {
+            // Planes are unbounded: the bounding sphere of the finite geometry (at least the
+            // camera's surroundings) is where photons from the sun are useful.
+            *c = scene_center;
+            *r = scene_radius.max(1e-3);
+        }
+    }
     let any_transmissive = materials.iter().any(Material::transmits);
     let scene = Scene {
         bvh,
@@ -340,8 +416,11 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     Ok(LoadedScene {
         scene,
         settings,
-        integrator: overrides.integrator.or(render.integrator).unwrap_or_default(),
-        max_depth,
+        integrator: IntegratorConfig {
+            kind: overrides.integrator.or(render.integrator).unwrap_or_default(),
+            max_depth,
+            light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
+        },
         info,
     })
 }
@@ -457,8 +536,12 @@ const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior"]),
 ];
 
-const LIGHT_KINDS: &[(&str, &[&str])] =
-    &[("point", &["position", "color", "intensity"]), ("directional", &["direction", "color", "intensity"])];
+const LIGHT_KINDS: &[(&str, &[&str])] = &[
+    ("point", &["position", "color", "intensity"]),
+    ("spot", &["position", "direction", "look_at", "angle", "falloff", "color", "intensity"]),
+    ("directional", &["direction", "color", "intensity"]),
+    ("area", &["shape", "corner", "edge1", "edge2", "center", "radius", "transform", "color", "intensity"]),
+];
 
 const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("sphere", &["material", "transform", "center", "radius"]),
@@ -485,6 +568,7 @@ struct RenderDesc {
     ambient: Option<Rgb>,
     ray_bias: Option<NonNegative>,
     transparent_shadows: Option<bool>,
+    light_samples: Option<u32>,
 }
 
 #[derive(Deserialize)]
@@ -578,6 +662,7 @@ impl MaterialDesc {
             ),
             kt: self.kt.map_or(if kind == MaterialKind::Transparent { 0.9 } else { 0.0 }, |v| v.0),
             ior: self.ior.map_or(d.ior, |v| v.0),
+            ..d
         }
     }
 }
@@ -587,8 +672,19 @@ impl MaterialDesc {
 struct LightDesc {
     position: Option<Point>,
     direction: Option<Direction>,
+    look_at: Option<Point>,
+    /// Spot cone half-angle and the half-angle where the fall-off starts, in degrees.
+    angle: Option<Positive>,
+    falloff: Option<NonNegative>,
     color: Option<Rgb>,
     intensity: Option<NonNegative>,
+    shape: Option<String>,
+    corner: Option<Point>,
+    edge1: Option<Point>,
+    edge2: Option<Point>,
+    center: Option<Point>,
+    radius: Option<Positive>,
+    transform: Option<Vec<TransformOp>>,
 }
 
 #[derive(Deserialize)]
@@ -629,19 +725,23 @@ struct ObjectDesc {
 }
 
 impl ObjectDesc {
-    /// The object's transform: its operations applied in the order listed.
     fn transform(&self, cx: &Cx, span: Range<usize>) -> Result<Transform, SceneError> {
-        let mut t = Transform::IDENTITY;
-        for op in self.transform.iter().flatten() {
-            t = t.then(match op {
-                TransformOp::Translate(v) => Transform::translate(v.0),
-                TransformOp::Rotate(r) => Transform::rotate(r.axis.0, r.degrees.0),
-                TransformOp::Scale(s) => Transform::scale(s.0),
-            });
-        }
-        if !t.is_valid() {
-            return Err(cx.at(span, "transform is singular or not finite"));
-        }
-        Ok(t)
+        transform_of(&self.transform, cx, span)
     }
+}
+
+/// A transform list's operations composed in the order listed.
+fn transform_of(ops: &Option<Vec<TransformOp>>, cx: &Cx, span: Range<usize>) -> Result<Transform, SceneError> {
+    let mut t = Transform::IDENTITY;
+    for op in ops.iter().flatten() {
+        t = t.then(match op {
+            TransformOp::Translate(v) => Transform::translate(v.0),
+            TransformOp::Rotate(r) => Transform::rotate(r.axis.0, r.degrees.0),
+            TransformOp::Scale(s) => Transform::scale(s.0),
+        });
+    }
+    if !t.is_valid() {
+        return Err(cx.at(span, "transform is singular or not finite"));
+    }
+    Ok(t)
 }
