@@ -2,7 +2,7 @@
 //! requested size, write the image. `main.rs` only parses arguments and reports errors.
 
 use crate::film::output::{OutputError, check_writable, write_image};
-use crate::integrator::{IntegratorKind, Whitted};
+use crate::integrator::{IntegratorKind, PathTracer, Whitted};
 use crate::render::{RenderControl, RenderSettings, RenderStats, render};
 use crate::scene::{Overrides, SceneError, load_scene};
 use std::path::{Path, PathBuf};
@@ -105,6 +105,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         let (image, stats) = match loaded.integrator.kind {
             IntegratorKind::Whitted => {
                 render(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
+            }
+            IntegratorKind::Path => {
+                render(&loaded.scene, &PathTracer { max_depth: loaded.integrator.max_depth }, &settings, &control)
             }
         };
         write_image(&image, &output)?;

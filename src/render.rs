@@ -29,6 +29,8 @@ pub struct RenderSettings {
     /// Call the checkpoint callback at least this often.
     pub checkpoint: Option<Duration>,
     pub progress: bool,
+    /// Also accumulate the direct, specular, caustic and indirect layers.
+    pub layers: bool,
 }
 
 /// What a finished (or stopped) render reports.
@@ -70,8 +72,18 @@ pub fn render<I: Integrator>(
     settings: &RenderSettings,
     control: &RenderControl,
 ) -> (Image, RenderStats) {
+    let (film, stats) = render_film(scene, integrator, settings, control);
+    (film.image(), stats)
+}
+
+fn render_film<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    settings: &RenderSettings,
+    control: &RenderControl,
+) -> (Film, RenderStats) {
     let start = Instant::now();
-    let mut film = Film::new(settings.width, settings.height);
+    let mut film = Film::new(settings.width, settings.height, settings.layers);
     let pixels = settings.width as u64 * settings.height as u64;
     let bar = progress_bar(settings, pixels);
 
@@ -146,7 +158,19 @@ pub fn render<I: Integrator>(
         nonfinite_samples: nonfinite.into_inner(),
         interrupted,
     };
-    (film.image(), stats)
+    (film, stats)
+}
+
+/// Like `render`, but also returns the four layer images (empty unless `settings.layers`).
+pub fn render_layers<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    settings: &RenderSettings,
+    control: &RenderControl,
+) -> (Image, Vec<Image>, RenderStats) {
+    let (film, stats) = render_film(scene, integrator, settings, control);
+    let layers = (0..if settings.layers { 4 } else { 0 }).map(|k| film.layer_image(k)).collect();
+    (film.image(), layers, stats)
 }
 
 /// Renders samples `range` of every pixel of `tile`, adding them to its sums in index order.
@@ -160,6 +184,7 @@ fn render_tile<I: Integrator>(
     stats: &mut RayStats,
 ) -> u64 {
     let mut bad = 0;
+    let mut scratch = I::Scratch::default();
     for j in 0..tile.height {
         for i in 0..tile.width {
             let (x, y) = (tile.x0 + i, tile.y0 + j);
@@ -170,10 +195,16 @@ fn render_tile<I: Integrator>(
                 let offset = if settings.antialias { jitter } else { Vec2::splat(0.5) };
                 let lens = sampler.lens();
                 let ray = scene.camera.generate_ray(Vec2::new(x as f32, y as f32) + offset, lens);
-                let c = integrator.radiance(scene, &ray, &mut sampler, stats);
+                let layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
+                let c = layers[0] + layers[1] + layers[2] + layers[3];
                 if c.is_finite() {
                     tile.sum[k] += c;
                     tile.count[k] += 1;
+                    if let Some(l) = tile.layers.get_mut(k) {
+                        for (acc, v) in l.iter_mut().zip(layers) {
+                            *acc += v;
+                        }
+                    }
                 } else {
                     bad += 1;
                 }

@@ -19,6 +19,8 @@ pub struct Tile {
     pub sum: Vec<Color>,
     /// Samples accumulated per pixel (finite samples only).
     pub count: Vec<u32>,
+    /// Per-pixel sums of the four layers (empty when layers are not wanted).
+    pub layers: Vec<[Color; 4]>,
 }
 
 pub struct Film {
@@ -28,14 +30,15 @@ pub struct Film {
 }
 
 impl Film {
-    pub fn new(width: u32, height: u32) -> Self {
+    pub fn new(width: u32, height: u32, layers: bool) -> Self {
         let mut tiles = Vec::new();
         for y0 in (0..height).step_by(TILE_SIZE as usize) {
             for x0 in (0..width).step_by(TILE_SIZE as usize) {
                 let w = TILE_SIZE.min(width - x0);
                 let h = TILE_SIZE.min(height - y0);
                 let n = (w * h) as usize;
-                tiles.push(Tile { x0, y0, width: w, height: h, sum: vec![Color::ZERO; n], count: vec![0; n] });
+                let layers = if layers { vec![[Color::ZERO; 4]; n] } else { Vec::new() };
+                tiles.push(Tile { x0, y0, width: w, height: h, sum: vec![Color::ZERO; n], count: vec![0; n], layers });
             }
         }
         Film { width, height, tiles }
@@ -50,6 +53,24 @@ impl Film {
                     let k = (j * t.width + i) as usize;
                     let c = if t.count[k] > 0 { t.sum[k] / t.count[k] as f32 } else { Color::ZERO };
                     img.set(t.x0 + i, t.y0 + j, c);
+                }
+            }
+        }
+        img
+    }
+
+    /// The average of layer `layer` (see `integrator::Layers`).
+    pub fn layer_image(&self, layer: usize) -> Image {
+        let mut img = Image::new(self.width, self.height);
+        for t in &self.tiles {
+            for j in 0..t.height {
+                for i in 0..t.width {
+                    let k = (j * t.width + i) as usize;
+                    if let Some(l) = t.layers.get(k)
+                        && t.count[k] > 0
+                    {
+                        img.set(t.x0 + i, t.y0 + j, l[layer] / t.count[k] as f32);
+                    }
                 }
             }
         }

@@ -1,8 +1,10 @@
 //! Integrators: turn a camera ray into radiance. The render loop is generic over `Integrator`,
 //! so each integrator's inner calls are monomorphised and inlined.
 
+pub mod path;
 pub mod whitted;
 
+pub use path::PathTracer;
 pub use whitted::Whitted;
 
 use crate::geometry::Ray;
@@ -30,9 +32,25 @@ impl RayStats {
     }
 }
 
+/// The light arriving along a camera ray, split by where it came from. The parts sum to the
+/// pixel's value:
+/// - `DIRECT`: emission seen directly and light sampled at the first non-specular surface;
+/// - `SPECULAR`: everything seen through mirrors and glass (camera paths starting with S+);
+/// - `CAUSTIC`: light reaching the first non-specular surface through mirrors and glass (L S+ D);
+/// - `INDIRECT`: light reaching it after at least one more non-specular bounce.
+pub type Layers = [Color; 4];
+pub const DIRECT: usize = 0;
+pub const SPECULAR: usize = 1;
+pub const CAUSTIC: usize = 2;
+pub const INDIRECT: usize = 3;
+pub const LAYER_NAMES: [&str; 4] = ["direct", "specular", "caustic", "indirect"];
+
 pub trait Integrator: Sync {
-    /// Radiance arriving along `ray` (towards its origin). Must not allocate or lock.
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color;
+    /// Reusable per-worker buffers (created once per tile, so the hot path allocates nothing).
+    type Scratch: Default;
+
+    /// Radiance arriving along `ray` (towards its origin), by layer. Must not allocate or lock.
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, scratch: &mut Self::Scratch, stats: &mut RayStats) -> Layers;
 }
 
 /// Everything that configures an integrator, from the scene file and the command line.
@@ -58,6 +76,8 @@ pub enum IntegratorKind {
     /// Classic Whitted ray tracing with the seed report's Phong model.
     #[default]
     Whitted,
+    /// Unidirectional path tracing with next-event estimation and MIS: the reference.
+    Path,
 }
 
 impl std::str::FromStr for IntegratorKind {
@@ -65,7 +85,8 @@ impl std::str::FromStr for IntegratorKind {
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
             "whitted" => Ok(IntegratorKind::Whitted),
-            _ => Err(format!("unknown integrator `{s}` (expected `whitted`)")),
+            "path" => Ok(IntegratorKind::Path),
+            _ => Err(format!("unknown integrator `{s}` (expected whitted, path or photon)")),
         }
     }
 }

@@ -8,7 +8,7 @@
 //! reflection sending everything into S, and Fresnel weights (eq. 5-8) for dielectrics.
 //! The medium outside every object is air (index 1).
 
-use super::{Integrator, RayStats};
+use super::{DIRECT, Integrator, Layers, RayStats, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::material::MaterialKind;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
@@ -27,8 +27,14 @@ pub struct Whitted {
 }
 
 impl Integrator for Whitted {
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
-        self.trace(scene, ray, 0, sampler, stats)
+    type Scratch = ();
+
+    /// Layers: the local shading of the first surface is `DIRECT`, what its reflection and
+    /// refraction bring is `SPECULAR`.
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
+        let mut layers = [Color::ZERO; 4];
+        (layers[DIRECT], layers[SPECULAR]) = self.trace(scene, ray, 0, sampler, stats);
+        layers
     }
 }
 
@@ -37,10 +43,11 @@ impl Whitted {
         Whitted { max_depth: c.max_depth, area_samples: c.light_samples }
     }
 
-    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+    /// Radiance along `ray` as (local shading, what reflection and refraction bring).
+    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> (Color, Color) {
         stats.rays += 1;
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
-            return scene.background;
+            return (scene.background, Color::ZERO);
         };
         let m = *scene.material(&hit);
         let front = hit.is_front(ray.d);
@@ -76,11 +83,13 @@ impl Whitted {
         }
 
         if depth >= self.max_depth {
-            return c;
+            return (c, Color::ZERO);
         }
+        let local = c;
+        c = Color::ZERO;
         let reflected = |sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats)
+            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats, ).into_sum()
         };
         match m.kind {
             MaterialKind::Diffuse => {}
@@ -97,7 +106,7 @@ impl Whitted {
                             c += m.kr * reflected(sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
+                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats, ).into_sum();
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
@@ -111,11 +120,22 @@ impl Whitted {
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
+                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats, ).into_sum();
                 }
             }
         }
-        c
+        (local, c)
+    }
+}
+
+trait IntoSum {
+    fn into_sum(self) -> Color;
+}
+
+impl IntoSum for (Color, Color) {
+    #[inline]
+    fn into_sum(self) -> Color {
+        self.0 + self.1
     }
 }
 

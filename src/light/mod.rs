@@ -59,6 +59,12 @@ pub struct EmittedPhoton {
     pub n: Vec3,
 }
 
+/// A point just off a light's surface on the side of `n`, so photons leaving it do not hit it.
+#[inline]
+pub fn off_surface(q: Vec3, n: Vec3) -> Vec3 {
+    q + n * (1e-5 * (1.0 + q.abs().max_element()))
+}
+
 #[inline]
 fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
     if e0 == e1 {
@@ -186,7 +192,7 @@ impl Light {
                 let (q, n, area) = emitter.sample_area(u_pos);
                 let d = Frame::from_z(n).to_world(cosine_hemisphere(u_dir));
                 // L cos / (pdf_area * cos / pi) = L * area * pi.
-                Some(EmittedPhoton { ray: Ray::new(q, d), flux: radiance * (area * PI), n })
+                Some(EmittedPhoton { ray: Ray::new(off_surface(q, n), d), flux: radiance * (area * PI), n })
             }
         }
     }
@@ -348,5 +354,51 @@ mod tests {
         let (a, b, d) = (1.0f64, 1.0f64, 3.0f64);
         let exact = 4.0 * (a * b / ((a * a + d * d) * (b * b + d * d)).sqrt()).asin();
         assert!((omega - exact).abs() < 0.01 * exact, "{omega} vs {exact}");
+    }
+}
+
+/// Chooses lights in proportion to their power (uniformly when none has any).
+#[derive(Clone, Debug, Default)]
+pub struct LightPicker {
+    /// Cumulative selection probabilities; the last is 1.
+    cdf: Vec<f32>,
+    prob: Vec<f32>,
+}
+
+impl LightPicker {
+    pub fn new(lights: &[Light]) -> Self {
+        let w: Vec<f32> = lights.iter().map(|l| l.selection_weight()).collect();
+        let total: f32 = w.iter().sum();
+        let prob: Vec<f32> = if total > 0.0 && total.is_finite() {
+            w.iter().map(|x| x / total).collect()
+        } else {
+            vec![1.0 / lights.len().max(1) as f32; lights.len()]
+        };
+        let mut acc = 0.0;
+        let cdf = prob
+            .iter()
+            .map(|p| {
+                acc += p;
+                acc
+            })
+            .collect();
+        LightPicker { cdf, prob }
+    }
+
+    /// (light index, probability of choosing it) for a uniform number `u`.
+    #[inline]
+    pub fn pick(&self, u: f32) -> Option<(usize, f32)> {
+        if self.cdf.is_empty() {
+            return None;
+        }
+        let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+        // Skip zero-probability entries that a rounding edge could land on.
+        let i = (i..self.cdf.len()).chain(0..i).find(|&j| self.prob[j] > 0.0)?;
+        Some((i, self.prob[i]))
+    }
+
+    #[inline]
+    pub fn prob(&self, i: usize) -> f32 {
+        self.prob.get(i).copied().unwrap_or(0.0)
     }
 }

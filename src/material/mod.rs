@@ -65,6 +65,17 @@ impl Material {
         Material { color: Color::ZERO, ka: 0.0, kd: 0.0, emission: radiance, light, ..Material::default() }
     }
 
+    /// True when the material has a perfectly specular (mirror or refracting) part, so light
+    /// arriving through it can form caustics.
+    pub fn is_specular(&self) -> bool {
+        match self.kind {
+            MaterialKind::Diffuse => false,
+            MaterialKind::Reflective => self.kr > 0.0,
+            MaterialKind::Transparent => self.kr > 0.0 || self.kt > 0.0,
+            MaterialKind::Dielectric => true,
+        }
+    }
+
     #[inline]
     pub fn is_emitter(&self) -> bool {
         self.light != u32::MAX

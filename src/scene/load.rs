@@ -143,6 +143,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
     let mut planes = Vec::new();
     let mut meshes: Vec<TriangleMesh> = Vec::new();
     let mut info = LoadInfo::default();
+    let mut specular_targets = Vec::new();
     if let Some(v) = sections.remove("objects") {
         for value in cx.array(v, "objects")? {
             let table_span = value.span();
@@ -164,6 +165,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                 })?,
             };
             let transform = d.transform(&cx, table_span.clone())?;
+            let first_prim = prims.len();
             match kind {
                 "sphere" => {
                     let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
@@ -250,6 +252,13 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                     meshes.push(mesh);
                 }
                 _ => unreachable!("kind checked by tagged()"),
+            }
+            if materials[material as usize].is_specular() && prims.len() > first_prim {
+                let b = prims[first_prim..].iter().fold(crate::geometry::Aabb::EMPTY, |b, p| b.union(p.shape.bounds()));
+                specular_targets.push(match prims[first_prim].shape {
+                    Shape::Sphere(s) if prims.len() == first_prim + 1 => (s.center, s.radius),
+                    _ => b.bounding_sphere(),
+                });
             }
         }
     }
@@ -391,6 +400,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         meshes,
         materials,
         material_names,
+        light_picker: crate::light::LightPicker::new(&lights),
         lights,
         camera,
         background: render.background.map_or(Color::ZERO, |c| c.0),
@@ -400,6 +410,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         ray_bias: render.ray_bias.map_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }, |b| b.0),
         transparent_shadows: render.transparent_shadows.unwrap_or(true),
         any_transmissive,
+        specular_targets,
     };
     let settings = RenderSettings {
         width,
@@ -412,6 +423,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         time_limit: None,
         checkpoint: None,
         progress: false,
+        layers: false,
     };
     Ok(LoadedScene {
         scene,

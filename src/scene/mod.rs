@@ -11,7 +11,7 @@ pub use load::{Overrides, load_scene, load_scene_str};
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, Ray};
-use crate::light::Light;
+use crate::light::{Light, LightPicker};
 use crate::material::Material;
 use crate::math::Color;
 use crate::shape::{Plane, TriangleMesh};
@@ -24,6 +24,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
     pub lights: Vec<Light>,
+    /// Chooses a light in proportion to power (next-event estimation, photon emission).
+    pub light_picker: LightPicker,
     pub camera: Camera,
     pub background: Color,
     /// Ambient light I_a of seed eq. 1.
@@ -34,6 +36,9 @@ pub struct Scene {
     pub transparent_shadows: bool,
     /// Some material transmits light (so shadow rays must look for transparent surfaces).
     pub any_transmissive: bool,
+    /// Bounding spheres (centre, radius) of objects with mirror or glass materials: where caustic
+    /// photons are aimed.
+    pub specular_targets: Vec<(crate::math::Vec3, f32)>,
 }
 
 impl Scene {

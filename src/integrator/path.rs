@@ -1,0 +1,147 @@
+//! Unidirectional path tracing: the reference the photon-mapping integrators are checked against.
+//!
+//! Next-event estimation at every non-specular vertex (a light chosen in proportion to power),
+//! combined with BSDF sampling by multiple importance sampling (power heuristic, Veach 1997) for
+//! area lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
+
+use super::{CAUSTIC, DIRECT, INDIRECT, Integrator, Layers, RayStats, SPECULAR};
+use crate::geometry::Ray;
+use crate::material::bsdf::{Bsdf, Transport};
+use crate::math::{Color, Vec3};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+pub struct PathTracer {
+    /// Longest path in bounces (1 = direct light only).
+    pub max_depth: u32,
+}
+
+#[inline]
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+impl Integrator for PathTracer {
+    type Scratch = ();
+
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
+        let mut layers = [Color::ZERO; 4];
+        let mut beta = Color::ONE;
+        let mut ray = *ray;
+        let mut specular_bounce = true;
+        let mut prev_pdf = 0.0f32;
+        let mut prev_p = ray.o;
+        let mut depth = 0;
+        // Layer bookkeeping: x is the first non-specular vertex of the camera path.
+        let mut reached_x = false;
+        let mut prefix_specular = false;
+        let mut vertices_after_x = 0u32;
+        let mut specular_since_x = true;
+        // Where light arriving at the current vertex (by emission) belongs.
+        let layer_of_emission = |reached_x: bool, prefix_specular: bool, after: u32, spec: bool| {
+            if prefix_specular {
+                SPECULAR
+            } else if !reached_x || after == 0 {
+                DIRECT
+            } else if spec {
+                CAUSTIC
+            } else {
+                INDIRECT
+            }
+        };
+        loop {
+            stats.rays += 1;
+            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+                let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
+                layers[k] += beta * scene.background;
+                break;
+            };
+            let m = scene.material(&hit);
+            let wo = -ray.d;
+            if m.is_emitter() && hit.is_front(ray.d) {
+                let le = m.emission;
+                let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
+                if specular_bounce {
+                    layers[k] += beta * le;
+                } else {
+                    let light = &scene.lights[m.light as usize];
+                    let light_pdf = scene.light_picker.prob(m.light as usize) * light.pdf(prev_p, hit.p, hit.ng, ray.d);
+                    layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
+                }
+            }
+            if depth >= self.max_depth {
+                break;
+            }
+            let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+            let specular_vertex = bsdf.is_specular_only();
+            if reached_x {
+                vertices_after_x += 1;
+                specular_since_x &= specular_vertex;
+            } else if specular_vertex {
+                prefix_specular = true;
+            } else {
+                reached_x = true;
+            }
+            if !specular_vertex {
+                let k = if prefix_specular {
+                    SPECULAR
+                } else if vertices_after_x == 0 {
+                    DIRECT
+                } else {
+                    INDIRECT
+                };
+                layers[k] += beta * direct_light(scene, &hit, &bsdf, wo, sampler, stats, true);
+            }
+            let uc = sampler.next_1d();
+            let u = sampler.next_2d();
+            let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
+            beta *= s.weight;
+            specular_bounce = s.lobe.is_specular();
+            prev_pdf = s.pdf;
+            prev_p = hit.p;
+            depth += 1;
+            if depth >= 3 {
+                let survive = beta.max_element().min(0.95);
+                if sampler.rng().uniform() >= survive {
+                    break;
+                }
+                beta /= survive;
+            }
+            if !beta.is_finite() || beta == Color::ZERO {
+                break;
+            }
+            ray = scene.spawn(&hit, s.wi);
+        }
+        layers
+    }
+}
+
+/// One light sample at a hit: a light chosen by power, a point on it, a shadow ray. With `mis`,
+/// area-light samples are weighted against BSDF sampling (whose hits on lights add the rest).
+pub fn direct_light(
+    scene: &Scene,
+    hit: &crate::geometry::Hit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+    mis: bool,
+) -> Color {
+    let Some((li, p_pick)) = scene.light_picker.pick(sampler.next_1d()) else { return Color::ZERO };
+    let light = &scene.lights[li];
+    let Some(ls) = light.sample(hit.p, sampler.next_2d()) else { return Color::ZERO };
+    let f = bsdf.f(wo, ls.wi);
+    if f == Color::ZERO {
+        return Color::ZERO;
+    }
+    let cos = ls.wi.dot(bsdf.normal()).abs();
+    stats.shadow_rays += 1;
+    let shadow = scene.spawn(hit, ls.wi);
+    let t_max = if ls.dist.is_finite() { (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4) } else { f32::INFINITY };
+    if scene.occluded(&shadow, t_max) {
+        return Color::ZERO;
+    }
+    let w = if light.is_delta() || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi)) };
+    f * ls.irradiance * (cos * w / p_pick)
+}

@@ -1,0 +1,250 @@
+//! Photon tracing (Jensen 2001 sec. 2): photons leave the lights, carrying flux, and scatter
+//! through the scene by Russian roulette; those landing on diffuse surfaces are recorded.
+//!
+//! Two passes fill the two maps:
+//! - global: photons emitted from every light by its emission distribution; every hit on a
+//!   diffuse surface is stored (also the first, flagged `DIRECT`, and the ones that came only
+//!   through mirrors and glass, flagged `CAUSTIC`, so each use of the map can pick what it needs);
+//! - caustic: photons aimed at the bounding spheres of mirror and glass objects (the projection
+//!   map of Jensen 1996, with the density of the aimed directions in the photon's weight), kept
+//!   only for L S+ D paths, emitted in batches until enough are stored or a cap is reached.
+//!
+//! Photon `i` of a pass draws its random numbers from a stream seeded by (seed, pass, i), and
+//! photons are traced in fixed chunks whose results are joined in order, so the maps are the
+//! same for any thread count.
+
+use crate::geometry::Ray;
+use crate::light::{EmittedPhoton, Light};
+use crate::material::bsdf::Bsdf;
+use crate::math::{Color, Frame, Vec2, Vec3};
+use crate::sampling::warp::{concentric_disk, uniform_cone};
+use crate::sampling::{Rng32, hash_seed};
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+/// Flag: the photon's first bounce (L D): light a direct-lighting computation already counts.
+pub const DIRECT: u8 = 1;
+/// Flag: the photon came from the light only through specular bounces (L S+ D).
+pub const CAUSTIC: u8 = 2;
+
+/// A photon hit before packing: where, travelling which way, with what flux (watts).
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonHit {
+    pub p: Vec3,
+    /// Direction of travel (towards the surface).
+    pub dir: Vec3,
+    pub flux: Color,
+    pub flags: u8,
+}
+
+/// What one pass produced.
+#[derive(Clone, Debug, Default)]
+pub struct PhotonPass {
+    /// Stored hits, flux already divided by the number emitted.
+    pub hits: Vec<PhotonHit>,
+    pub emitted: u64,
+    /// The caustic pass stopped at its emission cap before storing the requested number.
+    pub capped: bool,
+}
+
+const CHUNK: u64 = 4096;
+/// Bounces after which a photon is dropped (Russian roulette ends nearly all paths long before).
+pub const MAX_BOUNCES: u32 = 64;
+
+/// Traces `n_emit` photons from the scene's lights (chosen in proportion to power).
+pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64) -> PhotonPass {
+    let mut hits = run_chunks(0, n_emit, |i| {
+        let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
+        let (li, p) = scene.light_picker.pick(rng.uniform())?;
+        let e = scene.lights[li].emit(rng.uniform2(), rng.uniform2())?;
+        Some((e, p, rng))
+    }, scene, false);
+    let scale = 1.0 / n_emit.max(1) as f32;
+    hits.iter_mut().for_each(|h| h.flux *= scale);
+    PhotonPass { hits, emitted: n_emit, capped: false }
+}
+
+/// Traces caustic photons until `n_store` are stored or `cap` have been emitted.
+pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64) -> PhotonPass {
+    if scene.specular_targets.is_empty() || n_store == 0 {
+        return PhotonPass::default();
+    }
+    let batch = n_store.max(CHUNK * 4);
+    let mut hits = Vec::new();
+    let mut emitted = 0u64;
+    while (hits.len() as u64) < n_store && emitted < cap {
+        let n = batch.min(cap - emitted);
+        hits.extend(run_chunks(emitted, n, |i| {
+            let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
+            let (li, p) = scene.light_picker.pick(rng.uniform())?;
+            let e = emit_towards(&scene.lights[li], &scene.specular_targets, &mut rng)?;
+            Some((e, p, rng))
+        }, scene, true));
+        emitted += n;
+    }
+    let scale = 1.0 / emitted.max(1) as f32;
+    hits.iter_mut().for_each(|h| h.flux *= scale);
+    let capped = (hits.len() as u64) < n_store;
+    PhotonPass { hits, emitted, capped }
+}
+
+/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order.
+fn run_chunks(
+    first: u64,
+    n: u64,
+    emit: impl Fn(u64) -> Option<(EmittedPhoton, f32, Rng32)> + Sync,
+    scene: &Scene,
+    caustic_only: bool,
+) -> Vec<PhotonHit> {
+    let chunks = n.div_ceil(CHUNK);
+    let parts: Vec<Vec<PhotonHit>> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Vec::new();
+            let start = first + c * CHUNK;
+            let end = (start + CHUNK).min(first + n);
+            for i in start..end {
+                if let Some((e, p_light, mut rng)) = emit(i) {
+                    let flux = e.flux / p_light;
+                    if flux.max_element() > 0.0 && flux.is_finite() {
+                        trace_photon(scene, e.ray, flux, &mut rng, caustic_only, &mut out);
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    parts.concat()
+}
+
+/// Follows one photon, appending its stored hits to `out`.
+pub fn trace_photon(scene: &Scene, mut ray: Ray, mut flux: Color, rng: &mut Rng32, caustic_only: bool, out: &mut Vec<PhotonHit>) {
+    let mut only_specular = true;
+    for depth in 0..MAX_BOUNCES {
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
+        let m = scene.material(&hit);
+        if m.is_emitter() {
+            return;
+        }
+        let wo = -ray.d;
+        let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+        if bsdf.has_diffuse() {
+            let caustic = depth > 0 && only_specular;
+            if caustic_only {
+                if caustic {
+                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC });
+                }
+                return;
+            }
+            let flags = if depth == 0 { DIRECT } else if caustic { CAUSTIC } else { 0 };
+            out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags });
+        }
+        let Some(s) = bsdf.scatter_photon(wo, rng.uniform(), rng.uniform2()) else { return };
+        if !s.lobe.is_specular() {
+            only_specular = false;
+            if caustic_only {
+                return;
+            }
+        }
+        flux *= s.weight;
+        if !flux.is_finite() || flux.max_element() <= 0.0 {
+            return;
+        }
+        ray = scene.spawn(&hit, s.wi);
+    }
+}
+
+/// Solid angle and cone of a target sphere seen from `p`: (axis, cos of the half-angle, solid
+/// angle); the whole sphere of directions when `p` is inside it.
+fn cone(p: Vec3, (c, r): (Vec3, f32)) -> (Vec3, f32, f32) {
+    let v = c - p;
+    let d2 = v.length_squared();
+    if d2 <= r * r {
+        return (Vec3::Z, -1.0, 4.0 * PI);
+    }
+    let d = d2.sqrt();
+    let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+    (v / d, cos_max, 2.0 * PI * (1.0 - cos_max))
+}
+
+/// Emits a photon aimed at the specular targets. The direction (or, for a directional light,
+/// the position) is drawn from a mixture over the targets' cones (disks), and the flux divided
+/// by the mixture's density, so the caustic photons are an unbiased sample of the light's
+/// emission restricted to the directions that can reach a mirror or glass object.
+fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Option<EmittedPhoton> {
+    let (u_pos, u_pick, u_dir) = (rng.uniform2(), rng.uniform(), rng.uniform2());
+    if let Light::Directional { direction, irradiance, scene_center, scene_radius } = *light {
+        // Disks of the targets' projections, perpendicular to the light.
+        let frame = Frame::from_z(direction);
+        let areas: Vec<f32> = targets.iter().map(|t| PI * t.1 * t.1).collect();
+        let total: f32 = areas.iter().sum();
+        let j = pick(&areas, total, u_pick)?;
+        let (c, r) = targets[j];
+        let disk = concentric_disk(u_dir) * r;
+        let q = c + frame.x * disk.x + frame.y * disk.y;
+        let covering = targets
+            .iter()
+            .filter(|(tc, tr)| {
+                let v = q - *tc;
+                let off = v - direction * v.dot(direction);
+                off.length_squared() <= tr * tr
+            })
+            .count()
+            .max(1);
+        let pdf_area = covering as f32 / total;
+        let back = (scene_center - q).dot(-direction) + scene_radius;
+        let o = q - direction * back.max(r);
+        return Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction });
+    }
+    // Position (on area lights), then a direction towards one of the targets.
+    let (p, n, pos_weight, radiance_like) = match *light {
+        Light::Point { position, intensity } => (position, Vec3::ZERO, 1.0, intensity),
+        Light::Spot { position, intensity, .. } => (position, Vec3::ZERO, 1.0, intensity),
+        Light::Area { emitter, radiance, .. } => {
+            let (q, n, area) = emitter.sample_area(u_pos);
+            (q, n, area, radiance)
+        }
+        Light::Directional { .. } => unreachable!(),
+    };
+    let cones: Vec<(Vec3, f32, f32)> = targets.iter().map(|&t| cone(p, t)).collect();
+    let solid: Vec<f32> = cones.iter().map(|c| c.2).collect();
+    let total: f32 = solid.iter().sum();
+    let j = pick(&solid, total, u_pick)?;
+    let (axis, cos_max, _) = cones[j];
+    let d = Frame::from_z(axis).to_world(uniform_cone(u_dir, cos_max));
+    let covering = cones.iter().filter(|(a, cm, _)| d.dot(*a) >= *cm).count().max(1);
+    let pdf_dir = covering as f32 / total;
+    let emitted = match *light {
+        Light::Point { .. } => radiance_like,
+        Light::Spot { direction, cos_total, cos_falloff, .. } => {
+            let probe = Light::Spot { position: p, direction, intensity: radiance_like, cos_total, cos_falloff };
+            // The spot's intensity towards d: its irradiance at unit distance along d.
+            probe.sample(p + d, Vec2::ZERO).map_or(Color::ZERO, |s| s.irradiance)
+        }
+        Light::Area { .. } => {
+            let cos = n.dot(d);
+            if cos <= 0.0 {
+                return None;
+            }
+            radiance_like * cos * pos_weight
+        }
+        Light::Directional { .. } => unreachable!(),
+    };
+    let (o, n_out) = if n == Vec3::ZERO { (p, d) } else { (crate::light::off_surface(p, n), n) };
+    Some(EmittedPhoton { ray: Ray::new(o, d), flux: emitted / pdf_dir, n: n_out })
+}
+
+fn pick(weights: &[f32], total: f32, u: f32) -> Option<usize> {
+    if !(total > 0.0) {
+        return None;
+    }
+    let mut x = u * total;
+    for (i, w) in weights.iter().enumerate() {
+        if x < *w {
+            return Some(i);
+        }
+        x -= w;
+    }
+    weights.iter().rposition(|w| *w > 0.0)
+}
