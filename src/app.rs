@@ -2,8 +2,8 @@
 //! requested size, write the image. `main.rs` only parses arguments and reports errors.
 
 use crate::film::output::{OutputError, check_writable, write_image};
-use crate::integrator::{IntegratorKind, PathTracer, Whitted};
-use crate::render::{RenderControl, RenderSettings, RenderStats, render};
+use crate::integrator::{IntegratorKind, LAYER_NAMES, PathTracer, PhotonIntegrator, Whitted};
+use crate::render::{RenderControl, RenderSettings, RenderStats, render_layers};
 use crate::scene::{Overrides, SceneError, load_scene};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -20,6 +20,10 @@ pub struct RenderOptions {
     pub time_limit: Option<Duration>,
     pub checkpoint: Option<Duration>,
     pub quiet: bool,
+    /// Write the four light layers next to the output.
+    pub layers: bool,
+    /// Memory budget for photon maps in bytes (default: half the machine's memory).
+    pub max_memory: Option<u64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -32,6 +36,11 @@ pub enum AppError {
     Threads { threads: usize, message: String },
     #[error("--threads must be at least 1")]
     ZeroThreads,
+    #[error(
+        "the photon maps would need about {need_mib} MiB, more than the {limit_mib} MiB allowed; \
+         use fewer photons (--photons, --caustic-photons) or raise --max-memory"
+    )]
+    Memory { need_mib: u64, limit_mib: u64 },
     #[error("interrupted: wrote `{path}` with {samples} samples per pixel")]
     Interrupted { path: String, samples: u32 },
 }
@@ -46,6 +55,25 @@ pub struct Summary {
 pub fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "render".into());
     PathBuf::from(format!("{stem}.png"))
+}
+
+/// `out.png` -> `out.direct.png` for layer `direct`.
+pub fn layer_path(output: &Path, layer: &str) -> PathBuf {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = output.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{stem}.{layer}.{ext}"))
+}
+
+/// Total memory of the machine in bytes (from /proc/meminfo; 8 GiB when unknown).
+pub fn system_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib * 1024)
+        })
+        .unwrap_or(8 << 30)
 }
 
 fn log(quiet: bool, msg: std::fmt::Arguments) {
@@ -102,14 +130,39 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             Err(e) => eprintln!("warning: checkpoint failed: {e}"),
         };
         let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
-        let (image, stats) = match loaded.integrator.kind {
+        settings.layers = opts.layers;
+        let (image, layers, stats) = match loaded.integrator.kind {
             IntegratorKind::Whitted => {
-                render(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
+                render_layers(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
             }
             IntegratorKind::Path => {
-                render(&loaded.scene, &PathTracer { max_depth: loaded.integrator.max_depth }, &settings, &control)
+                render_layers(&loaded.scene, &PathTracer { max_depth: loaded.integrator.max_depth }, &settings, &control)
+            }
+            IntegratorKind::Photon => {
+                let config = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
+                let need = crate::integrator::photon::estimated_map_bytes(config.photons.saturating_mul(4))
+                    + crate::integrator::photon::estimated_map_bytes(config.caustic_photons);
+                let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
+                log(opts.quiet, format_args!(
+                    "photon maps: up to {} global photons (bounces included) and {} caustic photons, about {} MiB (limit {} MiB)",
+                    config.photons.saturating_mul(4), config.caustic_photons, need >> 20, limit >> 20));
+                if need > limit {
+                    return Err(AppError::Memory { need_mib: need >> 20, limit_mib: limit >> 20 });
+                }
+                let pm = PhotonIntegrator::build(&loaded.scene, config);
+                let s = &pm.stats;
+                log(opts.quiet, format_args!(
+                    "photons: global {} emitted, {} stored ({:.1} MiB); caustic {} emitted, {} stored ({:.1} MiB){}; traced in {:.2} s, maps built in {:.2} s",
+                    s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
+                    s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
+                    if s.caustic_capped { " (emission cap reached)" } else { "" },
+                    s.trace_time.as_secs_f64(), s.build_time.as_secs_f64()));
+                render_layers(&loaded.scene, &pm, &settings, &control)
             }
         };
+        for (img, name) in layers.iter().zip(LAYER_NAMES) {
+            write_image(img, &layer_path(&output, name))?;
+        }
         write_image(&image, &output)?;
         if stats.nonfinite_samples > 0 {
             eprintln!("warning: {} samples were NaN or infinite and were dropped", stats.nonfinite_samples);

@@ -16,6 +16,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod photon;
 pub mod render;
 pub mod sampling;
 pub mod scene;

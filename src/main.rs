@@ -74,6 +74,28 @@ struct RenderArgs {
     /// Trace every ray through the pixel centre (only the lens is sampled).
     #[arg(long)]
     no_antialias: bool,
+    /// Photons emitted for the global photon map (photon integrator).
+    #[arg(long, value_name = "N")]
+    photons: Option<u64>,
+    /// Caustic photons to store (photon integrator; 0 disables caustics).
+    #[arg(long, value_name = "N")]
+    caustic_photons: Option<u64>,
+    /// Final-gather rays per sample; 0 reads the global photon map directly (fast preview).
+    #[arg(long, value_name = "N")]
+    gather: Option<u32>,
+    /// Photons per radiance estimate.
+    #[arg(long, value_name = "K")]
+    gather_k: Option<usize>,
+    /// Largest radius of a radiance estimate, in scene units [default: 5% of the scene's size].
+    #[arg(long, value_name = "R")]
+    max_radius: Option<f32>,
+    /// Also write the direct, specular, caustic and indirect parts as OUT.direct.EXT etc.
+    #[arg(long)]
+    layers: bool,
+    /// Refuse to render when photon maps would need more memory than this, in MiB
+    /// [default: half of the machine's memory].
+    #[arg(long, value_name = "MIB")]
+    max_memory: Option<u64>,
     /// Stop starting new passes after this many seconds and write the image so far.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
@@ -107,7 +129,17 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
             integrator: args.integrator,
             sampler: args.sampler,
             antialias: args.no_antialias.then_some(false),
+            photon: caustic::integrator::PhotonOptions {
+                photons: args.photons,
+                caustic_photons: args.caustic_photons,
+                gather: args.gather,
+                gather_k: args.gather_k,
+                max_radius: args.max_radius,
+                ..Default::default()
+            },
         },
+        layers: args.layers,
+        max_memory: args.max_memory.map(|m| m.saturating_mul(1 << 20)),
         threads: args.threads,
         time_limit: seconds(args.time, "time")?,
         checkpoint: seconds(args.checkpoint, "checkpoint")?,

@@ -36,6 +36,8 @@ pub struct PhotonHit {
     pub dir: Vec3,
     pub flux: Color,
     pub flags: u8,
+    /// Surface normal at the hit, on the side the photon arrived from.
+    pub n: Vec3,
 }
 
 /// What one pass produced.
@@ -131,14 +133,15 @@ pub fn trace_photon(scene: &Scene, mut ray: Ray, mut flux: Color, rng: &mut Rng3
         let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
         if bsdf.has_diffuse() {
             let caustic = depth > 0 && only_specular;
+            let n = bsdf.normal();
             if caustic_only {
                 if caustic {
-                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC });
+                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, n });
                 }
                 return;
             }
             let flags = if depth == 0 { DIRECT } else if caustic { CAUSTIC } else { 0 };
-            out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags });
+            out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
         }
         let Some(s) = bsdf.scatter_photon(wo, rng.uniform(), rng.uniform2()) else { return };
         if !s.lobe.is_specular() {

@@ -44,6 +44,7 @@ pub struct Overrides {
     pub integrator: Option<IntegratorKind>,
     pub sampler: Option<SamplerKind>,
     pub antialias: Option<bool>,
+    pub photon: crate::integrator::PhotonOptions,
 }
 
 /// Everything a loaded scene file describes.
@@ -376,6 +377,14 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         });
     }
 
+    let photon = render.photon.overridden_by(&overrides.photon);
+    for (name, v) in [("max_radius", photon.max_radius), ("caustic_radius", photon.caustic_radius)] {
+        if let Some(r) = v
+            && !(r > 0.0 && r.is_finite())
+        {
+            return Err(SceneError::File { path: name_of(&cx), message: format!("photon {name} must be a positive number, got {r}") });
+        }
+    }
     let camera = camera_desc.build(&cx, camera_span, width, height)?;
     let t0 = Instant::now();
     let bvh = Bvh::build(prims);
@@ -432,9 +441,14 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
             kind: overrides.integrator.or(render.integrator).unwrap_or_default(),
             max_depth,
             light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
+            photon,
         },
         info,
     })
+}
+
+fn name_of(cx: &Cx) -> String {
+    cx.path.to_string()
 }
 
 fn default_material(materials: &mut Vec<Material>, names: &mut Vec<String>, index: &mut HashMap<String, u32>) -> u32 {
@@ -581,6 +595,9 @@ struct RenderDesc {
     ray_bias: Option<NonNegative>,
     transparent_shadows: Option<bool>,
     light_samples: Option<u32>,
+    /// Photon-mapping settings.
+    #[serde(default)]
+    photon: crate::integrator::PhotonOptions,
 }
 
 #[derive(Deserialize)]
