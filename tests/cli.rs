@@ -127,3 +127,45 @@ fn sigint_writes_the_image_so_far_and_exits_nonzero() {
     assert!(err.contains("interrupted") && err.contains("samples per pixel"), "{err}");
     assert_eq!(png_size(&png), (200, 150));
 }
+
+#[test]
+fn photon_maps_beyond_max_memory_are_refused_before_tracing() {
+    let start = Instant::now();
+    let out = caustic()
+        .arg("render")
+        .arg(scene("13-cornell-caustics.toml"))
+        .args(["--photons", "100000000", "--max-memory", "64", "-o"])
+        .arg(common::scratch("cli-mem").join("m.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("MiB") && err.contains("--max-memory") && err.contains("--photons"), "{err}");
+    assert!(start.elapsed() < Duration::from_secs(5), "refusal took {:?}", start.elapsed());
+}
+
+#[test]
+fn layers_are_written_and_sum_to_the_image() {
+    let dir = common::scratch("cli-layers");
+    let out = dir.join("l.exr");
+    let status = caustic()
+        .arg("render")
+        .arg(scene("13-cornell-caustics.toml"))
+        .args(["--width", "32", "--height", "32", "--spp", "2", "--photons", "20000", "--caustic-photons", "20000", "--gather", "2", "--layers", "-q", "-o"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let total = caustic::film::output::read_exr(&out).unwrap();
+    let mut sum = vec![caustic::math::Vec3::ZERO; total.pixels.len()];
+    for layer in caustic::integrator::LAYER_NAMES {
+        let img = caustic::film::output::read_exr(&dir.join(format!("l.{layer}.exr"))).unwrap();
+        assert!(img.mean().max_element() > 0.0, "layer {layer} is black");
+        for (s, p) in sum.iter_mut().zip(&img.pixels) {
+            *s += *p;
+        }
+    }
+    for (s, t) in sum.iter().zip(&total.pixels) {
+        assert!((*s - *t).abs().max_element() <= 1e-4 * (1.0 + t.max_element()), "layers sum {s} vs image {t}");
+    }
+}

@@ -44,6 +44,45 @@ fn same_seed_gives_identical_image_on_1_and_2_threads() {
     assert_ne!(a, c);
 }
 
+/// Renders `scene` through the command-line path (`render_file`) with `threads` workers.
+fn render_cli(scene: &str, integrator: &str, threads: usize, out: &std::path::Path) -> Image {
+    let opts = RenderOptions {
+        scene: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene),
+        output: Some(out.to_path_buf()),
+        overrides: Overrides {
+            width: Some(40),
+            height: Some(40),
+            spp: Some(4),
+            seed: Some(11),
+            integrator: Some(integrator.parse().unwrap()),
+            photon: caustic::integrator::PhotonOptions {
+                photons: Some(50_000),
+                caustic_photons: Some(20_000),
+                gather: Some(4),
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        threads: Some(threads),
+        quiet: true,
+        ..Default::default()
+    };
+    render_file(&opts, &AtomicBool::new(false)).unwrap();
+    read_exr(out).unwrap()
+}
+
+#[test]
+fn every_integrator_is_bit_identical_on_1_and_2_threads() {
+    let dir = common::scratch("threads");
+    for integrator in ["whitted", "path", "photon"] {
+        let a = render_cli("13-cornell-caustics.toml", integrator, 1, &dir.join(format!("{integrator}-1.exr")));
+        let b = render_cli("13-cornell-caustics.toml", integrator, 2, &dir.join(format!("{integrator}-2.exr")));
+        let same = a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
+        assert!(same, "{integrator}: images differ between 1 and 2 threads");
+        assert!(a.mean().max_element() > 0.0, "{integrator}: black image");
+    }
+}
+
 #[test]
 fn every_bundled_scene_renders_to_png_and_exr_without_nan() {
     let out = common::scratch("scenes");
