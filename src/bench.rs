@@ -15,6 +15,8 @@ use std::time::{Duration, Instant};
 pub const MESH_SCENE: &str = include_str!("../benches/scenes/mesh.toml");
 /// The bundled 100k-triangle example scene (torus knot on a floor, between two spheres).
 pub const KNOT_EXAMPLE: &str = include_str!("../scenes/07-torus-knot.toml");
+/// The Cornell box with a point light (photon-tracing throughput).
+pub const CORNELL_POINT: &str = include_str!("../scenes/12-cornell-point.toml");
 /// 512 x 512, 4 x 4 spp, depth 5, mirror and Fresnel-glass spheres, two point lights.
 pub const WHITTED_SCENE: &str = include_str!("../benches/scenes/whitted.toml");
 
@@ -93,6 +95,24 @@ pub fn run_all(repeats: u32) {
         "primary rays (scenes/07-torus-knot.toml at 1920x1440, closest hit incl. its floor plane): {:.2} Mrays/s ({:.3} s)",
         best.0 as f64 / best.2.as_secs_f64() / 1e6,
         best.2.as_secs_f64()
+    );
+
+    let cornell = load(CORNELL_POINT, "scenes/12-cornell-point.toml");
+    let n = 1_000_000;
+    let best = (0..repeats)
+        .map(|r| {
+            let t = Instant::now();
+            let pass = crate::photon::trace::trace_global(&cornell.scene, n, r as u64);
+            (t.elapsed(), pass.hits.len())
+        })
+        .min_by_key(|r| r.0)
+        .unwrap_or_default();
+    say!(
+        "photon tracing (Cornell box, point light, 1M photons emitted): {:.2} M photons/s emitted, {} stored ({:.2} M stored/s), {:.3} s",
+        n as f64 / best.0.as_secs_f64() / 1e6,
+        best.1,
+        best.1 as f64 / best.0.as_secs_f64() / 1e6,
+        best.0.as_secs_f64()
     );
 
     let whitted = load(WHITTED_SCENE, "bench:whitted");
