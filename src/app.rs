@@ -138,6 +138,25 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             IntegratorKind::Path => {
                 render_layers(&loaded.scene, &PathTracer { max_depth: loaded.integrator.max_depth }, &settings, &control)
             }
+            IntegratorKind::Sppm => {
+                let pixels = settings.width as u64 * settings.height as u64;
+                let config = loaded.integrator.photon.sppm(&loaded.integrator, pixels);
+                if opts.layers {
+                    eprintln!("warning: --layers is not available with sppm; writing the image only");
+                }
+                let (img, stats) = crate::integrator::sppm::render_sppm(&loaded.scene, &config, &settings, &control);
+                log(
+                    opts.quiet,
+                    format_args!(
+                        "sppm: {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
+                        stats.passes,
+                        config.photons_per_iter,
+                        stats.passes as f64 / stats.wall.as_secs_f64().max(1e-9),
+                        stats.memory_bytes as f64 / 1048576.0
+                    ),
+                );
+                (img, Vec::new(), stats)
+            }
             IntegratorKind::Photon => {
                 let config = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
                 let need = crate::integrator::photon::estimated_map_bytes(config.photons.saturating_mul(4))

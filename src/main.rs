@@ -89,6 +89,15 @@ struct RenderArgs {
     /// Largest radius of a radiance estimate, in scene units [default: 5% of the scene's size].
     #[arg(long, value_name = "R")]
     max_radius: Option<f32>,
+    /// SPPM iterations (the same as --spp for sppm: one sample per pixel per iteration).
+    #[arg(long, value_name = "N")]
+    iterations: Option<u32>,
+    /// SPPM photons per iteration [default: one per pixel].
+    #[arg(long, value_name = "N")]
+    photons_per_iter: Option<u64>,
+    /// SPPM starting search radius in scene units [default: about two pixel footprints].
+    #[arg(long, value_name = "R")]
+    initial_radius: Option<f32>,
     /// Also write the direct, specular, caustic and indirect parts as OUT.direct.EXT etc.
     #[arg(long)]
     layers: bool,
@@ -123,7 +132,7 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
             width: args.width,
             height: args.height,
             spp_axis: args.spp_axis,
-            spp: args.spp,
+            spp: args.spp.or(args.iterations),
             max_depth: args.max_depth,
             seed: args.seed,
             integrator: args.integrator,
@@ -135,6 +144,8 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
                 gather: args.gather,
                 gather_k: args.gather_k,
                 max_radius: args.max_radius,
+                photons_per_iter: args.photons_per_iter,
+                initial_radius: args.initial_radius,
                 ..Default::default()
             },
         },

@@ -45,6 +45,8 @@ pub struct RenderStats {
     pub nonfinite_samples: u64,
     /// The render was stopped by the cancel flag before reaching its sample count.
     pub interrupted: bool,
+    /// Largest working memory an iteration needed, in bytes (measured by SPPM; 0 elsewhere).
+    pub memory_bytes: u64,
 }
 
 impl RenderStats {
@@ -157,6 +159,7 @@ fn render_film<I: Integrator>(
         passes,
         nonfinite_samples: nonfinite.into_inner(),
         interrupted,
+        memory_bytes: 0,
     };
     (film, stats)
 }

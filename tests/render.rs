@@ -74,7 +74,7 @@ fn render_cli(scene: &str, integrator: &str, threads: usize, out: &std::path::Pa
 #[test]
 fn every_integrator_is_bit_identical_on_1_and_2_threads() {
     let dir = common::scratch("threads");
-    for integrator in ["whitted", "path", "photon"] {
+    for integrator in ["whitted", "path", "photon", "sppm"] {
         let a = render_cli("13-cornell-caustics.toml", integrator, 1, &dir.join(format!("{integrator}-1.exr")));
         let b = render_cli("13-cornell-caustics.toml", integrator, 2, &dir.join(format!("{integrator}-2.exr")));
         let same = a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));

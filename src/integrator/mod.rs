@@ -3,6 +3,7 @@
 
 pub mod path;
 pub mod photon;
+pub mod sppm;
 pub mod whitted;
 
 pub use path::PathTracer;
@@ -79,6 +80,10 @@ pub struct PhotonOptions {
     pub caustic_k: Option<usize>,
     pub max_radius: Option<f32>,
     pub caustic_radius: Option<f32>,
+    /// SPPM: photons per iteration (default: one per pixel).
+    pub photons_per_iter: Option<u64>,
+    /// SPPM: starting search radius (default: from the pixel footprint and the scene's size).
+    pub initial_radius: Option<f32>,
 }
 
 impl PhotonOptions {
@@ -92,6 +97,8 @@ impl PhotonOptions {
             caustic_k: other.caustic_k.or(self.caustic_k),
             max_radius: other.max_radius.or(self.max_radius),
             caustic_radius: other.caustic_radius.or(self.caustic_radius),
+            photons_per_iter: other.photons_per_iter.or(self.photons_per_iter),
+            initial_radius: other.initial_radius.or(self.initial_radius),
         }
     }
 
@@ -118,6 +125,18 @@ impl PhotonOptions {
     }
 }
 
+impl PhotonOptions {
+    /// SPPM settings for an image of `pixels` pixels.
+    pub fn sppm(&self, c: &IntegratorConfig, pixels: u64) -> sppm::SppmConfig {
+        sppm::SppmConfig {
+            photons_per_iter: self.photons_per_iter.unwrap_or(pixels).max(1),
+            initial_radius: self.initial_radius,
+            alpha: 2.0 / 3.0,
+            max_depth: c.max_depth,
+        }
+    }
+}
+
 impl Default for IntegratorConfig {
     fn default() -> Self {
         IntegratorConfig { kind: IntegratorKind::Whitted, max_depth: 5, light_samples: 16, photon: PhotonOptions::default() }
@@ -135,6 +154,8 @@ pub enum IntegratorKind {
     Path,
     /// Photon mapping: global and caustic maps, final gathering (Jensen 2001).
     Photon,
+    /// Stochastic progressive photon mapping (Hachisuka and Jensen 2009).
+    Sppm,
 }
 
 impl std::str::FromStr for IntegratorKind {
@@ -144,7 +165,8 @@ impl std::str::FromStr for IntegratorKind {
             "whitted" => Ok(IntegratorKind::Whitted),
             "path" => Ok(IntegratorKind::Path),
             "photon" => Ok(IntegratorKind::Photon),
-            _ => Err(format!("unknown integrator `{s}` (expected whitted, path or photon)")),
+            "sppm" => Ok(IntegratorKind::Sppm),
+            _ => Err(format!("unknown integrator `{s}` (expected whitted, path, photon or sppm)")),
         }
     }
 }

@@ -1,0 +1,883 @@
+//! Robustness properties (see FUZZING.md): the loaders never panic on any input, and rays spawned
+//! from a hit never re-hit their own surface at any scale.
+//!
+//! Case counts are fixed so the suite stays fast (about 13,000 loader inputs and 1,000 + 300
+//! self-intersection cases per run); `ROBUSTNESS_SCALE=N` multiplies every count for long runs.
+//! Failure persistence is off: a failure found here becomes a named regression test at the end
+//! of this file instead.
+
+use caustic::accel::Bvh;
+use caustic::geometry::Ray;
+use caustic::light::Light;
+use caustic::math::{Vec2, Vec3};
+use caustic::scene::{Overrides, load::LoadedScene, load_scene_str};
+use caustic::shape::{Primitive, Quad, RayShear, Shape, Sphere, Triangle, TriangleMesh};
+use proptest::prelude::*;
+use proptest::test_runner::Config as ProptestConfig;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+// ---------------------------------------------------------------------------------------------
+// Shared helpers
+// ---------------------------------------------------------------------------------------------
+
+/// `n` cases, times `ROBUSTNESS_SCALE` (default 1) for long runs.
+fn scaled(n: u32) -> u32 {
+    let k = std::env::var("ROBUSTNESS_SCALE").ok().and_then(|s| s.parse::<u32>().ok()).unwrap_or(1).max(1);
+    n.saturating_mul(k)
+}
+
+fn config(cases: u32) -> ProptestConfig {
+    ProptestConfig { cases: scaled(cases), failure_persistence: None, ..ProptestConfig::default() }
+}
+
+/// A folder with a few mesh files that generated scenes refer to (valid, broken, non-finite).
+fn mesh_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = std::env::temp_dir().join(format!("caustic-robustness-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let files = [
+            ("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+            ("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nf 1//1 2//2 3//3 4//4\n"),
+            ("degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\nv 5 5 5\nf 4 4 4\n"),
+            ("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+            ("huge.obj", "v 3e38 0 0\nv -3e38 0 0\nv 0 3e38 0\nf 1 2 3\n"),
+            ("zero_normals.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 0 0 0\nvn 0 0 0\nf 1//1 2//2 3//3\n"),
+            ("bad_index.obj", "v 0 0 0\nv 1 0 0\nf 1 2 9\n"),
+            ("empty.obj", ""),
+        ];
+        for (name, text) in files {
+            std::fs::write(d.join(name), text).unwrap();
+        }
+        d
+    })
+}
+
+/// A scratch file path unique to one test (tests run on parallel threads).
+fn scratch_file(name: &str) -> PathBuf {
+    mesh_dir().join(name)
+}
+
+/// Loads `text`; a panic fails the property. An accepted scene must be usable: finite bounds
+/// (or none), finite light power, and camera rays that trace without panicking.
+fn load_and_check(text: &str) -> Result<(), TestCaseError> {
+    let Ok(loaded) = load_scene_str(text, "fuzz.toml", mesh_dir(), &Overrides::default()) else {
+        return Ok(());
+    };
+    check_loaded(&loaded).map_err(|m| TestCaseError::fail(format!("{m}\n--- scene ---\n{text}")))
+}
+
+fn check_loaded(loaded: &LoadedScene) -> Result<(), String> {
+    let scene = &loaded.scene;
+    let b = scene.bounds();
+    if !b.is_empty() && !(b.min.is_finite() && b.max.is_finite()) {
+        return Err(format!("accepted scene has non-finite bounds {b:?}"));
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        let p = l.power();
+        if !p.is_finite() {
+            return Err(format!("accepted light {i} has non-finite power {p}: {l:?}"));
+        }
+        if let Light::Area { emitter, .. } = l {
+            let a = emitter.area();
+            if !(a > 0.0 && a.is_finite()) {
+                return Err(format!("accepted area light {i} has area {a}: {l:?}"));
+            }
+        }
+    }
+    // A few camera rays, each intersected: no panic, and every hit is a finite point.
+    let (w, h) = (loaded.settings.width as f32, loaded.settings.height as f32);
+    for raster in [Vec2::new(0.5 * w, 0.5 * h), Vec2::ZERO, Vec2::new(w, h), Vec2::new(0.3 * w, 0.8 * h)] {
+        let ray = scene.camera.generate_ray(raster, Vec2::new(0.5, 0.5));
+        if let Some(hit) = scene.intersect(&ray, f32::INFINITY)
+            && !(hit.p.is_finite() && hit.t > 0.0)
+        {
+            return Err(format!("camera ray {ray:?} hit at non-finite point {hit:?}"));
+        }
+        let _ = scene.occluded(&ray, f32::INFINITY);
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene TOML generator: well-formed documents with random sections, keys and values
+// ---------------------------------------------------------------------------------------------
+
+fn fmt_f64(v: f64) -> String {
+    if v.is_nan() {
+        "nan".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf".into() } else { "-inf".into() }
+    } else {
+        // Debug keeps a decimal point or exponent, which TOML reads as a float.
+        format!("{v:?}")
+    }
+}
+
+/// A TOML number, mostly ordinary, sometimes special: NaN, infinities, negative zero, values
+/// beyond f32 or f64, subnormals, integers that overflow i64.
+fn number() -> BoxedStrategy<String> {
+    prop_oneof![
+        6 => (-4i32..=4).prop_map(|i| i.to_string()),
+        6 => (-10.0f64..10.0).prop_map(fmt_f64),
+        2 => (-45.0f64..39.0, any::<bool>()).prop_map(|(e, neg)| fmt_f64(if neg { -1.0 } else { 1.0 } * 10f64.powf(e))),
+        2 => prop::sample::select(vec![
+            "nan", "+nan", "-nan", "inf", "+inf", "-inf", "0.0", "-0.0", "0", "1e39", "-1e39", "3.4028235e38",
+            "3.4028236e38", "1e308", "1.7976931348623157e308", "1e-45", "1e-46", "5e-324", "9223372036854775807",
+            "99999999999999999999", "-9223372036854775808", "1e-8", "1e8", "0x10", "0o7", "0b1", "1_000",
+        ]).prop_map(str::to_string),
+        1 => any::<f64>().prop_map(fmt_f64),
+    ]
+    .boxed()
+}
+
+/// A whole number (counts, sizes, seeds), sometimes zero, negative, huge or a float.
+fn whole() -> BoxedStrategy<String> {
+    prop_oneof![
+        8 => (0u32..20).prop_map(|i| i.to_string()),
+        2 => prop::sample::select(vec![
+            "0", "-1", "1.0", "65536", "65537", "4096", "4097", "4294967295", "4294967296", "18446744073709551615",
+            "1000", "1001", "nan", "1e3", "\"4\"",
+        ]).prop_map(str::to_string),
+    ]
+    .boxed()
+}
+
+/// Three numbers, with coordinates often repeated (so eye == look_at, parallel edges, zero
+/// vectors and collinear points come up), or an array of the wrong length.
+fn vec3() -> BoxedStrategy<String> {
+    let coord = prop_oneof![3 => prop::sample::select(vec!["0", "1", "-1", "2", "0.5"]).prop_map(str::to_string), 2 => number()];
+    prop_oneof![
+        10 => (coord.clone(), coord.clone(), coord).prop_map(|(a, b, c)| format!("[{a}, {b}, {c}]")),
+        1 => prop::sample::select(vec!["[]", "[1]", "[1, 2]", "[1, 2, 3, 4]", "[0, 0, 0]", "[[1], 2, 3]", "[\"a\", 1, 2]", "1", "\"up\""])
+            .prop_map(str::to_string),
+    ]
+    .boxed()
+}
+
+/// A number the loader accepts for a key of `range`, extremes included: ordinary values, and
+/// now and then the largest or smallest floats (so accepted scenes can still overflow).
+fn valid_number(range: Range) -> BoxedStrategy<String> {
+    let extreme_pos = prop::sample::select(vec!["3.4028235e38", "1e38", "1e30", "1e20", "1e-20", "1e-38", "1e-45", "1e-30"])
+        .prop_map(str::to_string);
+    match range {
+        Range::Any => prop_oneof![
+            8 => prop::sample::select(vec!["0", "1", "-1", "2", "0.5", "-3", "10"]).prop_map(str::to_string),
+            4 => (-10.0f64..10.0).prop_map(fmt_f64),
+            1 => extreme_pos.prop_map(|s| s.to_string()),
+            1 => prop::sample::select(vec!["-3.4028235e38", "-1e30", "-1e-45", "-0.0"]).prop_map(str::to_string),
+        ]
+        .boxed(),
+        Range::Positive => prop_oneof![
+            8 => prop::sample::select(vec!["1", "2", "0.5", "0.25", "10"]).prop_map(str::to_string),
+            4 => (0.01f64..10.0).prop_map(fmt_f64),
+            1 => extreme_pos,
+        ]
+        .boxed(),
+        Range::NonNegative => prop_oneof![
+            8 => prop::sample::select(vec!["0", "1", "2", "0.5", "0.0"]).prop_map(str::to_string),
+            4 => (0.0f64..10.0).prop_map(fmt_f64),
+            1 => extreme_pos,
+        ]
+        .boxed(),
+        Range::Unit => prop_oneof![
+            4 => prop::sample::select(vec!["0", "1", "0.5", "0.0", "1.0"]).prop_map(str::to_string),
+            4 => (0.0f64..=1.0).prop_map(fmt_f64),
+            1 => Just("1e-45".to_string()),
+        ]
+        .boxed(),
+        Range::Degrees => prop_oneof![
+            4 => prop::sample::select(vec!["1", "30", "45", "60", "89.9", "90", "179.9"]).prop_map(str::to_string),
+            4 => (0.001f64..180.0).prop_map(fmt_f64),
+            1 => Just("1e-45".to_string()),
+        ]
+        .boxed(),
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Range {
+    Any,
+    Positive,
+    NonNegative,
+    Unit,
+    Degrees,
+}
+
+/// Three accepted numbers; with `nonneg`, none negative (colours).
+fn valid_vec3(range: Range) -> BoxedStrategy<String> {
+    (valid_number(range), valid_number(range), valid_number(range)).prop_map(|(a, b, c)| format!("[{a}, {b}, {c}]")).boxed()
+}
+
+fn color() -> BoxedStrategy<String> {
+    prop_oneof![3 => vec3(), 1 => number()].boxed()
+}
+
+/// A value of any type (for keys given the wrong type, or unknown keys).
+fn any_value() -> BoxedStrategy<String> {
+    let leaf = prop_oneof![
+        number(),
+        vec3(),
+        "[a-z_]{0,8}".prop_map(|s| format!("{s:?}")),
+        prop::sample::select(vec!["true", "false", "\"\"", "\"\\u0000\"", "'''x'''", "1979-05-27T07:32:00Z", "{}", "[]"])
+            .prop_map(str::to_string),
+    ];
+    leaf.prop_recursive(3, 12, 4, |inner| {
+        prop_oneof![
+            prop::collection::vec(inner.clone(), 0..4).prop_map(|v| format!("[{}]", v.join(", "))),
+            prop::collection::vec(("[a-z]{1,6}", inner), 0..3).prop_map(|kv| {
+                let kv: Vec<String> = kv.into_iter().enumerate().map(|(i, (k, v))| format!("{k}{i} = {v}")).collect();
+                format!("{{ {} }}", kv.join(", "))
+            }),
+        ]
+    })
+    .boxed()
+}
+
+/// A transform list, up to 16 operations deep: mostly valid ones (with extreme scales and
+/// offsets that can overflow), sometimes singular, non-finite or malformed ones.
+fn transform() -> BoxedStrategy<String> {
+    let scale = prop_oneof![
+        3 => valid_number(Range::Positive),
+        1 => valid_number(Range::Positive).prop_map(|s| format!("-{s}")),
+        2 => (valid_number(Range::Positive), valid_number(Range::Positive), valid_number(Range::Positive))
+            .prop_map(|(a, b, c)| format!("[{a}, -{b}, {c}]")),
+    ];
+    let op = prop_oneof![
+        12 => valid_vec3(Range::Any).prop_map(|v| format!("{{ translate = {v} }}")),
+        12 => (valid_vec3(Range::Any), valid_number(Range::Any))
+            .prop_map(|(a, d)| format!("{{ rotate = {{ axis = {a}, degrees = {d} }} }}")),
+        12 => scale.prop_map(|s| format!("{{ scale = {s} }}")),
+        1 => vec3().prop_map(|v| format!("{{ translate = {v} }}")),
+        1 => (vec3(), number()).prop_map(|(a, d)| format!("{{ rotate = {{ axis = {a}, degrees = {d} }} }}")),
+        1 => prop_oneof![number(), vec3()].prop_map(|s| format!("{{ scale = {s} }}")),
+        1 => any_value(),
+        1 => (vec3(), vec3()).prop_map(|(a, b)| format!("{{ translate = {a}, scale = {b} }}")),
+    ];
+    prop_oneof![6 => prop::collection::vec(op.clone(), 0..4), 1 => prop::collection::vec(op, 4..16)]
+        .prop_map(|ops| format!("[{}]", ops.join(", ")))
+        .boxed()
+}
+
+const MATERIAL_NAMES: &[&str] = &["a", "b", "glass", "mirror"];
+const MESH_FILES: &[&str] = &[
+    "tri.obj", "quad.obj", "degenerate.obj", "nan.obj", "huge.obj", "zero_normals.obj", "bad_index.obj", "empty.obj",
+    "missing.obj", "", ".", "..",
+];
+
+/// A value suited to `key`: mostly one the loader accepts (extremes included), sometimes a
+/// wrong one of the right type (NaN, negative, zero vector, ...), rarely anything at all.
+fn value_for(key: &'static str) -> BoxedStrategy<String> {
+    let str_of = |v: Vec<&'static str>| prop::sample::select(v).prop_map(str::to_string).boxed();
+    let (valid, wrong): (BoxedStrategy<String>, BoxedStrategy<String>) = match key {
+        "eye" | "look_at" | "up" | "focus_on" | "position" | "direction" | "center" | "point" | "normal" | "corner"
+        | "edge1" | "edge2" | "min" | "max" => (valid_vec3(Range::Any), vec3()),
+        "color" | "background" | "ambient" => {
+            (prop_oneof![3 => valid_vec3(Range::NonNegative), 1 => valid_number(Range::NonNegative)].boxed(), vec3())
+        }
+        "width" | "height" | "spp" | "spp_axis" | "max_depth" | "seed" | "light_samples" | "p" | "q" | "segments"
+        | "sides" | "photons" | "caustic_photons" | "gather" | "gather_k" | "caustic_k" => {
+            (prop_oneof![4 => (1u32..12).prop_map(|i| i.to_string()), 1 => whole()].boxed(), whole())
+        }
+        "transform" => (transform(), any_value()),
+        "material" => (prop::sample::select(MATERIAL_NAMES).prop_map(|s| format!("{s:?}")).boxed(), any_value()),
+        "file" => (prop::sample::select(MESH_FILES).prop_map(|s| format!("{s:?}")).boxed(), any_value()),
+        "shape" => (str_of(vec!["\"quad\"", "\"sphere\""]), str_of(vec!["\"disk\"", "1", "\"\""])),
+        "integrator" => (str_of(vec!["\"whitted\"", "\"path\"", "\"photon\""]), str_of(vec!["\"bdpt\"", "0"])),
+        "sampler" => (str_of(vec!["\"jittered\"", "\"sobol\""]), str_of(vec!["\"halton\"", "0"])),
+        "antialias" | "transparent_shadows" => (str_of(vec!["true", "false"]), str_of(vec!["1", "\"yes\""])),
+        "radius" | "fov" | "ior" | "tube" | "view_distance" | "focal_distance" | "max_radius" | "caustic_radius" => {
+            (valid_number(if key == "fov" { Range::Degrees } else { Range::Positive }), number())
+        }
+        "angle" | "falloff" => (valid_number(Range::Degrees), number()),
+        "kr" | "kt" => (valid_number(Range::Unit), number()),
+        // ka, kd, ks, exponent, intensity, lens_radius, ray_bias, degrees, ...
+        _ => (valid_number(Range::NonNegative), number()),
+    };
+    prop_oneof![40 => valid, 1 => wrong, 1 => any_value()].boxed()
+}
+
+/// `key = value` lines for a table whose keys come from `keys`, plus now and then an unknown key.
+fn entries(keys: &'static [&'static str]) -> BoxedStrategy<Vec<String>> {
+    let known = prop::sample::subsequence(keys, 0..=keys.len()).prop_flat_map(|ks| {
+        ks.into_iter().map(|k| value_for(k).prop_map(move |v| format!("{k} = {v}"))).collect::<Vec<_>>()
+    });
+    let unknown = prop::collection::vec(("[a-z_]{1,8}", any_value()).prop_map(|(k, v)| format!("{k} = {v}")), 0..2);
+    (known, prop::option::weighted(0.02, unknown)).prop_map(|(mut e, u)| {
+        e.extend(u.into_iter().flatten());
+        e
+    })
+    .boxed()
+}
+
+const RENDER_KEYS: &[&str] = &[
+    "width", "height", "spp_axis", "spp", "max_depth", "seed", "integrator", "sampler", "antialias", "background",
+    "ambient", "ray_bias", "transparent_shadows", "light_samples",
+];
+const PHOTON_KEYS: &[&str] = &["photons", "caustic_photons", "gather", "gather_k", "caustic_k", "max_radius", "caustic_radius"];
+const CAMERA_KEYS: &[&str] = &["eye", "look_at", "up", "fov", "view_distance", "lens_radius", "focal_distance", "focus_on"];
+const MATERIAL_KEYS: &[&str] = &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"];
+const LIGHT_KEYS: &[&str] = &[
+    "position", "direction", "look_at", "angle", "falloff", "color", "intensity", "shape", "corner", "edge1", "edge2",
+    "center", "radius", "transform",
+];
+const OBJECT_KEYS: &[&str] = &[
+    "material", "transform", "center", "radius", "point", "normal", "corner", "edge1", "edge2", "min", "max", "file", "p",
+    "q", "tube", "segments", "sides",
+];
+
+/// Keys each tagged kind accepts (so most generated tables get past the key check).
+fn kind_keys(kind: &str) -> &'static [&'static str] {
+    match kind {
+        "diffuse" => &["color", "ka", "kd", "ks", "exponent"],
+        "reflective" => &["color", "ka", "kd", "ks", "exponent", "kr"],
+        "transparent" | "dielectric" => &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"],
+        "point" => &["position", "color", "intensity"],
+        "spot" => &["position", "direction", "look_at", "angle", "falloff", "color", "intensity"],
+        "directional" => &["direction", "color", "intensity"],
+        "area" => &["shape", "corner", "edge1", "edge2", "center", "radius", "transform", "color", "intensity"],
+        "sphere" => &["material", "transform", "center", "radius"],
+        "plane" => &["material", "transform", "point", "normal"],
+        "quad" => &["material", "transform", "corner", "edge1", "edge2"],
+        "box" => &["material", "transform", "min", "max"],
+        "mesh" => &["material", "transform", "file"],
+        "torus_knot" => &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"],
+        _ => &[],
+    }
+}
+
+/// A tagged table body: `type = KIND` (sometimes missing or unknown) and keys for that kind
+/// (sometimes keys of every kind).
+fn tagged(kinds: &'static [&'static str], all_keys: &'static [&'static str]) -> BoxedStrategy<String> {
+    let kind = prop_oneof![
+        60 => prop::sample::select(kinds).prop_map(|k| Some(format!("{k:?}"))),
+        1 => Just(None),
+        1 => any_value().prop_map(Some),
+    ];
+    (kind, prop::bool::weighted(0.03)).prop_flat_map(move |(k, mixed)| {
+        let keys = match &k {
+            Some(s) if !mixed => kind_keys(s.trim_matches('"')),
+            _ => all_keys,
+        };
+        let keys = if keys.is_empty() { all_keys } else { keys };
+        entries(keys).prop_map(move |mut e| {
+            if let Some(k) = &k {
+                e.insert(0, format!("type = {k}"));
+            }
+            e.join("\n")
+        })
+    })
+    .boxed()
+}
+
+/// A scene document: sections in the usual order, each present or not.
+fn scene_doc() -> BoxedStrategy<String> {
+    let render = prop::option::weighted(0.5, entries(RENDER_KEYS));
+    let photon = prop::option::weighted(0.1, entries(PHOTON_KEYS));
+    let camera = prop_oneof![
+        // Mostly a usable camera, so the rest of the document gets loaded.
+        12 => entries(&["fov", "up", "lens_radius", "focal_distance"]).prop_map(|mut e| {
+            e.insert(0, "eye = [0, 1, 5]\nlook_at = [0, 0, 0]".to_string());
+            Some(e)
+        }),
+        4 => entries(CAMERA_KEYS).prop_map(Some),
+        1 => Just(None),
+    ];
+    // Distinct names (a repeated table is a TOML error, which the mutations cover).
+    let materials = prop::sample::subsequence(MATERIAL_NAMES, 0..=MATERIAL_NAMES.len()).prop_flat_map(|names| {
+        names
+            .into_iter()
+            .map(|n| tagged(&["diffuse", "reflective", "transparent", "dielectric"], MATERIAL_KEYS).prop_map(move |b| (n, b)))
+            .collect::<Vec<_>>()
+    });
+    let lights = prop::collection::vec(tagged(&["point", "spot", "directional", "area"], LIGHT_KEYS), 0..4);
+    let objects =
+        prop::collection::vec(tagged(&["sphere", "plane", "quad", "box", "mesh", "torus_knot"], OBJECT_KEYS), 0..6);
+    (render, photon, camera, materials, lights, objects, prop::option::weighted(0.01, "[a-z]{1,8}"))
+        .prop_map(|(render, photon, camera, materials, lights, objects, extra)| {
+            let mut s = String::new();
+            if let Some(r) = render {
+                s += &format!("[render]\n{}\n", r.join("\n"));
+            }
+            if let Some(p) = photon {
+                s += &format!("[render.photon]\n{}\n", p.join("\n"));
+            }
+            if let Some(c) = camera {
+                s += &format!("[camera]\n{}\n", c.join("\n"));
+            }
+            for (name, body) in materials {
+                s += &format!("[materials.{name}]\n{body}\n");
+            }
+            for l in lights {
+                s += &format!("[[lights]]\n{l}\n");
+            }
+            for o in objects {
+                s += &format!("[[objects]]\n{o}\n");
+            }
+            if let Some(x) = extra {
+                s += &format!("[{x}]\n");
+            }
+            s
+        })
+        .boxed()
+}
+
+/// The bundled example scenes (the torus knot made small), as seeds for mutation.
+fn example_scenes() -> Vec<String> {
+    vec![
+        include_str!("../scenes/01-reflection-unequal.toml").to_string(),
+        include_str!("../scenes/06-fresnel-glass.toml").to_string(),
+        include_str!("../scenes/07-torus-knot.toml").replace("segments = 1600", "segments = 16").replace("sides = 32", "sides = 6"),
+        include_str!("../scenes/08-dof-red-focus.toml").to_string(),
+        include_str!("../scenes/11-cornell-area.toml").to_string(),
+        include_str!("../scenes/13-cornell-caustics.toml").to_string(),
+    ]
+}
+
+#[derive(Clone, Debug)]
+enum Mutation {
+    Replace(prop::sample::Index, char),
+    Insert(prop::sample::Index, char),
+    Delete(prop::sample::Index),
+    Truncate(prop::sample::Index),
+    DuplicateLine(prop::sample::Index),
+    DeleteLine(prop::sample::Index),
+}
+
+/// Characters that matter to TOML and to numbers, plus a few arbitrary ones.
+fn mutation_char() -> BoxedStrategy<char> {
+    prop_oneof![
+        4 => prop::sample::select("[]{}=\"',.#\n-+0123456789eE_ \tnaif".chars().collect::<Vec<_>>()),
+        1 => any::<char>(),
+    ]
+    .boxed()
+}
+
+fn mutation() -> BoxedStrategy<Mutation> {
+    prop_oneof![
+        4 => (any::<prop::sample::Index>(), mutation_char()).prop_map(|(i, c)| Mutation::Replace(i, c)),
+        3 => (any::<prop::sample::Index>(), mutation_char()).prop_map(|(i, c)| Mutation::Insert(i, c)),
+        3 => any::<prop::sample::Index>().prop_map(Mutation::Delete),
+        1 => any::<prop::sample::Index>().prop_map(Mutation::Truncate),
+        1 => any::<prop::sample::Index>().prop_map(Mutation::DuplicateLine),
+        1 => any::<prop::sample::Index>().prop_map(Mutation::DeleteLine),
+    ]
+    .boxed()
+}
+
+fn mutate(text: &str, muts: &[Mutation]) -> String {
+    let mut chars: Vec<char> = text.chars().collect();
+    for m in muts {
+        if chars.is_empty() {
+            break;
+        }
+        match m {
+            Mutation::Replace(i, c) => {
+                let i = i.index(chars.len());
+                chars[i] = *c;
+            }
+            Mutation::Insert(i, c) => {
+                let i = i.index(chars.len() + 1);
+                chars.insert(i, *c);
+            }
+            Mutation::Delete(i) => {
+                let i = i.index(chars.len());
+                chars.remove(i);
+            }
+            Mutation::Truncate(i) => {
+                let i = i.index(chars.len());
+                chars.truncate(i);
+            }
+            Mutation::DuplicateLine(i) | Mutation::DeleteLine(i) => {
+                let s: String = chars.iter().collect();
+                let mut lines: Vec<&str> = s.lines().collect();
+                if lines.is_empty() {
+                    continue;
+                }
+                let i = i.index(lines.len());
+                if matches!(m, Mutation::DuplicateLine(_)) {
+                    lines.insert(i, lines[i]);
+                } else {
+                    lines.remove(i);
+                }
+                chars = lines.join("\n").chars().collect();
+            }
+        }
+    }
+    chars.into_iter().collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene loader properties: 2,000 + 2,000 + 3,000 + 3,000 = 10,000 inputs per run
+// ---------------------------------------------------------------------------------------------
+
+proptest! {
+    // 2,000 cases: arbitrary bytes (as lossy UTF-8).
+    #![proptest_config(config(2_000))]
+    #[test]
+    fn scene_toml_random_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
+        load_and_check(&String::from_utf8_lossy(&bytes))?;
+    }
+}
+
+proptest! {
+    // 2,000 cases: soup of TOML tokens and scene keys, so the parser gets past the first byte.
+    #![proptest_config(config(2_000))]
+    #[test]
+    fn scene_toml_token_soup_never_panics(tokens in prop::collection::vec(prop_oneof![
+        prop::sample::select(vec![
+            "[", "]", "[[", "]]", "{", "}", "=", ",", ".", "\"", "'", "\n", " ", "#", "camera", "render", "objects",
+            "lights", "materials", "type", "sphere", "eye", "look_at", "radius", "transform", "scale", "translate",
+            "\"sphere\"", "\"mesh\"", "file", "\"tri.obj\"", "1", "-1", "0", "nan", "inf", "1e39", "[0, 0, 0]",
+            "[1, 2, 3]", "\"\"", "true",
+        ]).prop_map(str::to_string),
+        "[ -~]{1,4}",
+    ], 0..80)) {
+        load_and_check(&tokens.concat())?;
+    }
+}
+
+proptest! {
+    // 3,000 cases: well-formed documents with random content.
+    #![proptest_config(config(3_000))]
+    #[test]
+    fn scene_toml_generated_never_panics(doc in scene_doc()) {
+        load_and_check(&doc)?;
+    }
+}
+
+proptest! {
+    // 3,000 cases: example scenes and generated documents with 1-4 small edits.
+    #![proptest_config(config(3_000))]
+    #[test]
+    fn scene_toml_mutated_never_panics(
+        base in prop_oneof![1 => prop::sample::select(example_scenes()), 1 => scene_doc()],
+        muts in prop::collection::vec(mutation(), 1..5),
+    ) {
+        load_and_check(&mutate(&base, &muts))?;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ loader properties: 2,000 + 1,000 = 3,000 inputs per run
+// ---------------------------------------------------------------------------------------------
+
+fn obj_index() -> BoxedStrategy<String> {
+    prop_oneof![
+        6 => (1i64..8).prop_map(|i| i.to_string()),
+        2 => (-8i64..0).prop_map(|i| i.to_string()),
+        1 => prop::sample::select(vec!["0", "99999999999", "-99999999999", "4294967296", "x", ""]).prop_map(str::to_string),
+    ]
+    .boxed()
+}
+
+fn obj_line() -> BoxedStrategy<String> {
+    let vref = prop_oneof![
+        4 => obj_index(),
+        1 => (obj_index(), obj_index()).prop_map(|(a, b)| format!("{a}/{b}")),
+        1 => (obj_index(), obj_index()).prop_map(|(a, b)| format!("{a}//{b}")),
+        1 => (obj_index(), obj_index(), obj_index()).prop_map(|(a, b, c)| format!("{a}/{b}/{c}")),
+    ];
+    prop_oneof![
+        8 => prop::collection::vec(number(), 3..=3).prop_map(|v| format!("v {}", v.join(" "))),
+        1 => prop::collection::vec(number(), 0..7).prop_map(|v| format!("v {}", v.join(" "))),
+        2 => prop::collection::vec(number(), 3..=3).prop_map(|v| format!("vn {}", v.join(" "))),
+        1 => prop::collection::vec(number(), 2..=2).prop_map(|v| format!("vt {}", v.join(" "))),
+        6 => prop::collection::vec(vref, 0..6).prop_map(|v| format!("f {}", v.join(" "))),
+        1 => prop::sample::select(vec![
+            "o obj", "g group", "s 1", "s off", "usemtl red", "mtllib missing.mtl", "# comment", "", "l 1 2", "p 1",
+            "f", "v", "\\", "f 1 2 3 \\",
+        ]).prop_map(str::to_string),
+        1 => "[ -~]{0,16}",
+    ]
+    .boxed()
+}
+
+/// Loads `text` as an OBJ file; an accepted mesh must have in-range indices and finite positions.
+fn load_obj_and_check(file: &str, text: &str) -> Result<(), TestCaseError> {
+    let path = scratch_file(file);
+    std::fs::write(&path, text).unwrap();
+    let Ok(mesh) = TriangleMesh::load_obj(&path) else {
+        return Ok(());
+    };
+    check_mesh(&mesh).map_err(|m| TestCaseError::fail(format!("{m}\n--- obj ---\n{text}")))
+}
+
+fn check_mesh(mesh: &TriangleMesh) -> Result<(), String> {
+    let n = mesh.positions.len();
+    if mesh.indices.is_empty() {
+        return Err("accepted mesh has no triangles".into());
+    }
+    if let Some(t) = mesh.indices.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
+        return Err(format!("triangle {t:?} indexes past {n} vertices"));
+    }
+    if let Some(p) = mesh.positions.iter().find(|p| !p.is_finite()) {
+        return Err(format!("accepted mesh has non-finite vertex {p}"));
+    }
+    if let Some(ns) = &mesh.normals
+        && ns.len() != n
+    {
+        return Err(format!("{} normals for {n} vertices", ns.len()));
+    }
+    // Triangles and shading normals of the accepted mesh can be used without panicking.
+    let (tris, _) = mesh.triangles(0);
+    for t in tris.iter().take(16) {
+        let _ = mesh.shading_normal(t.index as usize, 0.2, 0.3, 0.5);
+    }
+    Ok(())
+}
+
+proptest! {
+    // 2,000 cases: OBJ-like lines (vertices with special numbers, faces with bad indices).
+    #![proptest_config(config(2_000))]
+    #[test]
+    fn obj_generated_never_panics(lines in prop::collection::vec(obj_line(), 0..24)) {
+        load_obj_and_check("gen.obj", &lines.join("\n"))?;
+    }
+}
+
+proptest! {
+    // 1,000 cases: random bytes.
+    #![proptest_config(config(1_000))]
+    #[test]
+    fn obj_random_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..256)) {
+        let path = scratch_file("bytes.obj");
+        std::fs::write(&path, &bytes).unwrap();
+        if let Ok(mesh) = TriangleMesh::load_obj(&path) {
+            check_mesh(&mesh).map_err(TestCaseError::fail)?;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Self-intersection: spawned rays never re-hit their own surface (1,000 cases, >= 8 rays each)
+// ---------------------------------------------------------------------------------------------
+
+/// A coordinate log-uniform in 1e-4..1e6 with a random sign.
+fn coord() -> BoxedStrategy<f32> {
+    (-4.0f64..6.0, any::<bool>()).prop_map(|(e, neg)| (if neg { -1.0 } else { 1.0 } * 10f64.powf(e)) as f32).boxed()
+}
+
+fn point() -> BoxedStrategy<Vec3> {
+    (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z)).boxed()
+}
+
+fn unit_from(u: f32, v: f32) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * v;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+#[derive(Clone, Debug)]
+enum TestShape {
+    Triangle([Vec3; 3]),
+    /// Centre and radius.
+    Sphere(Vec3, f32),
+    /// Corner and two edges.
+    Quad([Vec3; 3]),
+}
+
+impl TestShape {
+    fn shape(&self) -> Option<Shape> {
+        Some(match *self {
+            TestShape::Triangle([a, b, c]) => Shape::Triangle(Triangle::new(a, b, c)),
+            TestShape::Sphere(c, r) => Shape::Sphere(Sphere::new(c, r)),
+            TestShape::Quad([p, e1, e2]) => Shape::Quad(Quad::new(p, e1, e2)?),
+        })
+    }
+
+    /// A point on the surface for barycentric-like `(a, b)` in [0, 1)^2.
+    fn target(&self, a: f32, b: f32) -> Vec3 {
+        match *self {
+            TestShape::Triangle([p0, p1, p2]) => {
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                p0 * (1.0 - a - b) + p1 * a + p2 * b
+            }
+            TestShape::Sphere(c, r) => c + unit_from(a, b) * r,
+            TestShape::Quad([p, e1, e2]) => p + e1 * a + e2 * b,
+        }
+    }
+}
+
+fn triangle() -> BoxedStrategy<TestShape> {
+    (point(), point(), point()).prop_map(|(a, b, c)| TestShape::Triangle([a, b, c])).boxed()
+}
+
+/// Centre log-uniform; radius log-uniform too, from 1e-3 to 10 times the centre's largest
+/// coordinate (at least 1e-4), so the sphere is thick enough for f32 to resolve.
+fn sphere() -> BoxedStrategy<TestShape> {
+    (point(), -3.0f64..1.0)
+        .prop_map(|(c, e)| TestShape::Sphere(c, ((c.abs().max_element() as f64 * 10f64.powf(e)) as f32).max(1e-4)))
+        .boxed()
+}
+
+fn quad() -> BoxedStrategy<TestShape> {
+    (point(), point(), point()).prop_map(|(p, e1, e2)| TestShape::Quad([p, e1, e2])).boxed()
+}
+
+/// Where the first ray comes from: a log-uniform point (pbrt-v4's test), or along a random
+/// direction from the target at a log-uniform distance.
+#[derive(Clone, Debug)]
+enum Origin {
+    Point(Vec3),
+    FromTarget { u: f32, v: f32, log_dist: f32 },
+}
+
+fn origin() -> BoxedStrategy<Origin> {
+    prop_oneof![
+        point().prop_map(Origin::Point),
+        (0.0f32..1.0, 0.0f32..1.0, -4.0f32..6.0).prop_map(|(u, v, log_dist)| Origin::FromTarget { u, v, log_dist }),
+    ]
+    .boxed()
+}
+
+/// Outcome of one case, for the tally printed by the self-intersection tests.
+#[derive(Default)]
+struct Tally {
+    hits: usize,
+    spawned: usize,
+}
+
+/// Hits `ts` with a ray, spawns rays from the hit in `dirs` (plus the mirror, the continuing
+/// direction and grazing ones) and checks none re-hits the surface.
+fn check_no_self_hit(ts: &TestShape, ab: (f32, f32), o: &Origin, dirs: &[(f32, f32)], tally: &mut Tally) -> Result<(), TestCaseError> {
+    let Some(shape) = ts.shape() else { return Ok(()) };
+    let target = ts.target(ab.0, ab.1);
+    let o = match *o {
+        Origin::Point(p) => p,
+        Origin::FromTarget { u, v, log_dist } => target + unit_from(u, v) * 10f32.powf(log_dist),
+    };
+    let d = (target - o).normalize_or_zero();
+    if d == Vec3::ZERO || !d.is_finite() || !target.is_finite() {
+        return Ok(());
+    }
+    let ray = Ray::new(o, d);
+    let Some(h) = shape.intersect(&ray, &RayShear::new(&ray), f32::INFINITY) else { return Ok(()) };
+    let sp = shape.surface(&ray, &h, &[]);
+    tally.hits += 1;
+    let n = sp.ng;
+    prop_assert!(sp.p.is_finite() && sp.p_error.is_finite() && n.is_finite(), "bad surface point {sp:?}");
+    // A single-primitive BVH, as the scene traverses it (compact shapes, box tests).
+    let bvh = Bvh::build(vec![Primitive { shape, material: 0 }]);
+
+    let tangent = n.any_orthonormal_vector();
+    let mut ws: Vec<Vec3> = dirs.iter().map(|&(u, v)| unit_from(u, v)).collect();
+    ws.push(d - 2.0 * d.dot(n) * n); // mirror reflection
+    ws.push(d); // straight through (transmission with ior 1)
+    for g in [1e-2f32, 1e-3] {
+        ws.push((tangent + n * g).normalize());
+        ws.push((tangent - n * g).normalize());
+    }
+    for w in ws {
+        let cos = w.dot(n);
+        if cos == 0.0 || !w.is_finite() {
+            continue;
+        }
+        let r = Ray::spawn(sp.p, sp.p_error, n, w, 0.0);
+        tally.spawned += 1;
+        let again = shape.intersect(&r, &RayShear::new(&r), f32::INFINITY);
+        let again_bvh = bvh.intersect(&r, f32::INFINITY).map(|(_, h)| h);
+        let ctx = || {
+            format!(
+                "shape {ts:?}\nfirst ray {ray:?} hit t={} at p={} (error {}), ng={n}\nspawned {r:?} (cos {cos})",
+                h.t, sp.p, sp.p_error
+            )
+        };
+        match ts {
+            TestShape::Triangle(_) | TestShape::Quad(_) => {
+                // A plane: a ray leaving it, to either side, never meets it again.
+                prop_assert!(again.is_none(), "re-hit at t={:?}\n{}", again.map(|h| h.t), ctx());
+                prop_assert!(again_bvh.is_none(), "BVH re-hit at t={:?}\n{}", again_bvh.map(|h| h.t), ctx());
+            }
+            TestShape::Sphere(_, radius) => {
+                if cos > 0.0 {
+                    // Leaving a convex surface outwards: nothing to hit.
+                    prop_assert!(again.is_none(), "outward ray re-hit at t={:?}\n{}", again.map(|h| h.t), ctx());
+                    prop_assert!(again_bvh.is_none(), "BVH: outward ray re-hit at t={:?}\n{}", again_bvh.map(|h| h.t), ctx());
+                } else {
+                    // Inwards: the far side, a chord 2 r |cos| away, never the start point.
+                    let chord = -2.0 * radius * cos;
+                    if cos < -0.01 {
+                        let t = again.map(|h| h.t);
+                        prop_assert!(t.is_some_and(|t| t > 0.5 * chord && t < 1.5 * chord), "inward ray: t={t:?}, chord {chord}\n{}", ctx());
+                        let t = again_bvh.map(|h| h.t);
+                        prop_assert!(t.is_some_and(|t| t > 0.5 * chord && t < 1.5 * chord), "BVH inward ray: t={t:?}, chord {chord}\n{}", ctx());
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn spawn_dirs() -> BoxedStrategy<Vec<(f32, f32)>> {
+    prop::collection::vec((0.0f32..1.0, 0.0f32..1.0), 8..=8).boxed()
+}
+
+proptest! {
+    // 1,000 cases (half triangles, half spheres), 14 spawned rays per hit.
+    #![proptest_config(config(1_000))]
+    #[test]
+    fn spawned_rays_never_rehit_triangles_or_spheres(
+        ts in prop_oneof![triangle(), sphere()],
+        ab in (0.0f32..1.0, 0.0f32..1.0),
+        o in origin(),
+        dirs in spawn_dirs(),
+    ) {
+        let mut tally = Tally::default();
+        check_no_self_hit(&ts, ab, &o, &dirs, &mut tally)?;
+    }
+}
+
+proptest! {
+    // 300 cases: quads (box faces, area lights), same property.
+    #![proptest_config(config(300))]
+    #[test]
+    fn spawned_rays_never_rehit_quads(ts in quad(), ab in (0.0f32..1.0, 0.0f32..1.0), o in origin(), dirs in spawn_dirs()) {
+        let mut tally = Tally::default();
+        check_no_self_hit(&ts, ab, &o, &dirs, &mut tally)?;
+    }
+}
+
+/// The property above counts only cases whose first ray hits; this checks that most do, so the
+/// 1,000 cases really spawn well over 1,000 rays.
+#[test]
+fn self_intersection_cases_mostly_hit() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::TestRunner;
+    let mut runner = TestRunner::deterministic();
+    let strat = (prop_oneof![triangle(), sphere()], (0.0f32..1.0, 0.0f32..1.0), origin(), spawn_dirs());
+    let mut tally = Tally::default();
+    for _ in 0..1_000 {
+        let (ts, ab, o, dirs) = strat.new_tree(&mut runner).unwrap().current();
+        check_no_self_hit(&ts, ab, &o, &dirs, &mut tally).unwrap();
+    }
+    eprintln!("self-intersection: {} of 1000 first rays hit, {} rays spawned", tally.hits, tally.spawned);
+    assert!(tally.hits >= 600 && tally.spawned >= 1_000 * 6, "{} hits, {} spawned", tally.hits, tally.spawned);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Regression tests: one per failure the properties or the fuzzers found
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn tmp_coverage() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::TestRunner;
+    let mut runner = TestRunner::deterministic();
+    let strat = scene_doc();
+    let mut ok = 0;
+    let mut errs: std::collections::BTreeMap<String, usize> = Default::default();
+    for i in 0..3000 {
+        let doc = strat.new_tree(&mut runner).unwrap().current();
+        match load_scene_str(&doc, "fuzz.toml", mesh_dir(), &Overrides::default()) {
+            Ok(l) => { ok += 1; if i % 300 == 0 { eprintln!("OK ({} prims, {} lights):\n{doc}\n", l.scene.bvh.prims.len(), l.scene.lights.len()); } }
+            Err(e) => { let m = e.to_string(); let m = m.lines().next().unwrap_or("").split(": ").skip(1).collect::<Vec<_>>().join(": "); let key: String = m.chars().take(50).collect(); *errs.entry(key).or_default() += 1; }
+        }
+    }
+    eprintln!("ok {ok} / 3000");
+    let mut v: Vec<_> = errs.into_iter().collect(); v.sort_by_key(|x| std::cmp::Reverse(x.1));
+    for (m, c) in v.iter().take(40) { eprintln!("{c:5} {m}"); }
+}

@@ -1,0 +1,77 @@
+//! Stochastic progressive photon mapping converges to the path tracer's image, renders caustics
+//! from a point light, and keeps its memory bounded.
+
+use caustic::film::Image;
+use caustic::integrator::sppm::{SppmConfig, render_sppm};
+use caustic::integrator::{Integrator, PathTracer};
+use caustic::math::luminance;
+use caustic::render::{RenderControl, RenderStats, render};
+use caustic::scene::Overrides;
+use caustic::scene::load::LoadedScene;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+fn cornell(name: &str, o: &Overrides) -> LoadedScene {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    caustic::scene::load_scene(&path, o).unwrap()
+}
+
+fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) {
+    let cancel = AtomicBool::new(false);
+    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
+    let mut settings = s.settings.clone();
+    settings.spp = iterations;
+    let config = SppmConfig { photons_per_iter: photons, initial_radius: None, alpha: 2.0 / 3.0, max_depth: s.integrator.max_depth };
+    render_sppm(&s.scene, &config, &settings, &control)
+}
+
+fn render_with<I: Integrator>(s: &LoadedScene, integrator: &I) -> Image {
+    let cancel = AtomicBool::new(false);
+    render(&s.scene, integrator, &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
+}
+
+#[test]
+fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
+    let size = Overrides { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
+    let reference = render_with(&cornell("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }), &PathTracer { max_depth: 12 });
+    let s = cornell("11-cornell-area.toml", &size);
+    let (early, _) = sppm(&s, 16, 20_000);
+    let (late, _) = sppm(&s, 256, 20_000);
+    let (e_early, e_late) = (early.rmse(&reference), late.rmse(&reference));
+    // 16 times the iterations: the error must fall clearly (measured: about 0.09 -> 0.01).
+    assert!(e_late < 0.5 * e_early, "RMSE after 16 iterations {e_early}, after 256 {e_late}");
+    let (l_ref, l) = (luminance(reference.mean()), luminance(late.mean()));
+    assert!((l - l_ref).abs() < 0.01 * l_ref, "mean luminance {l} vs path tracer {l_ref}");
+}
+
+#[test]
+fn sppm_renders_and_converges_the_point_light_caustic() {
+    let s = cornell("13-cornell-caustics.toml", &Overrides { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() });
+    let (long, _) = sppm(&s, 512, 40_000);
+    let (a, _) = sppm(&s, 16, 40_000);
+    let (b, _) = sppm(&s, 128, 40_000);
+    let (ea, eb) = (a.rmse(&long), b.rmse(&long));
+    assert!(eb < 0.7 * ea, "RMSE against a long run: 16 iterations {ea}, 128 iterations {eb}");
+    // The caustic under the glass sphere (windows as in the photon-mapping test).
+    let mean = |img: &Image, x0: u32, x1: u32, y0: u32, y1: u32| {
+        let mut sum = 0.0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                sum += luminance(img.get(x, y));
+            }
+        }
+        sum / ((x1 - x0) * (y1 - y0)) as f32
+    };
+    let ratio = mean(&b, 39, 45, 57, 59) / mean(&b, 12, 28, 59, 62);
+    assert!(ratio >= 2.0, "caustic only {ratio} x as bright as the floor around it");
+}
+
+#[test]
+fn sppm_memory_does_not_grow_with_iterations() {
+    let s = cornell("11-cornell-area.toml", &Overrides { width: Some(32), height: Some(32), ..Default::default() });
+    let (_, ten) = sppm(&s, 10, 10_000);
+    let (_, hundred) = sppm(&s, 100, 10_000);
+    let (m10, m100) = (ten.memory_bytes as f64, hundred.memory_bytes as f64);
+    assert!(m10 > 0.0);
+    assert!((m100 - m10).abs() < 0.1 * m10, "working memory {m10} bytes after 10 iterations, {m100} after 100");
+}
