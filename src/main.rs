@@ -22,7 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file to a PNG (8-bit sRGB) or EXR (32-bit float linear) image.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Render the built-in benchmark scenes and print rays per second.
     Bench(BenchArgs),
 }
@@ -181,7 +181,7 @@ fn main() -> ExitCode {
         eprintln!("\nstopping: finishing the tiles in flight, then writing the image (Ctrl-C again to quit at once)");
     });
     let result = match cli.command {
-        Command::Render(args) => run(args, &CANCEL),
+        Command::Render(args) => run(*args, &CANCEL),
         Command::Bench(args) => bench(args),
     };
     match result {

@@ -53,7 +53,14 @@ pub trait Integrator: Sync {
     type Scratch: Default;
 
     /// Radiance arriving along `ray` (towards its origin), by layer. Must not allocate or lock.
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, scratch: &mut Self::Scratch, stats: &mut RayStats) -> Layers;
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        scratch: &mut Self::Scratch,
+        stats: &mut RayStats,
+    ) -> Layers;
 }
 
 /// Everything that configures an integrator, from the scene file and the command line.
@@ -139,7 +146,12 @@ impl PhotonOptions {
 
 impl Default for IntegratorConfig {
     fn default() -> Self {
-        IntegratorConfig { kind: IntegratorKind::Whitted, max_depth: 5, light_samples: 16, photon: PhotonOptions::default() }
+        IntegratorConfig {
+            kind: IntegratorKind::Whitted,
+            max_depth: 5,
+            light_samples: 16,
+            photon: PhotonOptions::default(),
+        }
     }
 }
 

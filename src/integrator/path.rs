@@ -138,7 +138,11 @@ pub fn direct_light(
     let cos = ls.wi.dot(bsdf.normal()).abs();
     stats.shadow_rays += 1;
     let shadow = scene.spawn(hit, ls.wi);
-    let t_max = if ls.dist.is_finite() { (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4) } else { f32::INFINITY };
+    let t_max = if ls.dist.is_finite() {
+        (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4)
+    } else {
+        f32::INFINITY
+    };
     if scene.occluded(&shadow, t_max) {
         return Color::ZERO;
     }

@@ -179,7 +179,15 @@ impl PhotonIntegrator {
     }
 
     /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area light.
-    fn direct(&self, scene: &Scene, hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+    fn direct(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Color {
         let mut sum = Color::ZERO;
         for light in &scene.lights {
             let n_samples = if light.is_delta() { 1 } else { self.config.light_samples.max(1) };
@@ -192,8 +200,11 @@ impl PhotonIntegrator {
                 }
                 stats.shadow_rays += 1;
                 let shadow = scene.spawn(hit, ls.wi);
-                let t_max =
-                    if ls.dist.is_finite() { (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4) } else { f32::INFINITY };
+                let t_max = if ls.dist.is_finite() {
+                    (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4)
+                } else {
+                    f32::INFINITY
+                };
                 if scene.occluded(&shadow, t_max) {
                     continue;
                 }
@@ -207,7 +218,17 @@ impl PhotonIntegrator {
     /// Indirect diffuse light at a hit by final gathering: cosine-distributed rays, each reading
     /// the global map where it lands (after following mirrors and glass). Rays that reach a light
     /// are skipped: direct light and caustics account for those paths.
-    fn final_gather(&self, scene: &Scene, hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, scratch: &mut Gathered, stats: &mut RayStats) -> Color {
+    #[allow(clippy::too_many_arguments)]
+    fn final_gather(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        sampler: &mut Sampler,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> Color {
         let n = self.config.gather_rays;
         let frame = crate::math::Frame::from_z(bsdf.normal());
         let mut sum = Color::ZERO;
@@ -229,7 +250,11 @@ impl PhotonIntegrator {
                 let wo_y = -ray.d;
                 let by = Bsdf::new(m, y.ns, y.ng, wo_y);
                 if by.is_specular_only() {
-                    let Some(s) = by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance) else { break };
+                    let Some(s) =
+                        by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
+                    else {
+                        break;
+                    };
                     beta *= s.weight;
                     ray = scene.spawn(&y, s.wi);
                     continue;
@@ -277,7 +302,14 @@ fn precompute_irradiance(hits: &[trace::PhotonHit], map: &PhotonMap, k: usize, m
 impl Integrator for PhotonIntegrator {
     type Scratch = Gathered;
 
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, scratch: &mut Gathered, stats: &mut RayStats) -> Layers {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> Layers {
         let mut layers = [Color::ZERO; 4];
         let mut beta = Color::ONE;
         let mut ray = *ray;
@@ -308,12 +340,34 @@ impl Integrator for PhotonIntegrator {
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            let (kd, kc, ki) = if prefix_specular { (SPECULAR, SPECULAR, SPECULAR) } else { (DIRECT, CAUSTIC, INDIRECT) };
+            let (kd, kc, ki) =
+                if prefix_specular { (SPECULAR, SPECULAR, SPECULAR) } else { (DIRECT, CAUSTIC, INDIRECT) };
             layers[kd] += beta * self.direct(scene, &hit, &bsdf, wo, sampler, stats);
             let c = &self.config;
-            layers[kc] += beta * Self::estimate(&self.caustic, &hit, &bsdf, wo, c.caustic_k, c.caustic_radius, 0, Some(c.cone_k), scratch);
+            layers[kc] += beta
+                * Self::estimate(
+                    &self.caustic,
+                    &hit,
+                    &bsdf,
+                    wo,
+                    c.caustic_k,
+                    c.caustic_radius,
+                    0,
+                    Some(c.cone_k),
+                    scratch,
+                );
             let indirect = if c.gather_rays == 0 {
-                Self::estimate(&self.global, &hit, &bsdf, wo, c.gather_k, c.max_radius, trace::DIRECT | trace::CAUSTIC, None, scratch)
+                Self::estimate(
+                    &self.global,
+                    &hit,
+                    &bsdf,
+                    wo,
+                    c.gather_k,
+                    c.max_radius,
+                    trace::DIRECT | trace::CAUSTIC,
+                    None,
+                    scratch,
+                )
             } else {
                 self.final_gather(scene, &hit, &bsdf, wo, sampler, scratch, stats)
             };

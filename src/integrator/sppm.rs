@@ -115,11 +115,8 @@ impl PhotonGrid {
     fn build(hits: &[PhotonHit], cell: f32, origin: Vec3) -> Self {
         let size = hits.len().next_power_of_two().max(1);
         let mask = size as u64 - 1;
-        let mut entries: Vec<(u64, u32)> = hits
-            .par_iter()
-            .enumerate()
-            .map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32))
-            .collect();
+        let mut entries: Vec<(u64, u32)> =
+            hits.par_iter().enumerate().map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32)).collect();
         let bucket = |k: u64| crate::sampling::mix64(k) & mask;
         entries.par_sort_unstable_by_key(|&(k, i)| (bucket(k), k, i));
         let mut starts = vec![0u32; size + 1];
@@ -163,7 +160,12 @@ impl PhotonGrid {
 
 /// Renders with SPPM: `settings.spp` iterations (or until the time limit), one camera sample per
 /// pixel per iteration.
-pub fn render_sppm(scene: &Scene, config: &SppmConfig, settings: &RenderSettings, control: &RenderControl) -> (Image, RenderStats) {
+pub fn render_sppm(
+    scene: &Scene,
+    config: &SppmConfig,
+    settings: &RenderSettings,
+    control: &RenderControl,
+) -> (Image, RenderStats) {
     let start = Instant::now();
     let (w, h) = (settings.width, settings.height);
     let n_pixels = (w * h) as usize;
@@ -370,7 +372,8 @@ mod tests {
                     found.push(i)
                 }
             });
-            let mut brute: Vec<u32> = (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length() <= r).collect();
+            let mut brute: Vec<u32> =
+                (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length() <= r).collect();
             found.sort();
             brute.sort();
             assert_eq!(found, brute);

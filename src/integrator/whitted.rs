@@ -44,7 +44,14 @@ impl Whitted {
     }
 
     /// Radiance along `ray` as (local shading, what reflection and refraction bring).
-    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> (Color, Color) {
+    fn trace(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        depth: u32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> (Color, Color) {
         stats.rays += 1;
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
             return (scene.background, Color::ZERO);
@@ -89,7 +96,7 @@ impl Whitted {
         c = Color::ZERO;
         let reflected = |sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats, ).into_sum()
+            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats).into_sum()
         };
         match m.kind {
             MaterialKind::Diffuse => {}
@@ -106,7 +113,7 @@ impl Whitted {
                             c += m.kr * reflected(sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats, ).into_sum();
+                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats).into_sum();
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
@@ -120,7 +127,7 @@ impl Whitted {
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats, ).into_sum();
+                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats).into_sum();
                 }
             }
         }

@@ -308,7 +308,11 @@ mod tests {
                 scene_radius: 3.0,
             },
             Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0), prim: 0 },
-            Light::Area { emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)), radiance: Color::splat(1.5), prim: 0 },
+            Light::Area {
+                emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
+                radiance: Color::splat(1.5),
+                prim: 0,
+            },
         ];
         let mut rng = Rng32::new(3);
         for l in lights {

@@ -56,12 +56,18 @@ pub const MAX_BOUNCES: u32 = 64;
 
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power).
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64) -> PhotonPass {
-    let mut hits = run_chunks(0, n_emit, |i| {
-        let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
-        let (li, p) = scene.light_picker.pick(rng.uniform())?;
-        let e = scene.lights[li].emit(rng.uniform2(), rng.uniform2())?;
-        Some((e, p, rng))
-    }, scene, false);
+    let mut hits = run_chunks(
+        0,
+        n_emit,
+        |i| {
+            let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
+            let (li, p) = scene.light_picker.pick(rng.uniform())?;
+            let e = scene.lights[li].emit(rng.uniform2(), rng.uniform2())?;
+            Some((e, p, rng))
+        },
+        scene,
+        false,
+    );
     let scale = 1.0 / n_emit.max(1) as f32;
     hits.iter_mut().for_each(|h| h.flux *= scale);
     PhotonPass { hits, emitted: n_emit, capped: false }
@@ -77,12 +83,18 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64) -> Photon
     let mut emitted = 0u64;
     while (hits.len() as u64) < n_store && emitted < cap {
         let n = batch.min(cap - emitted);
-        hits.extend(run_chunks(emitted, n, |i| {
-            let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
-            let (li, p) = scene.light_picker.pick(rng.uniform())?;
-            let e = emit_towards(&scene.lights[li], &scene.specular_targets, &mut rng)?;
-            Some((e, p, rng))
-        }, scene, true));
+        hits.extend(run_chunks(
+            emitted,
+            n,
+            |i| {
+                let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
+                let (li, p) = scene.light_picker.pick(rng.uniform())?;
+                let e = emit_towards(&scene.lights[li], &scene.specular_targets, &mut rng)?;
+                Some((e, p, rng))
+            },
+            scene,
+            true,
+        ));
         emitted += n;
     }
     let scale = 1.0 / emitted.max(1) as f32;
@@ -121,7 +133,14 @@ fn run_chunks(
 }
 
 /// Follows one photon, appending its stored hits to `out`.
-pub fn trace_photon(scene: &Scene, mut ray: Ray, mut flux: Color, rng: &mut Rng32, caustic_only: bool, out: &mut Vec<PhotonHit>) {
+pub fn trace_photon(
+    scene: &Scene,
+    mut ray: Ray,
+    mut flux: Color,
+    rng: &mut Rng32,
+    caustic_only: bool,
+    out: &mut Vec<PhotonHit>,
+) {
     let mut only_specular = true;
     for depth in 0..MAX_BOUNCES {
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
@@ -140,7 +159,13 @@ pub fn trace_photon(scene: &Scene, mut ray: Ray, mut flux: Color, rng: &mut Rng3
                 }
                 return;
             }
-            let flags = if depth == 0 { DIRECT } else if caustic { CAUSTIC } else { 0 };
+            let flags = if depth == 0 {
+                DIRECT
+            } else if caustic {
+                CAUSTIC
+            } else {
+                0
+            };
             out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
         }
         let Some(s) = bsdf.scatter_photon(wo, rng.uniform(), rng.uniform2()) else { return };

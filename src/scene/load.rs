@@ -274,17 +274,24 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
             "spot" => {
                 let position = d.position.map_or(Vec3::ZERO, |p| p.0);
                 let direction = match (d.direction, d.look_at) {
-                    (Some(_), Some(_)) => return Err(cx.at(span.clone(), "give either `direction` or `look_at`, not both")),
+                    (Some(_), Some(_)) => {
+                        return Err(cx.at(span.clone(), "give either `direction` or `look_at`, not both"));
+                    }
                     (Some(dir), None) => dir.0,
-                    (None, Some(t)) => (t.0 - position).try_normalize().ok_or_else(|| {
-                        cx.at(span.clone(), "spot light `look_at` is the light's own position")
-                    })?,
+                    (None, Some(t)) => (t.0 - position)
+                        .try_normalize()
+                        .ok_or_else(|| cx.at(span.clone(), "spot light `look_at` is the light's own position"))?,
                     (None, None) => -Vec3::Y,
                 };
                 let angle = d.angle.map_or(30.0, |a| a.0);
                 let falloff = d.falloff.map_or(angle * 0.75, |a| a.0);
                 if angle > 90.0 || falloff > angle {
-                    return Err(cx.at(span.clone(), format!("spot light needs falloff <= angle <= 90 degrees (got falloff {falloff}, angle {angle})")));
+                    return Err(cx.at(
+                        span.clone(),
+                        format!(
+                            "spot light needs falloff <= angle <= 90 degrees (got falloff {falloff}, angle {angle})"
+                        ),
+                    ));
                 }
                 Light::Spot {
                     position,
@@ -312,14 +319,18 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                         let corner = d.corner.map_or(Vec3::new(-0.5, 0.0, -0.5), |p| p.0);
                         let e1 = d.edge1.map_or(Vec3::new(1.0, 0.0, 0.0), |p| p.0);
                         let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, 1.0), |p| p.0);
-                        let q = transformed_quad(&transform, corner, e1, e2)
-                            .ok_or_else(|| cx.at(span.clone(), "area light quad edges are parallel or zero: it has no area"))?;
+                        let q = transformed_quad(&transform, corner, e1, e2).ok_or_else(|| {
+                            cx.at(span.clone(), "area light quad edges are parallel or zero: it has no area")
+                        })?;
                         prims.push(Primitive { shape: Shape::Quad(q), material });
                         Emitter::Quad(q)
                     }
                     "sphere" => {
                         if !transform.is_similarity() {
-                            return Err(cx.at(span.clone(), "a spherical light can only be translated, rotated and scaled uniformly"));
+                            return Err(cx.at(
+                                span.clone(),
+                                "a spherical light can only be translated, rotated and scaled uniformly",
+                            ));
                         }
                         let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
                         let radius = d.radius.map_or(0.5, |r| r.0) * transform.axis_scales().x;
@@ -327,7 +338,11 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
                         prims.push(Primitive { shape: Shape::Sphere(s), material });
                         Emitter::Sphere(s)
                     }
-                    other => return Err(cx.at(span.clone(), format!("unknown area light shape `{other}`; expected quad or sphere"))),
+                    other => {
+                        return Err(
+                            cx.at(span.clone(), format!("unknown area light shape `{other}`; expected quad or sphere"))
+                        );
+                    }
                 };
                 Light::Area { emitter, radiance: power, prim }
             }
@@ -382,7 +397,10 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         if let Some(r) = v
             && !(r > 0.0 && r.is_finite())
         {
-            return Err(SceneError::File { path: name_of(&cx), message: format!("photon {name} must be a positive number, got {r}") });
+            return Err(SceneError::File {
+                path: name_of(&cx),
+                message: format!("photon {name} must be a positive number, got {r}"),
+            });
         }
     }
     let camera = camera_desc.build(&cx, camera_span, width, height)?;
