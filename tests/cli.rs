@@ -151,7 +151,23 @@ fn layers_are_written_and_sum_to_the_image() {
     let status = caustic()
         .arg("render")
         .arg(scene("13-cornell-caustics.toml"))
-        .args(["--width", "32", "--height", "32", "--spp", "2", "--photons", "20000", "--caustic-photons", "20000", "--gather", "2", "--layers", "-q", "-o"])
+        .args([
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "2",
+            "--photons",
+            "20000",
+            "--caustic-photons",
+            "20000",
+            "--gather",
+            "2",
+            "--layers",
+            "-q",
+            "-o",
+        ])
         .arg(&out)
         .status()
         .unwrap();
@@ -168,4 +184,21 @@ fn layers_are_written_and_sum_to_the_image() {
     for (s, t) in sum.iter().zip(&total.pixels) {
         assert!((*s - *t).abs().max_element() <= 1e-4 * (1.0 + t.max_element()), "layers sum {s} vs image {t}");
     }
+}
+
+#[test]
+fn checkpoints_rewrite_the_output_during_a_render() {
+    let dir = common::scratch("cli-checkpoint");
+    let png = dir.join("c.png");
+    let out = caustic()
+        .arg("render")
+        .arg(scene("06-fresnel-glass.toml"))
+        .args(["--width", "160", "--height", "120", "--time", "2.5", "--checkpoint", "0.5", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.matches("checkpoint: wrote").count() >= 2, "{err}");
+    assert_eq!(png_size(&png), (160, 120));
 }

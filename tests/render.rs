@@ -77,7 +77,11 @@ fn every_integrator_is_bit_identical_on_1_and_2_threads() {
     for integrator in ["whitted", "path", "photon", "sppm"] {
         let a = render_cli("13-cornell-caustics.toml", integrator, 1, &dir.join(format!("{integrator}-1.exr")));
         let b = render_cli("13-cornell-caustics.toml", integrator, 2, &dir.join(format!("{integrator}-2.exr")));
-        let same = a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
+        let same = a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
         assert!(same, "{integrator}: images differ between 1 and 2 threads");
         assert!(a.mean().max_element() > 0.0, "{integrator}: black image");
     }
@@ -111,4 +115,23 @@ fn every_bundled_scene_renders_to_png_and_exr_without_nan() {
             }
         }
     }
+}
+
+#[test]
+fn thin_lens_with_zero_radius_renders_the_pinhole_image_bit_for_bit() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/06-fresnel-glass.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lens = text.replace("fov = 45", "fov = 45\nlens_radius = 0.0\nfocal_distance = 2.5");
+    assert_ne!(text, lens);
+    let o = Overrides { width: Some(64), height: Some(48), spp: Some(4), ..Default::default() };
+    let render_text = |t: &str| {
+        let s = caustic::scene::load_scene_str(t, "lens.toml", path.parent().unwrap(), &o).unwrap();
+        let cancel = AtomicBool::new(false);
+        render(&s.scene, &Whitted::new(&s.integrator), &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
+    };
+    let (a, b) = (render_text(&text), render_text(&lens));
+    assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+    // A real lens changes the image (so the comparison above can fail).
+    let blurred = render_text(&text.replace("fov = 45", "fov = 45\nlens_radius = 0.2\nfocal_distance = 2.5"));
+    assert_ne!(a, blurred);
 }
