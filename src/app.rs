@@ -37,8 +37,9 @@ pub enum AppError {
     #[error("--threads must be at least 1")]
     ZeroThreads,
     #[error(
-        "the photon maps would need about {need_mib} MiB, more than the {limit_mib} MiB allowed; \
-         use fewer photons (--photons, --caustic-photons) or raise --max-memory"
+        "the render would need about {need_mib} MiB, more than the {limit_mib} MiB allowed; \
+         use a smaller image, fewer photons (--photons, --caustic-photons, --photons-per-iter) \
+         or raise --max-memory"
     )]
     Memory { need_mib: u64, limit_mib: u64 },
     #[error("interrupted: wrote `{path}` with {samples} samples per pixel")]
@@ -55,6 +56,29 @@ pub struct Summary {
 pub fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "render".into());
     PathBuf::from(format!("{stem}.png"))
+}
+
+/// Bytes the render of `loaded` with `settings` will allocate: the film (with its layers), the
+/// output image, and the integrator's own data (photon maps, SPPM state). Geometry is already
+/// loaded by then and is not counted.
+pub fn estimate_render_bytes(loaded: &crate::scene::load::LoadedScene, settings: &RenderSettings) -> u64 {
+    let pixels = settings.width as u64 * settings.height as u64;
+    let per_pixel = 16 + 12 + if settings.layers { 48 + 4 * 12 } else { 0 };
+    let film = pixels * per_pixel;
+    let integrator = match loaded.integrator.kind {
+        IntegratorKind::Whitted | IntegratorKind::Path => 0,
+        IntegratorKind::Photon => {
+            let c = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
+            // Up to four stored bounces per global photon, plus the irradiance records.
+            crate::integrator::photon::estimated_map_bytes(c.photons.saturating_mul(5))
+                + crate::integrator::photon::estimated_map_bytes(c.caustic_photons)
+        }
+        IntegratorKind::Sppm => {
+            let c = loaded.integrator.photon.sppm(&loaded.integrator, pixels);
+            crate::integrator::sppm::estimated_bytes(pixels, c.photons_per_iter)
+        }
+    };
+    film.saturating_add(integrator)
 }
 
 /// `out.png` -> `out.direct.png` for layer `direct`.
@@ -131,6 +155,13 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         };
         let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
         settings.layers = opts.layers;
+        // Everything big the render will allocate, estimated before any of it is.
+        let need = estimate_render_bytes(&loaded, &settings);
+        let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
+        log(opts.quiet, format_args!("memory: about {} MiB needed (limit {} MiB)", need.div_ceil(1 << 20), limit >> 20));
+        if need > limit {
+            return Err(AppError::Memory { need_mib: need.div_ceil(1 << 20), limit_mib: limit >> 20 });
+        }
         let (image, layers, stats) = match loaded.integrator.kind {
             IntegratorKind::Whitted => {
                 render_layers(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
@@ -159,15 +190,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             }
             IntegratorKind::Photon => {
                 let config = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
-                let need = crate::integrator::photon::estimated_map_bytes(config.photons.saturating_mul(4))
-                    + crate::integrator::photon::estimated_map_bytes(config.caustic_photons);
-                let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
                 log(opts.quiet, format_args!(
-                    "photon maps: up to {} global photons (bounces included) and {} caustic photons, about {} MiB (limit {} MiB)",
-                    config.photons.saturating_mul(4), config.caustic_photons, need >> 20, limit >> 20));
-                if need > limit {
-                    return Err(AppError::Memory { need_mib: need >> 20, limit_mib: limit >> 20 });
-                }
+                    "photon maps: up to {} global photons (bounces included) and {} caustic photons",
+                    config.photons.saturating_mul(4), config.caustic_photons));
                 let pm = PhotonIntegrator::build(&loaded.scene, config);
                 let s = &pm.stats;
                 log(opts.quiet, format_args!(

@@ -202,3 +202,23 @@ fn checkpoints_rewrite_the_output_during_a_render() {
     assert!(err.matches("checkpoint: wrote").count() >= 2, "{err}");
     assert_eq!(png_size(&png), (160, 120));
 }
+
+#[test]
+fn film_and_sppm_beyond_max_memory_are_refused() {
+    for args in [
+        vec!["--width", "12000", "--height", "12000", "--max-memory", "256"],
+        vec!["--integrator", "sppm", "--photons-per-iter", "200000000", "--max-memory", "256"],
+    ] {
+        let out = caustic()
+            .arg("render")
+            .arg(scene("11-cornell-area.toml"))
+            .args(&args)
+            .arg("-o")
+            .arg(common::scratch("cli-mem2").join("m.png"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("MiB") && err.contains("--max-memory"), "{args:?}: {err}");
+    }
+}

@@ -43,6 +43,14 @@ pub struct SppmConfig {
     pub max_depth: u32,
 }
 
+/// Working memory of an SPPM render of `pixels` pixels and `photons_per_iter` photons per
+/// iteration (photons are stored up to a few times each as they bounce).
+pub fn estimated_bytes(pixels: u64, photons_per_iter: u64) -> u64 {
+    let per_pixel = (std::mem::size_of::<PixelStats>() + std::mem::size_of::<Option<VisiblePoint>>()) as u64;
+    let per_photon = 3 * (std::mem::size_of::<PhotonHit>() + std::mem::size_of::<(u64, u32)>() + 4) as u64;
+    pixels.saturating_mul(per_pixel).saturating_add(photons_per_iter.saturating_mul(per_photon))
+}
+
 /// What one pixel has gathered so far.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelStats {
