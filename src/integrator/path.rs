@@ -137,13 +137,7 @@ pub fn direct_light(
     }
     let cos = ls.wi.dot(bsdf.normal()).abs();
     stats.shadow_rays += 1;
-    let shadow = scene.spawn(hit, ls.wi);
-    let t_max = if ls.dist.is_finite() {
-        (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4)
-    } else {
-        f32::INFINITY
-    };
-    if scene.occluded(&shadow, t_max) {
+    if !scene.unoccluded(hit, ls.wi, ls.dist) {
         return Color::ZERO;
     }
     let w = if light.is_delta() || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi)) };

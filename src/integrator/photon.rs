@@ -199,13 +199,7 @@ impl PhotonIntegrator {
                     continue;
                 }
                 stats.shadow_rays += 1;
-                let shadow = scene.spawn(hit, ls.wi);
-                let t_max = if ls.dist.is_finite() {
-                    (hit.p + ls.wi * ls.dist - shadow.o).dot(ls.wi) * (1.0 - 1e-4)
-                } else {
-                    f32::INFINITY
-                };
-                if scene.occluded(&shadow, t_max) {
+                if !scene.unoccluded(hit, ls.wi, ls.dist) {
                     continue;
                 }
                 acc += f * ls.irradiance * ls.wi.dot(bsdf.normal()).abs();

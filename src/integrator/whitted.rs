@@ -43,6 +43,11 @@ impl Whitted {
         Whitted { max_depth: c.max_depth, area_samples: c.light_samples }
     }
 
+    fn trace_total(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        let (local, secondary) = self.trace(scene, ray, depth, sampler, stats);
+        local + secondary
+    }
+
     /// Radiance along `ray` as (local shading, what reflection and refraction bring).
     fn trace(
         &self,
@@ -96,7 +101,7 @@ impl Whitted {
         c = Color::ZERO;
         let reflected = |sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.trace(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats).into_sum()
+            self.trace_total(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats)
         };
         match m.kind {
             MaterialKind::Diffuse => {}
@@ -113,7 +118,7 @@ impl Whitted {
                             c += m.kr * reflected(sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += m.kt * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats).into_sum();
+                            c += m.kt * self.trace_total(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
@@ -127,22 +132,11 @@ impl Whitted {
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += (1.0 - ks) * self.trace(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats).into_sum();
+                    c += (1.0 - ks) * self.trace_total(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
                 }
             }
         }
         (local, c)
-    }
-}
-
-trait IntoSum {
-    fn into_sum(self) -> Color;
-}
-
-impl IntoSum for (Color, Color) {
-    #[inline]
-    fn into_sum(self) -> Color {
-        self.0 + self.1
     }
 }
 

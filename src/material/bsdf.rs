@@ -55,6 +55,15 @@ pub struct BsdfSample {
     pub lobe: Lobe,
 }
 
+/// A direction around `r` with density proportional to cos^n of the angle to it.
+#[inline]
+fn sample_phong(r: Vec3, exponent: f32, u: Vec2) -> Vec3 {
+    let cos_a = u.x.powf(1.0 / (exponent + 1.0));
+    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Frame::from_z(r).to_world(Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a))
+}
+
 /// A material at a hit point, oriented to the side the incoming ray is on.
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
@@ -208,11 +217,7 @@ impl Bsdf {
                     self.frame.to_world(cosine_hemisphere(u))
                 } else {
                     // Phong lobe: cos^n around the mirror direction.
-                    let r = reflect(-wo, n);
-                    let cos_a = u.x.powf(1.0 / (self.exponent + 1.0));
-                    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-                    let phi = 2.0 * PI * u.y;
-                    Frame::from_z(r).to_world(Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a))
+                    sample_phong(reflect(-wo, n), self.exponent, u)
                 };
                 let pdf = self.pdf(wo, wi);
                 if !(pdf > 0.0) {
@@ -281,11 +286,7 @@ impl Bsdf {
                     Some(BsdfSample { wi, weight: self.diffuse / pl, pdf: wi.dot(n) * FRAC_1_PI, lobe: Lobe::Diffuse })
                 }
                 1 => {
-                    let r = reflect(-wo, n);
-                    let cos_a = u.x.powf(1.0 / (self.exponent + 1.0));
-                    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-                    let phi = 2.0 * PI * u.y;
-                    let wi = Frame::from_z(r).to_world(Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a));
+                    let wi = sample_phong(reflect(-wo, n), self.exponent, u);
                     let cos_i = wi.dot(n);
                     if cos_i <= 0.0 || wi.dot(self.ng) <= 0.0 {
                         return None;

@@ -4,6 +4,7 @@
 mod de;
 pub mod error;
 pub mod load;
+pub mod mitsuba;
 
 pub use error::SceneError;
 pub use load::{Overrides, load_scene, load_scene_str};
@@ -86,6 +87,16 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.planes.iter().any(|(p, _)| p.intersect(ray, t_max).is_some()) || self.bvh.occluded(ray, t_max)
+    }
+
+    /// True when nothing blocks the way from hit `h` to a light sample `dist` away along `wi`
+    /// (infinitely far for directional lights). The ray stops just short of the sample, so the
+    /// light's own surface does not shadow it.
+    #[inline]
+    pub fn unoccluded(&self, h: &Hit, wi: crate::math::Vec3, dist: f32) -> bool {
+        let ray = self.spawn(h, wi);
+        let t_max = if dist.is_finite() { (h.p + wi * dist - ray.o).dot(wi) * (1.0 - 1e-4) } else { f32::INFINITY };
+        !self.occluded(&ray, t_max)
     }
 
     /// A ray leaving hit `h` in direction `d`.
