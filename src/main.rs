@@ -39,7 +39,7 @@ struct BenchArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Scene file (TOML; see docs/scene-format.md).
+    /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml).
     scene: PathBuf,
     /// Output image, .png or .exr [default: the scene's name with .png, in the current folder].
     #[arg(short, long, value_name = "FILE")]
@@ -114,6 +114,21 @@ struct RenderArgs {
     /// No progress bar or summary on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// Mitsuba scenes: give parameter `$NAME` the value VALUE (repeatable; wins over <default>).
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    define: Vec<(String, String)>,
+    /// Mitsuba scenes: treat every unsupported part as an error instead of a warning.
+    #[arg(long)]
+    strict: bool,
+}
+
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => {
+            Ok((k.to_string(), v.to_string()))
+        }
+        _ => Err(format!("expected NAME=VALUE (NAME of letters, digits and _), found `{s}`")),
+    }
 }
 
 fn seconds(v: Option<f64>, name: &str) -> Result<Option<Duration>> {
@@ -138,6 +153,8 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
             integrator: args.integrator,
             sampler: args.sampler,
             antialias: args.no_antialias.then_some(false),
+            defines: args.define,
+            strict: args.strict,
             photon: caustic::integrator::PhotonOptions {
                 photons: args.photons,
                 caustic_photons: args.caustic_photons,

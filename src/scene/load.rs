@@ -45,6 +45,10 @@ pub struct Overrides {
     pub sampler: Option<SamplerKind>,
     pub antialias: Option<bool>,
     pub photon: crate::integrator::PhotonOptions,
+    /// `-D name=value`: values of `$name` parameters in Mitsuba scenes (they win over `<default>`).
+    pub defines: Vec<(String, String)>,
+    /// Unsupported parts of a Mitsuba scene are errors instead of warnings.
+    pub strict: bool,
 }
 
 /// Everything a loaded scene file describes.
@@ -66,6 +70,9 @@ pub struct LoadInfo {
 }
 
 pub fn load_scene(path: &Path, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        return super::mitsuba::load_mitsuba(path, overrides);
+    }
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -482,7 +489,7 @@ fn default_material(materials: &mut Vec<Material>, names: &mut Vec<String>, inde
 }
 
 /// Corner and edges of the six faces of a box, each with its normal (e1 x e2) pointing out.
-fn box_faces(m: Vec3, mx: Vec3) -> [(Vec3, Vec3, Vec3); 6] {
+pub(crate) fn box_faces(m: Vec3, mx: Vec3) -> [(Vec3, Vec3, Vec3); 6] {
     let e = mx - m;
     let (ex, ey, ez) = (Vec3::new(e.x, 0.0, 0.0), Vec3::new(0.0, e.y, 0.0), Vec3::new(0.0, 0.0, e.z));
     [
@@ -497,7 +504,7 @@ fn box_faces(m: Vec3, mx: Vec3) -> [(Vec3, Vec3, Vec3); 6] {
 
 /// A quad moved by `t`; edges are swapped under a mirroring transform so the normal still points
 /// to the side the untransformed normal did.
-fn transformed_quad(t: &Transform, corner: Vec3, e1: Vec3, e2: Vec3) -> Option<Quad> {
+pub(crate) fn transformed_quad(t: &Transform, corner: Vec3, e1: Vec3, e2: Vec3) -> Option<Quad> {
     let (p0, a, b) = (t.point(corner), t.vector(e1), t.vector(e2));
     if t.m.determinant() < 0.0 { Quad::new(p0, b, a) } else { Quad::new(p0, a, b) }
 }

@@ -47,8 +47,20 @@ const UNLIMITED_PATH_DEPTH: u32 = 1000;
 const UNLIMITED_RECURSION_DEPTH: u32 = 5;
 
 /// Object (plugin) tags of the format.
-const OBJECT_TAGS: &[&str] =
-    &["shape", "bsdf", "emitter", "sensor", "film", "sampler", "integrator", "texture", "rfilter", "medium", "phase", "volume"];
+const OBJECT_TAGS: &[&str] = &[
+    "shape",
+    "bsdf",
+    "emitter",
+    "sensor",
+    "film",
+    "sampler",
+    "integrator",
+    "texture",
+    "rfilter",
+    "medium",
+    "phase",
+    "volume",
+];
 /// Property tags of the format.
 const PROPERTY_TAGS: &[&str] =
     &["integer", "float", "boolean", "string", "rgb", "point", "vector", "spectrum", "transform"];
@@ -112,7 +124,13 @@ pub fn load_mitsuba_str(
 ) -> Result<(LoadedScene, Vec<String>), SceneError> {
     let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf() }];
     let root = parse_source(&mut srcs, 0, 0)?;
-    let mut cx = Cx { srcs: &srcs, defines: HashMap::new(), ids: HashMap::new(), warnings: Vec::new(), strict: overrides.strict };
+    let mut cx = Cx {
+        srcs: &srcs,
+        defines: HashMap::new(),
+        ids: HashMap::new(),
+        warnings: Vec::new(),
+        strict: overrides.strict,
+    };
     for (k, v) in &overrides.defines {
         cx.defines.insert(k.clone(), v.clone());
     }
@@ -165,7 +183,7 @@ fn parse_source(srcs: &mut Vec<Src>, id: usize, depth: usize) -> Result<El, Scen
         SceneError::at(&name, &text, offset..offset + 1, format!("malformed XML: {message}"))
     })?;
     let root = doc.root_element();
-    let mut el = convert(&doc, root, id);
+    let mut el = convert(root, id);
     if el.tag != "scene" {
         return Err(SceneError::at(
             &name,
@@ -191,7 +209,7 @@ fn offset_of(text: &str, row: usize, col: usize) -> usize {
     start + line.char_indices().nth(col.saturating_sub(1)).map_or(line.len(), |(i, _)| i)
 }
 
-fn convert(doc: &roxmltree::Document, node: roxmltree::Node, src: usize) -> El {
+fn convert(node: roxmltree::Node, src: usize) -> El {
     let start = node.range().start + 1;
     let tag = node.tag_name().name().to_string();
     let span = start..start + tag.len();
@@ -199,7 +217,7 @@ fn convert(doc: &roxmltree::Document, node: roxmltree::Node, src: usize) -> El {
         .attributes()
         .map(|a| Attr { name: a.name().to_string(), value: a.value().to_string(), span: a.range_value() })
         .collect();
-    let children = node.children().filter(|c| c.is_element()).map(|c| convert(doc, c, src)).collect();
+    let children = node.children().filter(|c| c.is_element()).map(|c| convert(c, src)).collect();
     El { tag, attrs, children, src, span }
 }
 
@@ -221,7 +239,10 @@ fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize) -> Result<(),
             return Err(at(file.span.clone(), "`$` parameters are not supported in <include> file names".into()));
         }
         if depth >= MAX_INCLUDE_DEPTH {
-            return Err(at(file.span.clone(), format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)")));
+            return Err(at(
+                file.span.clone(),
+                format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)"),
+            ));
         }
         let path = src.base.join(&file.value);
         let text = std::fs::read_to_string(&path)
@@ -393,7 +414,8 @@ impl<'a> Cx<'a> {
             let tag = child.tag.as_str();
             let name = self.attr(child, "name")?;
             let entry = if PROPERTY_TAGS.contains(&tag) {
-                let (name, _) = name.ok_or_else(|| self.err(child, format!("<{tag}> property needs a `name` attribute")))?;
+                let (name, _) =
+                    name.ok_or_else(|| self.err(child, format!("<{tag}> property needs a `name` attribute")))?;
                 Entry::Prop { name, el: child }
             } else if OBJECT_TAGS.contains(&tag) {
                 Entry::Object { name: name.map(|n| n.0), el: child, at: child }
@@ -433,11 +455,23 @@ impl<'a> Cx<'a> {
             }
             match e {
                 Entry::Prop { name, el } => {
-                    self.warn(el, format!("property `{name}` of <{} type=\"{}\"> is not supported and is ignored", p.el.tag, p.kind))?;
+                    self.warn(
+                        el,
+                        format!(
+                            "property `{name}` of <{} type=\"{}\"> is not supported and is ignored",
+                            p.el.tag, p.kind
+                        ),
+                    )?;
                 }
                 Entry::Object { el, at, .. } => {
                     let kind = self.attr(el, "type")?.map_or(String::new(), |t| t.0);
-                    self.warn(at, format!("<{} type=\"{kind}\"> inside <{} type=\"{}\"> is not supported and is ignored", el.tag, p.el.tag, p.kind))?;
+                    self.warn(
+                        at,
+                        format!(
+                            "<{} type=\"{kind}\"> inside <{} type=\"{}\"> is not supported and is ignored",
+                            el.tag, p.el.tag, p.kind
+                        ),
+                    )?;
                 }
             }
         }
@@ -464,7 +498,8 @@ impl<'a> Cx<'a> {
             if let Entry::Object { name: n, el, at } = e {
                 let hit = match (name, n) {
                     (Some(want), Some(n)) => want == n,
-                    _ => el.tag == tag,
+                    (Some(_), None) => false,
+                    (None, _) => el.tag == tag,
                 };
                 if hit {
                     used.set(true);
@@ -614,7 +649,10 @@ impl<'a> Cx<'a> {
                         _ => Err(self.err_span(
                             el,
                             span,
-                            format!("<spectrum> `{name}` needs one value or wavelength:value pairs, found {} values", xs.len()),
+                            format!(
+                                "<spectrum> `{name}` needs one value or wavelength:value pairs, found {} values",
+                                xs.len()
+                            ),
                         )),
                     };
                 }
@@ -632,7 +670,12 @@ impl<'a> Cx<'a> {
                 let vals = if visible.is_empty() { pairs.iter().map(|p| p.1).collect() } else { visible };
                 let mean = vals.iter().sum::<f32>() / vals.len() as f32;
                 if vals.iter().any(|&x| (x - mean).abs() > 1e-6 * mean.abs().max(1.0)) {
-                    self.warn(el, format!("wavelength-dependent spectrum `{name}` is approximated by its mean value {mean} (grey)"))?;
+                    self.warn(
+                        el,
+                        format!(
+                            "wavelength-dependent spectrum `{name}` is approximated by its mean value {mean} (grey)"
+                        ),
+                    )?;
                 }
                 Ok(Color::splat(mean))
             }
@@ -657,7 +700,10 @@ impl<'a> Cx<'a> {
             }
             Color::splat(0.5)
         };
-        self.warn(at, format!("textures are not supported: <texture type=\"{}\"> is replaced by its mean colour {c}", p.kind))?;
+        self.warn(
+            at,
+            format!("textures are not supported: <texture type=\"{}\"> is replaced by its mean colour {c}", p.kind),
+        )?;
         Ok(c)
     }
 
@@ -679,7 +725,11 @@ impl<'a> Cx<'a> {
                             [s] => Vec3::splat(*s),
                             [x, y, z] => Vec3::new(*x, *y, *z),
                             _ => {
-                                return Err(self.err_span(op, span, format!("<scale> needs 1 or 3 values, found {}", xs.len())));
+                                return Err(self.err_span(
+                                    op,
+                                    span,
+                                    format!("<scale> needs 1 or 3 values, found {}", xs.len()),
+                                ));
                             }
                         }
                     } else {
@@ -712,7 +762,11 @@ impl<'a> Cx<'a> {
                             Mat4::from_cols(r(0), r(3), r(6), Vec4::W).transpose()
                         }
                         n => {
-                            return Err(self.err_span(op, span, format!("<matrix> needs 16 values (a 4x4 matrix, row by row) or 9, found {n}")));
+                            return Err(self.err_span(
+                                op,
+                                span,
+                                format!("<matrix> needs 16 values (a 4x4 matrix, row by row) or 9, found {n}"),
+                            ));
                         }
                     };
                     Transform::from_mat4(m)
@@ -724,7 +778,11 @@ impl<'a> Cx<'a> {
                                 let xs = self.parse_list(op, &v, span.clone())?;
                                 match xs.as_slice() {
                                     [x, y, z] => Ok(Some(Vec3::new(*x, *y, *z))),
-                                    _ => Err(self.err_span(op, span, format!("lookat `{name}` needs 3 values, found {}", xs.len()))),
+                                    _ => Err(self.err_span(
+                                        op,
+                                        span,
+                                        format!("lookat `{name}` needs 3 values, found {}", xs.len()),
+                                    )),
                                 }
                             }
                             None if required => Err(self.err(op, format!("<lookat> needs `{name}`"))),
@@ -760,7 +818,9 @@ impl<'a> Cx<'a> {
                 other => {
                     return Err(self.err(
                         op,
-                        format!("unknown transform operation <{other}>; expected translate, rotate, scale, matrix or lookat"),
+                        format!(
+                            "unknown transform operation <{other}>; expected translate, rotate, scale, matrix or lookat"
+                        ),
                     ));
                 }
             };
@@ -794,7 +854,14 @@ impl<'a> Cx<'a> {
                 let key = v.trim().to_ascii_lowercase();
                 NAMED_IOR.iter().find(|(n, _)| *n == key).map(|m| m.1).ok_or_else(|| {
                     let names: Vec<&str> = NAMED_IOR.iter().map(|m| m.0).collect();
-                    self.err_span(el, span, format!("unknown material `{v}` for `{name}`; expected a number or one of: {}", names.join(", ")))
+                    self.err_span(
+                        el,
+                        span,
+                        format!(
+                            "unknown material `{v}` for `{name}`; expected a number or one of: {}",
+                            names.join(", ")
+                        ),
+                    )
                 })
             }
             _ => Err(self.wrong_type(el, name, "a <float> or a <string> naming a material")),
@@ -812,6 +879,9 @@ enum PendingLight {
     Ready(Light),
     Area { emitter: Emitter, radiance: Color, material: Material },
 }
+
+/// Mitsuba's `max_depth` and the element that gave it.
+type Depth<'a> = (i64, &'a El);
 
 /// The shared state while building.
 struct Build {
@@ -849,7 +919,13 @@ impl<'a> Cx<'a> {
             Some((v, span)) => {
                 let major = v.split('.').next().and_then(|m| m.trim().parse::<u32>().ok());
                 match major {
-                    None => return Err(self.err_span(root, span, format!("expected a version such as 3.0.0, found `{v}`"))),
+                    None => {
+                        return Err(self.err_span(
+                            root,
+                            span,
+                            format!("expected a version such as 3.0.0, found `{v}`"),
+                        ));
+                    }
                     Some(m) if m < 2 => {
                         self.warn(root, format!("scene version {v} is older than Mitsuba 2: names such as toWorld or intIOR are not recognised; upgrade the file with Mitsuba's converter"))?;
                     }
@@ -908,7 +984,10 @@ impl<'a> Cx<'a> {
                 }
                 "medium" | "phase" | "volume" => {
                     let kind = self.attr(child, "type")?.map_or(String::new(), |t| t.0);
-                    self.warn(child, format!("participating media are not supported: <{} type=\"{kind}\"> is ignored", child.tag))?;
+                    self.warn(
+                        child,
+                        format!("participating media are not supported: <{} type=\"{kind}\"> is ignored", child.tag),
+                    )?;
                 }
                 other => {
                     return Err(self.err(
@@ -931,10 +1010,13 @@ impl<'a> Cx<'a> {
         }
         let max_depth = match overrides.max_depth {
             Some(d) => d,
-            None => self.map_depth(mitsuba_depth, kind, integrator.unwrap_or(root))?,
+            None => self.map_depth(mitsuba_depth, kind)?,
         };
         if max_depth > UNLIMITED_PATH_DEPTH {
-            return Err(self.err(integrator.unwrap_or(root), format!("max_depth {max_depth} is too large (at most {UNLIMITED_PATH_DEPTH})")));
+            return Err(self.err(
+                integrator.unwrap_or(root),
+                format!("max_depth {max_depth} is too large (at most {UNLIMITED_PATH_DEPTH})"),
+            ));
         }
 
         // Sensor, film and sampler.
@@ -1013,11 +1095,10 @@ impl<'a> Cx<'a> {
     /// bounces (0 = emitters only, 1 = direct lighting), so it gets max_depth - 1; the Whitted
     /// and photon integrators count specular bounces before direct lighting, so they get
     /// max_depth - 2.
-    fn map_depth(&mut self, depth: Option<(i64, &'a El)>, kind: IntegratorKind, at: &'a El) -> Result<u32, SceneError> {
+    fn map_depth(&mut self, depth: Option<Depth<'a>>, kind: IntegratorKind) -> Result<u32, SceneError> {
         let Some((d, el)) = depth else {
             return Ok(if kind == IntegratorKind::Path { UNLIMITED_PATH_DEPTH } else { UNLIMITED_RECURSION_DEPTH });
         };
-        let _ = at;
         if d < -1 {
             return Err(self.err(el, format!("max_depth must be -1 (unlimited) or at least 0, found {d}")));
         }
@@ -1034,7 +1115,7 @@ impl<'a> Cx<'a> {
         })
     }
 
-    fn integrator(&mut self, el: &'a El) -> Result<(IntegratorKind, Option<(i64, &'a El)>), SceneError> {
+    fn integrator(&mut self, el: &'a El) -> Result<(IntegratorKind, Option<Depth<'a>>), SceneError> {
         let p = self.props(el)?;
         let (kind, depth) = match p.kind.as_str() {
             "path" | "volpath" | "volpathmis" | "prb" | "prb_basic" | "prbvolpath" | "ptracer" => {
@@ -1190,7 +1271,15 @@ impl<'a> Cx<'a> {
                 if p.kind == "plastic" {
                     let kr = f0(int_ior / ext_ior);
                     self.warn(el, format!("plastic is approximated by a diffuse base with albedo (1 - {kr:.3}) x reflectance and a mirror coat of constant reflectance {kr:.3}"))?;
-                    Material { kind: MaterialKind::Reflective, color, ka: 0.0, kd: 1.0 - kr, ks: 0.0, kr, ..Material::default() }
+                    Material {
+                        kind: MaterialKind::Reflective,
+                        color,
+                        ka: 0.0,
+                        kd: 1.0 - kr,
+                        ks: 0.0,
+                        kr,
+                        ..Material::default()
+                    }
                 } else {
                     self.warn(el, "roughplastic is approximated by its diffuse base (the glossy coat is dropped)")?;
                     diffuse(color)
@@ -1203,7 +1292,10 @@ impl<'a> Cx<'a> {
                     [] => return Err(self.err(el, "twosided needs a nested <bsdf>")),
                     [(first, _), rest @ ..] => {
                         if !rest.is_empty() {
-                            self.warn(el, "twosided with a different back side is not supported: both sides use the first BSDF")?;
+                            self.warn(
+                                el,
+                                "twosided with a different back side is not supported: both sides use the first BSDF",
+                            )?;
                         }
                         self.bsdf(first, depth + 1)?
                     }
@@ -1227,23 +1319,15 @@ impl<'a> Cx<'a> {
         let to_world = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
         let flip = self.boolean(&p, "flip_normals")?.unwrap_or(false);
 
-        // Material: a nested or referenced <bsdf>, or Mitsuba's default.
-        let bsdfs = self.object(&p, None, "bsdf");
-        if bsdfs.len() > 1 {
-            self.warn(bsdfs[1].1, "a shape has one BSDF: the first is used")?;
-        }
-        let bsdf_el = bsdfs.first().map(|b| b.0);
-        let material = match bsdf_el {
-            Some(bel) => self.material(bel, b)?,
-            None => self.default_material(b),
-        };
         // A nested area emitter.
         let emitters = self.object(&p, None, "emitter");
         let mut radiance = None;
         for &(eel, at) in &emitters {
             let ep = self.props(eel)?;
             if ep.kind != "area" {
-                return Err(self.err(at, format!("an emitter inside a shape must be type=\"area\", found `{}`", ep.kind)));
+                return Err(
+                    self.err(at, format!("an emitter inside a shape must be type=\"area\", found `{}`", ep.kind))
+                );
             }
             if radiance.is_some() {
                 return Err(self.err(at, "a shape can have only one area emitter"));
@@ -1251,21 +1335,43 @@ impl<'a> Cx<'a> {
             radiance = Some(self.color(&ep, "radiance")?.unwrap_or(Color::ONE));
             self.finish(&ep)?;
         }
+        // Material: a nested or referenced <bsdf>, or Mitsuba's default. A `null` BSDF is an
+        // invisible surface: only its emission (if any) is kept.
+        let bsdfs = self.object(&p, None, "bsdf");
+        if bsdfs.len() > 1 {
+            self.warn(bsdfs[1].1, "a shape has one BSDF: the first is used")?;
+        }
+        let bsdf_el = bsdfs.first().map(|b| b.0);
+        let is_null = match bsdf_el {
+            Some(bel) => self.attr(bel, "type")?.is_some_and(|t| t.0 == "null"),
+            None => false,
+        };
+        let material = match bsdf_el {
+            _ if is_null => None,
+            Some(bel) => Some(self.material(bel, b)?),
+            None => Some(self.default_material(b)),
+        };
         // Other nested objects (media etc.) are reported by `finish`.
 
         let first_prim = b.prims.len();
         let kind = p.kind.clone();
         let mut emitters_out: Vec<Emitter> = Vec::new();
+        let mut mesh_out = None;
         match kind.as_str() {
             "rectangle" => {
                 let (c, e1, e2) = (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
-                let q = if flip { transformed_quad(&to_world, c, e2, e1) } else { transformed_quad(&to_world, c, e1, e2) };
+                let q =
+                    if flip { transformed_quad(&to_world, c, e2, e1) } else { transformed_quad(&to_world, c, e1, e2) };
                 let q = q.ok_or_else(|| self.err(el, "rectangle has no area after its to_world transform"))?;
                 emitters_out.push(Emitter::Quad(q));
             }
             "cube" => {
                 for (c, e1, e2) in box_faces(Vec3::splat(-1.0), Vec3::ONE) {
-                    let q = if flip { transformed_quad(&to_world, c, e2, e1) } else { transformed_quad(&to_world, c, e1, e2) };
+                    let q = if flip {
+                        transformed_quad(&to_world, c, e2, e1)
+                    } else {
+                        transformed_quad(&to_world, c, e1, e2)
+                    };
                     let q = q.ok_or_else(|| self.err(el, "cube is degenerate after its to_world transform"))?;
                     emitters_out.push(Emitter::Quad(q));
                 }
@@ -1293,9 +1399,9 @@ impl<'a> Cx<'a> {
                 let mesh = if kind == "disk" {
                     disk_mesh(DISK_SEGMENTS)
                 } else {
-                    let (file, fel) = self
-                        .string(&p, "filename")?
-                        .ok_or_else(|| self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>")))?;
+                    let (file, fel) = self.string(&p, "filename")?.ok_or_else(|| {
+                        self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
+                    })?;
                     let path = self.src(fel).base.join(&file);
                     let loaded = if kind == "obj" {
                         TriangleMesh::load_obj(&path).map_err(|e| e.to_string())
@@ -1334,12 +1440,7 @@ impl<'a> Cx<'a> {
                     }
                 }
                 if emitters_out.is_empty() {
-                    let id = b.meshes.len() as u32;
-                    let (tris, skipped) = mesh.triangles(id);
-                    b.info.triangles += tris.len();
-                    b.info.degenerate_triangles += skipped;
-                    b.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material }));
-                    b.meshes.push(mesh);
+                    mesh_out = Some(mesh);
                 }
             }
             other => {
@@ -1352,35 +1453,51 @@ impl<'a> Cx<'a> {
             }
         }
 
+        let Some(material) = material else {
+            // A `null` BSDF: nothing to see, only the emission (if any).
+            if let Some(radiance) = radiance {
+                for e in emitters_out {
+                    b.lights.push(PendingLight::Area {
+                        emitter: e,
+                        radiance,
+                        material: Material::emitter(radiance, 0),
+                    });
+                }
+            }
+            return self.finish(&p);
+        };
         let m = b.materials[material as usize];
         if let Some(radiance) = radiance {
             // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
             // exactly our plain emitter material.
             let reflects = m.is_specular() || (m.color * m.kd).max_element() > 0.0 || m.ks > 0.0;
-            if bsdf_el.is_some_and(|bel| self.props(bel).is_ok_and(|bp| bp.kind == "null")) || !reflects {
-                for e in emitters_out {
-                    b.lights.push(PendingLight::Area { emitter: e, radiance, material: Material::emitter(radiance, 0) });
-                }
-            } else {
-                for e in emitters_out {
-                    b.lights.push(PendingLight::Area { emitter: e, radiance, material: m });
-                }
-            }
-        } else {
+            let surface = if reflects { m } else { Material::emitter(radiance, 0) };
             for e in emitters_out {
-                let shape = match e {
-                    Emitter::Quad(q) => Shape::Quad(q),
-                    Emitter::Sphere(s) => Shape::Sphere(s),
-                };
-                b.prims.push(Primitive { shape, material });
+                b.lights.push(PendingLight::Area { emitter: e, radiance, material: surface });
             }
-            if m.is_specular() && b.prims.len() > first_prim {
-                let bb = b.prims[first_prim..].iter().fold(Aabb::EMPTY, |acc, p| acc.union(p.shape.bounds()));
-                b.specular_targets.push(match b.prims[first_prim].shape {
-                    Shape::Sphere(s) if b.prims.len() == first_prim + 1 => (s.center, s.radius),
-                    _ => bb.bounding_sphere(),
-                });
-            }
+            return self.finish(&p);
+        }
+        if let Some(mesh) = mesh_out {
+            let id = b.meshes.len() as u32;
+            let (tris, skipped) = mesh.triangles(id);
+            b.info.triangles += tris.len();
+            b.info.degenerate_triangles += skipped;
+            b.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material }));
+            b.meshes.push(mesh);
+        }
+        for e in emitters_out {
+            let shape = match e {
+                Emitter::Quad(q) => Shape::Quad(q),
+                Emitter::Sphere(s) => Shape::Sphere(s),
+            };
+            b.prims.push(Primitive { shape, material });
+        }
+        if m.is_specular() && b.prims.len() > first_prim {
+            let bb = b.prims[first_prim..].iter().fold(Aabb::EMPTY, |acc, p| acc.union(p.shape.bounds()));
+            b.specular_targets.push(match b.prims[first_prim].shape {
+                Shape::Sphere(s) if b.prims.len() == first_prim + 1 => (s.center, s.radius),
+                _ => bb.bounding_sphere(),
+            });
         }
         self.finish(&p)
     }
@@ -1468,13 +1585,18 @@ struct SensorOut {
 impl<'a> Cx<'a> {
     fn sensor(&mut self, sensor: Option<&'a El>, root: &'a El, overrides: &Overrides) -> Result<SensorOut, SceneError> {
         let Some(el) = sensor else {
-            return Err(self.err(root, "the scene has no <sensor>: add <sensor type=\"perspective\"> with a to_world transform"));
+            return Err(self
+                .err(root, "the scene has no <sensor>: add <sensor type=\"perspective\"> with a to_world transform"));
         };
         let p = self.props(el)?;
         let thin = match p.kind.as_str() {
             "perspective" => false,
             "thinlens" => true,
-            other => return Err(self.err(el, format!("sensor `{other}` is not supported; expected perspective or thinlens"))),
+            other => {
+                return Err(
+                    self.err(el, format!("sensor `{other}` is not supported; expected perspective or thinlens"))
+                );
+            }
         };
         // Film.
         let (mut width, mut height) = (768u32, 576u32);
@@ -1493,7 +1615,15 @@ impl<'a> Cx<'a> {
                 }
             }
             // Output-format settings do not change the rendered values.
-            for name in ["file_format", "pixel_format", "component_format", "banner", "high_quality_edges", "sample_border", "compensate"] {
+            for name in [
+                "file_format",
+                "pixel_format",
+                "component_format",
+                "banner",
+                "high_quality_edges",
+                "sample_border",
+                "compensate",
+            ] {
                 let _ = self.prop(&fp, name);
             }
             for (rel, at) in self.object(&fp, None, "rfilter") {
@@ -1538,7 +1668,12 @@ impl<'a> Cx<'a> {
 
         let width = overrides.width.unwrap_or(width);
         let height = overrides.height.unwrap_or(height);
-        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE || width as u64 * height as u64 > MAX_PIXELS {
+        if width == 0
+            || height == 0
+            || width > MAX_SIDE
+            || height > MAX_SIDE
+            || width as u64 * height as u64 > MAX_PIXELS
+        {
             return Err(self.err(el, format!("image size {width} x {height} is out of range (each side 1 to {MAX_SIDE}, at most {MAX_PIXELS} pixels)")));
         }
         let aspect = width as f64 / height as f64;
@@ -1555,7 +1690,8 @@ impl<'a> Cx<'a> {
             }
             (None, fl) => {
                 let (s, at) = fl.clone().unwrap_or(("50mm".into(), el));
-                let v = s.trim().trim_end_matches("mm").trim().parse::<f64>().ok().filter(|v| *v > 0.0 && v.is_finite());
+                let v =
+                    s.trim().trim_end_matches("mm").trim().parse::<f64>().ok().filter(|v| *v > 0.0 && v.is_finite());
                 let Some(v) = v else {
                     return Err(self.err(at, format!("focal_length must be of the form 50mm, found `{s}`")));
                 };
@@ -1578,7 +1714,9 @@ impl<'a> Cx<'a> {
             "diagonal" => half / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
             other => {
                 let at = axis_given.as_ref().map_or(el, |a| a.1);
-                return Err(self.err(at, format!("fov_axis must be x, y, diagonal, smaller or larger, found `{other}`")));
+                return Err(
+                    self.err(at, format!("fov_axis must be x, y, diagonal, smaller or larger, found `{other}`"))
+                );
             }
         };
         // Our camera takes the vertical angle; pass the given one unchanged when it is vertical.
@@ -1622,7 +1760,8 @@ impl<'a> Cx<'a> {
                 if !orthonormal {
                     return Err(self.err(el, "the sensor's to_world must only rotate and translate (Mitsuba does not allow scaling a camera)"));
                 }
-                let mut c = Camera::new(origin, origin + z, y, ViewPlane::Fov(fov_y), width, height, lens_radius, focus);
+                let mut c =
+                    Camera::new(origin, origin + z, y, ViewPlane::Fov(fov_y), width, height, lens_radius, focus);
                 // The image's x axis is local -x; this also keeps a mirroring to_world mirrored.
                 c.u = -x.normalize();
                 c
@@ -1630,14 +1769,6 @@ impl<'a> Cx<'a> {
         };
         if !vertical_given {
             camera.pixel_size = (2.0 * tan_x / width as f64) as f32 * camera.d;
-        }
-        for u in p.used.iter().zip(&p.entries) {
-            // Film and sampler were read above.
-            if let Entry::Object { el, .. } = u.1
-                && (el.tag == "film" || el.tag == "sampler")
-            {
-                u.0.set(true);
-            }
         }
         self.finish(&p)?;
 
@@ -1756,7 +1887,8 @@ fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
     let vertices = ply.payload.get("vertex").ok_or_else(|| invalid("no `vertex` element".into()))?;
     let mut positions = Vec::with_capacity(vertices.len());
     let mut normals = Vec::new();
-    let has_normals = vertices.first().is_some_and(|v| v.contains_key("nx") && v.contains_key("ny") && v.contains_key("nz"));
+    let has_normals =
+        vertices.first().is_some_and(|v| v.contains_key("nx") && v.contains_key("ny") && v.contains_key("nz"));
     for (i, v) in vertices.iter().enumerate() {
         let get = |k: &str| v.get(k).and_then(num);
         let (Some(x), Some(y), Some(z)) = (get("x"), get("y"), get("z")) else {
@@ -1768,8 +1900,12 @@ fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
         }
         positions.push(p);
         if has_normals {
-            let n = Vec3::new(get("nx").unwrap_or(0.0) as f32, get("ny").unwrap_or(0.0) as f32, get("nz").unwrap_or(0.0) as f32);
-            normals.push(n.normalize_or_zero());
+            // Normalised when the mesh is transformed.
+            normals.push(Vec3::new(
+                get("nx").unwrap_or(0.0) as f32,
+                get("ny").unwrap_or(0.0) as f32,
+                get("nz").unwrap_or(0.0) as f32,
+            ));
         }
     }
     let faces = ply.payload.get("face").ok_or_else(|| invalid("no `face` element".into()))?;
