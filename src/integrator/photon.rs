@@ -119,7 +119,9 @@ impl PhotonIntegrator {
     fn gathered_radiance(&self, y: &Hit, by: &Bsdf, scratch: &mut Gathered) -> Color {
         let r = self.config.max_radius;
         let n = by.normal();
-        let (found, _) = self.irradiance.gather(y.p, 8, r * r, scratch);
+        // Records lie a few photon spacings apart: the nearest few within half the estimate
+        // radius always include the right one.
+        let (found, _) = self.irradiance.gather(y.p, 4, r * r * 0.25, scratch);
         let best = found
             .iter()
             .filter(|(_, i)| self.irradiance.photon(*i).direction().dot(n) > 0.8)
