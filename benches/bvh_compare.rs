@@ -1,0 +1,295 @@
+//! `cargo bench --bench bvh_compare`: our binned-SAH BVH against obvhs 0.4 (PLOC BVH2 and the
+//! 8-wide compressed CWBVH), issue #2. Scene: the 102,400-triangle torus knot of `MESH_SCENE`.
+//!
+//! - Build time: `Bvh::build` against obvhs's presets. Both build on rayon (2 threads here).
+//!   The obvhs figures include permuting the triangles into leaf order, which our build also does.
+//! - Traversal: closest hit, and every variant calls OUR watertight `intersect_triangle` on
+//!   triangles stored in leaf order (no index indirection), so only the tree and its traversal
+//!   differ. "camera" = the 1024 x 1024 pinhole rays through pixel centres of `MESH_SCENE`;
+//!   "incoherent" = 1M rays with random origins inside the knot's bounding box and random
+//!   directions. `_1t` runs on the bench thread; `_2t` uses rayon over 1024-ray rows.
+//!   The `items/s` column is rays per second. For the obvhs traversals `P = 0` is the tree built
+//!   with `fast_build()`, `P = 1` with `medium_build()`.
+//!
+//! Before the benchmarks run, every ray is traced through every tree and the hit count and each
+//! closest distance (relative 1e-5) must agree with ours, or the binary panics.
+
+use caustic::accel::Bvh;
+use caustic::bench::{MESH_SCENE, load};
+use caustic::geometry::Ray;
+use caustic::math::{Vec2, Vec3, Vec3A};
+use caustic::shape::{Primitive, RayShear, Shape, TriangleMesh, intersect_triangle};
+use divan::counter::ItemsCount;
+use obvhs::BvhBuildParams;
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::RayHit;
+use rayon::prelude::*;
+use std::sync::LazyLock;
+use std::time::Duration;
+
+const ROW: usize = 1024;
+const N_INCOHERENT: usize = 1 << 20;
+
+fn main() {
+    let d = &*DATA;
+    println!(
+        "torus knot: {} triangles; our BVH {} nodes; obvhs BVH2 fast/medium {}/{} nodes, CWBVH fast/medium {}/{} nodes",
+        d.prims.len(),
+        d.ours.node_count(),
+        d.bvh2[0].0.nodes.len(),
+        d.bvh2[1].0.nodes.len(),
+        d.cwbvh[0].0.nodes.len(),
+        d.cwbvh[1].0.nodes.len()
+    );
+    for (name, rays) in [("camera", &d.camera), ("incoherent", &d.incoherent)] {
+        check(name, rays, d);
+    }
+    divan::main();
+}
+
+fn preset(name: &str) -> BvhBuildParams {
+    match name {
+        "fastest" => BvhBuildParams::fastest_build(),
+        "very_fast" => BvhBuildParams::very_fast_build(),
+        "fast" => BvhBuildParams::fast_build(),
+        "medium" => BvhBuildParams::medium_build(),
+        _ => unreachable!(),
+    }
+}
+
+/// Presets whose trees are traced (index into `Data::bvh2` / `Data::cwbvh`).
+const TRACED: [&str; 2] = ["fast", "medium"];
+
+struct Data {
+    prims: Vec<Primitive>,
+    otris: Vec<obvhs::triangle::Triangle>,
+    ours: Bvh,
+    /// Each tree with its triangles permuted into leaf order.
+    bvh2: Vec<(Bvh2, Vec<[Vec3; 3]>)>,
+    cwbvh: Vec<(CwBvh, Vec<[Vec3; 3]>)>,
+    camera: Vec<Ray>,
+    incoherent: Vec<Ray>,
+}
+
+fn knot_prims() -> Vec<Primitive> {
+    let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, 1600, 32);
+    mesh.triangles(0).0.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material: 0 }).collect()
+}
+
+fn obvhs_tris(prims: &[Primitive]) -> Vec<obvhs::triangle::Triangle> {
+    prims
+        .iter()
+        .map(|p| match p.shape {
+            Shape::Triangle(t) => {
+                obvhs::triangle::Triangle { v0: Vec3A::from(t.p[0]), v1: Vec3A::from(t.p[1]), v2: Vec3A::from(t.p[2]) }
+            }
+            _ => unreachable!(),
+        })
+        .collect()
+}
+
+fn leaf_order(otris: &[obvhs::triangle::Triangle], indices: &[u32]) -> Vec<[Vec3; 3]> {
+    indices
+        .iter()
+        .map(|&i| {
+            let t = &otris[i as usize];
+            [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]
+        })
+        .collect()
+}
+
+fn build_bvh2(otris: &[obvhs::triangle::Triangle], p: BvhBuildParams) -> (Bvh2, Vec<[Vec3; 3]>) {
+    let bvh = build_bvh2_from_tris(otris, p, &mut Duration::default());
+    let tris = leaf_order(otris, &bvh.primitive_indices);
+    (bvh, tris)
+}
+
+fn build_cwbvh(otris: &[obvhs::triangle::Triangle], p: BvhBuildParams) -> (CwBvh, Vec<[Vec3; 3]>) {
+    let bvh = build_cwbvh_from_tris(otris, p, &mut Duration::default());
+    let tris = leaf_order(otris, &bvh.primitive_indices);
+    (bvh, tris)
+}
+
+/// splitmix64 of a counter, mapped to [0, 1).
+fn uniform(i: u64) -> f32 {
+    let mut z = i.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(0x632b_e59b_d9b4_e019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+static DATA: LazyLock<Data> = LazyLock::new(|| {
+    let prims = knot_prims();
+    let otris = obvhs_tris(&prims);
+    let ours = Bvh::build(prims.clone());
+    let bvh2 = TRACED.iter().map(|p| build_bvh2(&otris, preset(p))).collect();
+    let cwbvh = TRACED.iter().map(|p| build_cwbvh(&otris, preset(p))).collect();
+
+    let scene = load(MESH_SCENE, "mesh");
+    let cam = &scene.scene.camera;
+    assert_eq!(cam.width as usize, ROW);
+    let mut camera = Vec::with_capacity((cam.width * cam.height) as usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            camera.push(cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), Vec2::splat(0.5)));
+        }
+    }
+
+    let b = ours.bounds();
+    let incoherent = (0..N_INCOHERENT as u64)
+        .map(|i| {
+            let u = |k: u64| uniform(i * 5 + k);
+            let o = b.min + (b.max - b.min) * Vec3::new(u(0), u(1), u(2));
+            // Uniform direction on the sphere.
+            let z = 1.0 - 2.0 * u(3);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * u(4);
+            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
+        })
+        .collect();
+    Data { prims, otris, ours, bvh2, cwbvh, camera, incoherent }
+});
+
+#[inline(always)]
+fn ours_t(bvh: &Bvh, ray: &Ray) -> f32 {
+    bvh.intersect(ray, f32::INFINITY).map_or(f32::INFINITY, |(_, h)| h.t)
+}
+
+#[inline(always)]
+fn oray(ray: &Ray) -> obvhs::ray::Ray {
+    obvhs::ray::Ray::new_inf(Vec3A::from(ray.o), Vec3A::from(ray.d))
+}
+
+#[inline(always)]
+fn bvh2_t(bvh: &Bvh2, tris: &[[Vec3; 3]], ray: &Ray) -> f32 {
+    let shear = RayShear::new(ray);
+    let mut hit = RayHit::none();
+    if bvh.ray_traverse(oray(ray), &mut hit, |r, id| {
+        intersect_triangle(&tris[id], ray, &shear, r.tmax).map_or(f32::INFINITY, |h| h.t)
+    }) {
+        hit.t
+    } else {
+        f32::INFINITY
+    }
+}
+
+#[inline(always)]
+fn cwbvh_t(bvh: &CwBvh, tris: &[[Vec3; 3]], ray: &Ray) -> f32 {
+    let shear = RayShear::new(ray);
+    let mut hit = RayHit::none();
+    if bvh.ray_traverse(oray(ray), &mut hit, |r, id| {
+        intersect_triangle(&tris[id], ray, &shear, r.tmax).map_or(f32::INFINITY, |h| h.t)
+    }) {
+        hit.t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// Every tree must return our closest distances, ray by ray.
+fn check(name: &str, rays: &[Ray], d: &Data) {
+    let reference: Vec<f32> = rays.par_iter().map(|r| ours_t(&d.ours, r)).collect();
+    let hits = reference.iter().filter(|t| t.is_finite()).count();
+    let compare = |label: String, f: &(dyn Fn(&Ray) -> f32 + Sync)| {
+        let ts: Vec<f32> = rays.par_iter().map(f).collect();
+        let other_hits = ts.iter().filter(|t| t.is_finite()).count();
+        let bad = reference
+            .iter()
+            .zip(&ts)
+            .filter(|(a, b)| {
+                if a.is_finite() != b.is_finite() {
+                    return true;
+                }
+                a.is_finite() && (*a - *b).abs() > 1e-5 * a.abs()
+            })
+            .count();
+        println!("check {name} rays, {label}: {other_hits} hits (ours {hits}), {bad} rays disagree");
+        assert_eq!(other_hits, hits, "{name} {label}: hit counts differ");
+        assert_eq!(bad, 0, "{name} {label}: closest distances differ");
+    };
+    for (i, p) in TRACED.iter().enumerate() {
+        let (bvh, tris) = &d.bvh2[i];
+        compare(format!("obvhs BVH2 {p}"), &|r| bvh2_t(bvh, tris, r));
+        let (bvh, tris) = &d.cwbvh[i];
+        compare(format!("obvhs CWBVH {p}"), &|r| cwbvh_t(bvh, tris, r));
+    }
+}
+
+// ---------------------------------------------------------------- build
+
+#[divan::bench(sample_count = 10)]
+fn build_ours(bencher: divan::Bencher) {
+    let prims = knot_prims();
+    bencher.with_inputs(|| prims.clone()).bench_local_values(Bvh::build);
+}
+
+#[divan::bench(sample_count = 10, args = ["fastest", "very_fast", "fast", "medium"])]
+fn build_obvhs_bvh2(bencher: divan::Bencher, p: &str) {
+    let otris = &DATA.otris;
+    bencher.bench_local(|| build_bvh2(divan::black_box(otris), preset(p)));
+}
+
+#[divan::bench(sample_count = 10, args = ["fastest", "very_fast", "fast", "medium"])]
+fn build_obvhs_cwbvh(bencher: divan::Bencher, p: &str) {
+    let otris = &DATA.otris;
+    bencher.bench_local(|| build_cwbvh(divan::black_box(otris), preset(p)));
+}
+
+// ---------------------------------------------------------------- traversal
+
+fn rays(which: &str) -> &'static [Ray] {
+    match which {
+        "camera" => &DATA.camera,
+        "incoherent" => &DATA.incoherent,
+        _ => unreachable!(),
+    }
+}
+
+fn trace_1t(rays: &[Ray], f: impl Fn(&Ray) -> f32) -> usize {
+    rays.iter().filter(|r| f(r).is_finite()).count()
+}
+
+fn trace_2t(rays: &[Ray], f: impl Fn(&Ray) -> f32 + Sync) -> usize {
+    rays.par_chunks(ROW).map(|row| row.iter().filter(|r| f(r).is_finite()).count()).sum()
+}
+
+const RAYS: [&str; 2] = ["camera", "incoherent"];
+
+#[divan::bench(sample_count = 5, sample_size = 1, args = RAYS)]
+fn trace_ours_1t(bencher: divan::Bencher, which: &str) {
+    let (rays, bvh) = (rays(which), &DATA.ours);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_1t(rays, |r| ours_t(bvh, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, args = RAYS)]
+fn trace_ours_2t(bencher: divan::Bencher, which: &str) {
+    let (rays, bvh) = (rays(which), &DATA.ours);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| ours_t(bvh, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, consts = [0, 1], args = RAYS)]
+fn trace_obvhs_bvh2_1t<const P: usize>(bencher: divan::Bencher, which: &str) {
+    let (rays, (bvh, tris)) = (rays(which), &DATA.bvh2[P]);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_1t(rays, |r| bvh2_t(bvh, tris, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, consts = [0, 1], args = RAYS)]
+fn trace_obvhs_bvh2_2t<const P: usize>(bencher: divan::Bencher, which: &str) {
+    let (rays, (bvh, tris)) = (rays(which), &DATA.bvh2[P]);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| bvh2_t(bvh, tris, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, consts = [0, 1], args = RAYS)]
+fn trace_obvhs_cwbvh_1t<const P: usize>(bencher: divan::Bencher, which: &str) {
+    let (rays, (bvh, tris)) = (rays(which), &DATA.cwbvh[P]);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_1t(rays, |r| cwbvh_t(bvh, tris, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, consts = [0, 1], args = RAYS)]
+fn trace_obvhs_cwbvh_2t<const P: usize>(bencher: divan::Bencher, which: &str) {
+    let (rays, (bvh, tris)) = (rays(which), &DATA.cwbvh[P]);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| cwbvh_t(bvh, tris, r)));
+}
