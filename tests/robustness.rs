@@ -71,14 +71,11 @@ fn load_and_check(text: &str) -> Result<(), TestCaseError> {
     check_loaded(&loaded).map_err(|m| TestCaseError::fail(format!("{m}\n--- scene ---\n{text}")))
 }
 
-/// The loader accepts some scenes whose numbers overflow once combined (the ignored
-/// `regression_*` tests at the end of this file). Until `src/` rejects them, the properties skip
-/// those checks; set this to `false` when the regression tests pass.
-const TOLERATE_KNOWN_OVERFLOWS: bool = true;
-
 fn check_loaded(loaded: &LoadedScene) -> Result<(), String> {
     let scene = &loaded.scene;
-    let known = |m: String| if TOLERATE_KNOWN_OVERFLOWS { Ok(()) } else { Err(m) };
+    // Overflows the property tests once found (the `regression_*` tests at the end) are now
+    // rejected by the loader, so an accepted scene must pass every check.
+    let known = |m: String| Err(m);
     let b = scene.bounds();
     if !b.is_empty() && !(b.min.is_finite() && b.max.is_finite()) {
         known(format!("accepted scene has non-finite bounds {b:?}"))?;
@@ -1050,7 +1047,6 @@ fn assert_rejected_or_usable(text: &str) {
 /// Found by `scene_toml_generated_never_panics`: colour and intensity are each finite, their
 /// product is not, so the light's power (used to pick lights and emit photons) is infinite.
 #[test]
-#[ignore = "src/ bug: the loader accepts a light whose colour x intensity overflows to infinity"]
 fn regression_scene_toml_light_power_overflows_to_infinity() {
     assert_rejected_or_usable(&format!("{CAMERA}[[lights]]\ntype = \"point\"\ncolor = 1e30\nintensity = 1e30\n"));
 }
@@ -1058,7 +1054,6 @@ fn regression_scene_toml_light_power_overflows_to_infinity() {
 /// Found by `scene_toml_mutated_never_panics`: a spherical area light of radius 1e-45 (any
 /// radius below about 1e-19) has zero area; sampling it divides by that area.
 #[test]
-#[ignore = "src/ bug: the loader accepts a spherical area light with zero area"]
 fn regression_scene_toml_zero_area_sphere_light() {
     assert_rejected_or_usable(&format!(
         "{CAMERA}[[lights]]\ntype = \"area\"\nshape = \"sphere\"\nradius = 1e-45\nintensity = 4\n"
@@ -1068,7 +1063,6 @@ fn regression_scene_toml_zero_area_sphere_light() {
 /// Found by `scene_toml_generated_never_panics`: a spherical area light's radius is scaled by
 /// its transform without the finiteness check that sphere objects get.
 #[test]
-#[ignore = "src/ bug: a spherical area light's radius can overflow to infinity in its transform"]
 fn regression_scene_toml_sphere_light_radius_overflows_in_transform() {
     assert_rejected_or_usable(&format!(
         "{CAMERA}[[lights]]\ntype = \"area\"\nshape = \"sphere\"\nradius = 3e38\ntransform = [{{ scale = 10 }}]\n"
@@ -1078,7 +1072,6 @@ fn regression_scene_toml_sphere_light_radius_overflows_in_transform() {
 /// Found by `scene_toml_generated_never_panics`: a quad's corner overflows to -inf in its
 /// transform; `Quad::new` checks only the edges, so the scene's bounds become infinite.
 #[test]
-#[ignore = "src/ bug: the loader accepts a quad whose corner overflows to infinity in its transform"]
 fn regression_scene_toml_quad_corner_overflows_in_transform() {
     assert_rejected_or_usable(&format!(
         "{CAMERA}[[objects]]\ntype = \"quad\"\ncorner = [0, -3.4028234e38, 0]\ntransform = [{{ scale = 10 }}]\n"
@@ -1088,7 +1081,6 @@ fn regression_scene_toml_quad_corner_overflows_in_transform() {
 /// Found by `scene_toml_generated_never_panics`: with a lens, a focal distance of 1e-38 makes the
 /// central camera ray's direction underflow, and normalising it gives NaN.
 #[test]
-#[ignore = "src/ bug: a tiny focal_distance makes camera rays NaN"]
 fn regression_scene_toml_tiny_focal_distance_nan_camera_ray() {
     assert_rejected_or_usable(&format!(
         "{CAMERA}lens_radius = 1\nfocal_distance = 1e-38\n[[objects]]\ntype = \"sphere\"\n"
@@ -1099,7 +1091,6 @@ fn regression_scene_toml_tiny_focal_distance_nan_camera_ray() {
 /// camera ray then "hits" it at t = NaN (the watertight test's products overflow, and a NaN
 /// determinant passes every rejection test).
 #[test]
-#[ignore = "src/ bug: triangles with coordinates near f32::MAX are accepted and hit at t = NaN"]
 fn regression_scene_toml_huge_mesh_nan_hit() {
     assert_rejected_or_usable(&format!(
         "{CAMERA}[[objects]]\ntype = \"mesh\"\nfile = \"huge.obj\"\ntransform = [{{ scale = 0.5 }}]\n"
@@ -1108,7 +1099,6 @@ fn regression_scene_toml_huge_mesh_nan_hit() {
 
 /// The shape-level half of the above: an intersection never reports a non-finite distance.
 #[test]
-#[ignore = "src/ bug: intersect_triangle returns Some(t = NaN) when its products overflow"]
 fn regression_triangle_huge_coordinates_nan_hit() {
     let tri = Shape::Triangle(Triangle::new(
         Vec3::new(1.5e38, 0.0, 0.0),

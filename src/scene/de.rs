@@ -82,7 +82,9 @@ pub struct Direction(pub Vec3);
 impl<'de> Deserialize<'de> for Direction {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = vec3(d)?;
-        let n = v.normalize_or_zero();
+        // Scale to the largest component first, so huge vectors do not overflow when squared.
+        let m = v.abs().max_element();
+        let n = if m > 0.0 { (v / m).normalize_or_zero() } else { Vec3::ZERO };
         if n == Vec3::ZERO || !n.is_finite() {
             return Err(D::Error::custom("expected a direction, found a zero-length vector"));
         }

@@ -459,6 +459,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         progress: false,
         layers: false,
     };
+    scene.check_usable().map_err(|message| SceneError::File { path: name.to_string(), message })?;
     Ok(LoadedScene {
         scene,
         settings,

@@ -99,6 +99,38 @@ impl Scene {
         !self.occluded(&ray, t_max)
     }
 
+    /// Checks what a scene built from finite, in-range values can still get wrong through
+    /// overflow: geometry whose bounds are not finite, lights whose power or area is not a
+    /// positive finite number, a camera whose rays are not finite. Returns what is wrong.
+    pub fn check_usable(&self) -> Result<(), String> {
+        let b = self.bounds();
+        if !b.is_empty() && !(b.min.is_finite() && b.max.is_finite() && b.diagonal().is_finite()) {
+            return Err("the scene's geometry reaches beyond the range of 32-bit floats (coordinates overflow after transforms)".into());
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if !l.power().is_finite() {
+                return Err(format!("light {} is too strong: its power overflows (colour x intensity too large)", i + 1));
+            }
+            if let Light::Area { emitter, .. } = l {
+                let a = emitter.area();
+                if !(a > 0.0 && a.is_finite()) {
+                    return Err(format!("area light {} has no usable area (area {a})", i + 1));
+                }
+            }
+        }
+        let cam = &self.camera;
+        let (w, h) = (cam.width as f32, cam.height as f32);
+        for raster in [crate::math::Vec2::new(0.5 * w, 0.5 * h), crate::math::Vec2::ZERO, crate::math::Vec2::new(w, h)] {
+            for lens in [crate::math::Vec2::splat(0.5), crate::math::Vec2::ZERO, crate::math::Vec2::ONE] {
+                let r = cam.generate_ray(raster, lens);
+                if !(r.o.is_finite() && r.d.is_finite() && (r.d.length() - 1.0).abs() < 1e-3) {
+                    return Err("the camera's rays are not finite (focal distance or view-plane distance too small or too large)".into());
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// A ray leaving hit `h` in direction `d`.
     #[inline]
     pub fn spawn(&self, h: &Hit, d: crate::math::Vec3) -> Ray {

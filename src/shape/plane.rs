@@ -20,7 +20,9 @@ impl Plane {
             return None;
         }
         let t = self.normal.dot(self.point - ray.o) / denom;
-        (t > 0.0 && t < t_max).then_some(PrimHit { t, u: 0.0, v: 0.0 })
+        // A ray nearly parallel to the plane can meet it so far away that the point (or the
+        // arithmetic on it) overflows; such distant hits are treated as misses.
+        (t > 0.0 && t < t_max && ray.at(t).abs().max_element() < 1e30).then_some(PrimHit { t, u: 0.0, v: 0.0 })
     }
 
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {

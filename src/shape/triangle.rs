@@ -119,7 +119,8 @@ pub fn intersect_triangle(p: &[Vec3; 3], ray: &Ray, s: &RayShear, t_max: f32) ->
         return None;
     }
     let det = e0 + e1 + e2;
-    if det == 0.0 {
+    // Zero, or not finite when huge coordinates overflowed the products.
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
     let (z0, z1, z2) = (z0 * s.sz, z1 * s.sz, z2 * s.sz);
@@ -143,7 +144,7 @@ pub fn intersect_triangle(p: &[Vec3; 3], ray: &Ray, s: &RayShear, t_max: f32) ->
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = e0.abs().max(e1.abs()).max(e2.abs());
     let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-    if t <= delta_t {
+    if !(t > delta_t) || !t.is_finite() {
         return None;
     }
     Some(PrimHit { t, u: e1 * inv_det, v: e2 * inv_det })
