@@ -63,17 +63,18 @@ fn photon_irradiance_under_a_point_light_matches_i_cos_over_d2() {
 #[test]
 fn first_hits_carry_light_power_times_hit_fraction() {
     // Above an infinite plane exactly half the directions of a point light hit it.
-    let text = FLOOR_UNDER_POINT_LIGHT.replace(
-        "type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]",
-        "type = \"plane\"",
-    );
+    let text = FLOOR_UNDER_POINT_LIGHT
+        .replace("type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "type = \"plane\"");
     let s = common::scene(&text);
     let pass = trace::trace_global(&s.scene, 400_000, 3);
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
     let expected = 4.0 * PI * 10.0 * 0.5;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
     // A 2 x 2 square 2 below the light subtends 4 asin(1 / 5) of the sphere of directions.
-    let square = FLOOR_UNDER_POINT_LIGHT.replace("corner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "corner = [-1, 0, 1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, -2]");
+    let square = FLOOR_UNDER_POINT_LIGHT.replace(
+        "corner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]",
+        "corner = [-1, 0, 1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, -2]",
+    );
     let s = common::scene(&square);
     let pass = trace::trace_global(&s.scene, 400_000, 4);
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
@@ -131,7 +132,9 @@ fn caustic_map_holds_only_specular_paths() {
     let flagged = global.hits.iter().filter(|h| h.flags & CAUSTIC != 0);
     assert!(flagged.clone().count() > 100 && flagged.clone().all(came_through_glass));
     // ... and only those: photons landing outside the glass's shadow came straight.
-    assert!(global.hits.iter().filter(|h| h.flags & CAUSTIC == 0 && h.flags & DIRECT != 0).all(|h| !came_through_glass(h)));
+    assert!(
+        global.hits.iter().filter(|h| h.flags & CAUSTIC == 0 && h.flags & DIRECT != 0).all(|h| !came_through_glass(h))
+    );
 }
 
 /// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen

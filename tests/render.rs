@@ -78,7 +78,12 @@ fn every_integrator_is_bit_identical_on_1_2_and_8_threads() {
         let a = render_cli("13-cornell-caustics.toml", integrator, 1, &dir.join(format!("{integrator}-1.exr")));
         assert!(a.mean().max_element() > 0.0, "{integrator}: black image");
         for threads in [2, 8] {
-            let b = render_cli("13-cornell-caustics.toml", integrator, threads, &dir.join(format!("{integrator}-{threads}.exr")));
+            let b = render_cli(
+                "13-cornell-caustics.toml",
+                integrator,
+                threads,
+                &dir.join(format!("{integrator}-{threads}.exr")),
+            );
             let same = a
                 .pixels
                 .iter()
@@ -129,10 +134,18 @@ fn thin_lens_with_zero_radius_renders_the_pinhole_image_bit_for_bit() {
     let render_text = |t: &str| {
         let s = caustic::scene::load_scene_str(t, "lens.toml", path.parent().unwrap(), &o).unwrap();
         let cancel = AtomicBool::new(false);
-        render(&s.scene, &Whitted::new(&s.integrator), &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
+        render(
+            &s.scene,
+            &Whitted::new(&s.integrator),
+            &s.settings,
+            &RenderControl { cancel: &cancel, on_checkpoint: None },
+        )
+        .0
     };
     let (a, b) = (render_text(&text), render_text(&lens));
-    assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+    assert!(
+        a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+    );
     // A real lens changes the image (so the comparison above can fail).
     let blurred = render_text(&text.replace("fov = 45", "fov = 45\nlens_radius = 0.2\nfocal_distance = 2.5"));
     assert_ne!(a, blurred);

@@ -21,7 +21,12 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
     let control = RenderControl { cancel: &cancel, on_checkpoint: None };
     let mut settings = s.settings.clone();
     settings.spp = iterations;
-    let config = SppmConfig { photons_per_iter: photons, initial_radius: None, alpha: 2.0 / 3.0, max_depth: s.integrator.max_depth };
+    let config = SppmConfig {
+        photons_per_iter: photons,
+        initial_radius: None,
+        alpha: 2.0 / 3.0,
+        max_depth: s.integrator.max_depth,
+    };
     render_sppm(&s.scene, &config, &settings, &control)
 }
 
@@ -33,7 +38,10 @@ fn render_with<I: Integrator>(s: &LoadedScene, integrator: &I) -> Image {
 #[test]
 fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
     let size = Overrides { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
-    let reference = render_with(&cornell("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }), &PathTracer { max_depth: 12 });
+    let reference = render_with(
+        &cornell("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }),
+        &PathTracer { max_depth: 12 },
+    );
     let s = cornell("11-cornell-area.toml", &size);
     let (early, _) = sppm(&s, 16, 20_000);
     let (late, _) = sppm(&s, 256, 20_000);
@@ -46,7 +54,10 @@ fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
 
 #[test]
 fn sppm_renders_and_converges_the_point_light_caustic() {
-    let s = cornell("13-cornell-caustics.toml", &Overrides { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() });
+    let s = cornell(
+        "13-cornell-caustics.toml",
+        &Overrides { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() },
+    );
     let (long, _) = sppm(&s, 512, 40_000);
     let (a, _) = sppm(&s, 16, 40_000);
     let (b, _) = sppm(&s, 128, 40_000);

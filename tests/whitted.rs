@@ -10,7 +10,13 @@ use caustic::sampling::{Sampler, SamplerKind};
 
 fn radiance(s: &caustic::scene::load::LoadedScene, ray: Ray, depth: u32) -> Color {
     let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, 0, 1);
-    let l = Whitted { max_depth: depth, area_samples: 16 }.radiance(&s.scene, &ray, &mut sampler, &mut (), &mut RayStats::default());
+    let l = Whitted { max_depth: depth, area_samples: 16 }.radiance(
+        &s.scene,
+        &ray,
+        &mut sampler,
+        &mut (),
+        &mut RayStats::default(),
+    );
     l.iter().sum()
 }
 

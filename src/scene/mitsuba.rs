@@ -1077,9 +1077,7 @@ impl<'a> Cx<'a> {
             any_transmissive,
             specular_targets: b.specular_targets,
         };
-        scene
-            .check_usable()
-            .map_err(|message| SceneError::File { path: self.srcs[0].name.clone(), message })?;
+        scene.check_usable().map_err(|message| SceneError::File { path: self.srcs[0].name.clone(), message })?;
         Ok(LoadedScene {
             scene,
             settings: cam.settings,

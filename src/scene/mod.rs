@@ -104,12 +104,16 @@ impl Scene {
     /// positive finite number, a camera whose rays are not finite. Returns what is wrong.
     pub fn check_usable(&self) -> Result<(), String> {
         let b = self.bounds();
-        if !b.is_empty() && !(b.min.is_finite() && b.max.is_finite() && b.diagonal().is_finite()) {
+        let finite = b.min.is_finite() && b.max.is_finite() && b.diagonal().is_finite();
+        if !(b.is_empty() || finite) {
             return Err("the scene's geometry reaches beyond the range of 32-bit floats (coordinates overflow after transforms)".into());
         }
         for (i, l) in self.lights.iter().enumerate() {
             if !l.power().is_finite() {
-                return Err(format!("light {} is too strong: its power overflows (colour x intensity too large)", i + 1));
+                return Err(format!(
+                    "light {} is too strong: its power overflows (colour x intensity too large)",
+                    i + 1
+                ));
             }
             if let Light::Area { emitter, .. } = l {
                 let a = emitter.area();
@@ -120,7 +124,8 @@ impl Scene {
         }
         let cam = &self.camera;
         let (w, h) = (cam.width as f32, cam.height as f32);
-        for raster in [crate::math::Vec2::new(0.5 * w, 0.5 * h), crate::math::Vec2::ZERO, crate::math::Vec2::new(w, h)] {
+        for raster in [crate::math::Vec2::new(0.5 * w, 0.5 * h), crate::math::Vec2::ZERO, crate::math::Vec2::new(w, h)]
+        {
             for lens in [crate::math::Vec2::splat(0.5), crate::math::Vec2::ZERO, crate::math::Vec2::ONE] {
                 let r = cam.generate_ray(raster, lens);
                 if !(r.o.is_finite() && r.d.is_finite() && (r.d.length() - 1.0).abs() < 1e-3) {
