@@ -3,21 +3,15 @@
 mod common;
 
 use caustic::film::Image;
-use caustic::integrator::{Integrator, PathTracer, PhotonIntegrator};
+use caustic::integrator::{PathTracer, PhotonIntegrator};
 use caustic::math::{Color, Vec3, luminance};
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};
 use caustic::photon::{Gathered, Photon, PhotonMap};
-use caustic::render::{RenderControl, render};
+use caustic::render::RenderControl;
 use caustic::scene::Overrides;
 use caustic::scene::load::LoadedScene;
 use std::f32::consts::PI;
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
-
-fn render_with<I: Integrator>(s: &LoadedScene, integrator: &I) -> Image {
-    let cancel = AtomicBool::new(false);
-    render(&s.scene, integrator, &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
-}
 
 fn photon_integrator(s: &LoadedScene) -> PhotonIntegrator {
     let config = s.integrator.photon.resolve(&s.scene, &s.integrator, s.settings.seed);
@@ -172,9 +166,9 @@ material = "grey"
 
 #[test]
 fn furnace_path_tracer() {
-    let gi = luminance(render_with(&furnace(200), &PathTracer { max_depth: 200 }).mean());
+    let gi = luminance(common::render_with(&furnace(200), &PathTracer { max_depth: 200 }).mean());
     assert!((gi - 1.0).abs() < 0.03, "path tracer, all bounces: {gi}");
-    let direct = luminance(render_with(&furnace(1), &PathTracer { max_depth: 1 }).mean());
+    let direct = luminance(common::render_with(&furnace(1), &PathTracer { max_depth: 1 }).mean());
     assert!((direct - 0.5).abs() < 0.015, "path tracer, direct only: {direct}");
 }
 
@@ -193,22 +187,19 @@ fn furnace_photon_mapping() {
     assert!((direct - 0.5).abs() < 0.015, "photon mapping, direct only: {direct}");
 }
 
-fn cornell(name: &str, o: &Overrides) -> LoadedScene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    caustic::scene::load_scene(&path, o).unwrap()
-}
-
 #[test]
 fn photon_mapping_matches_the_path_tracer_on_the_diffuse_cornell_box() {
     let size = Overrides { width: Some(48), height: Some(48), ..Default::default() };
     let reference = |seed: u64| {
-        let s = cornell("11-cornell-area.toml", &Overrides { spp: Some(1024), seed: Some(seed), ..size.clone() });
-        render_with(&s, &PathTracer { max_depth: 12 })
+        let s =
+            common::bundled("11-cornell-area.toml", &Overrides { spp: Some(1024), seed: Some(seed), ..size.clone() });
+        common::render_with(&s, &PathTracer { max_depth: 12 })
     };
     let (pt_a, pt_b) = (reference(1), reference(2));
     let photon = |seed: u64| {
-        let s = cornell("11-cornell-area.toml", &Overrides { spp: Some(256), seed: Some(seed), ..size.clone() });
-        render_with(&s, &photon_integrator(&s))
+        let s =
+            common::bundled("11-cornell-area.toml", &Overrides { spp: Some(256), seed: Some(seed), ..size.clone() });
+        common::render_with(&s, &photon_integrator(&s))
     };
     let (pm_a, pm_b) = (photon(3), photon(4));
     let (l_pt, l_pm) = (luminance(pt_a.mean()), luminance(pm_a.mean()));
@@ -231,7 +222,7 @@ fn photon_mapping_matches_the_path_tracer_on_the_diffuse_cornell_box() {
 #[test]
 fn caustic_under_the_glass_sphere_is_bright_and_absent_without_caustics() {
     let size = Overrides { width: Some(64), height: Some(64), spp: Some(4), ..Default::default() };
-    let s = cornell("13-cornell-caustics.toml", &size);
+    let s = common::bundled("13-cornell-caustics.toml", &size);
     let ratio = |img: &Image| {
         // Floor pixels under the glass sphere (front right) against open floor in front of the
         // box. The windows were read off a 64 x 64 render: the caustic covers about
@@ -248,7 +239,7 @@ fn caustic_under_the_glass_sphere_is_bright_and_absent_without_caustics() {
         mean(39, 45, 57, 59) / mean(12, 28, 59, 62)
     };
     let pm = photon_integrator(&s);
-    let with = render_with(&s, &pm);
+    let with = common::render_with(&s, &pm);
     let r = ratio(&with);
     assert!(r >= 2.0, "caustic region only {r} x as bright as the floor around it");
     // With the caustic map disabled the focused light is gone. (The region does not go fully
@@ -259,7 +250,7 @@ fn caustic_under_the_glass_sphere_is_bright_and_absent_without_caustics() {
     let config = no_caustics.photon.resolve(&s.scene, &no_caustics, 0);
     let pm0 = PhotonIntegrator::build(&s.scene, config);
     assert_eq!(pm0.stats.caustic_stored, 0);
-    let without = render_with(&s, &pm0);
+    let without = common::render_with(&s, &pm0);
     let r0 = ratio(&without);
     assert!(r0 < 0.5 * r, "without caustics the region is still {r0} x as bright (with: {r})");
 }

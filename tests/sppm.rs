@@ -1,20 +1,16 @@
 //! Stochastic progressive photon mapping converges to the path tracer's image, renders caustics
 //! from a point light, and keeps its memory bounded.
 
+mod common;
+
 use caustic::film::Image;
+use caustic::integrator::PathTracer;
 use caustic::integrator::sppm::{SppmConfig, render_sppm};
-use caustic::integrator::{Integrator, PathTracer};
 use caustic::math::luminance;
-use caustic::render::{RenderControl, RenderStats, render};
+use caustic::render::{RenderControl, RenderStats};
 use caustic::scene::Overrides;
 use caustic::scene::load::LoadedScene;
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
-
-fn cornell(name: &str, o: &Overrides) -> LoadedScene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    caustic::scene::load_scene(&path, o).unwrap()
-}
 
 fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) {
     let cancel = AtomicBool::new(false);
@@ -30,19 +26,14 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
     render_sppm(&s.scene, &config, &settings, &control)
 }
 
-fn render_with<I: Integrator>(s: &LoadedScene, integrator: &I) -> Image {
-    let cancel = AtomicBool::new(false);
-    render(&s.scene, integrator, &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
-}
-
 #[test]
 fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
     let size = Overrides { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
-    let reference = render_with(
-        &cornell("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }),
+    let reference = common::render_with(
+        &common::bundled("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }),
         &PathTracer { max_depth: 12 },
     );
-    let s = cornell("11-cornell-area.toml", &size);
+    let s = common::bundled("11-cornell-area.toml", &size);
     let (early, _) = sppm(&s, 16, 20_000);
     let (late, _) = sppm(&s, 256, 20_000);
     let (e_early, e_late) = (early.rmse(&reference), late.rmse(&reference));
@@ -54,7 +45,7 @@ fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
 
 #[test]
 fn sppm_renders_and_converges_the_point_light_caustic() {
-    let s = cornell(
+    let s = common::bundled(
         "13-cornell-caustics.toml",
         &Overrides { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() },
     );
@@ -79,7 +70,8 @@ fn sppm_renders_and_converges_the_point_light_caustic() {
 
 #[test]
 fn sppm_memory_does_not_grow_with_iterations() {
-    let s = cornell("11-cornell-area.toml", &Overrides { width: Some(32), height: Some(32), ..Default::default() });
+    let s =
+        common::bundled("11-cornell-area.toml", &Overrides { width: Some(32), height: Some(32), ..Default::default() });
     let (_, ten) = sppm(&s, 10, 10_000);
     let (_, hundred) = sppm(&s, 100, 10_000);
     let (m10, m100) = (ten.memory_bytes as f64, hundred.memory_bytes as f64);
