@@ -211,7 +211,7 @@ pub fn render_sppm(
                 if let Some(v) = &vp
                     && px.r == 0.0
                 {
-                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, settings, v.dist, diag));
+                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, v.dist, diag));
                 }
                 vp
             })
@@ -279,10 +279,9 @@ fn image(pixels: &[PixelStats], w: u32, h: u32, iterations: u32) -> Image {
 
 /// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
 /// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.
-fn initial_radius(scene: &Scene, settings: &RenderSettings, dist: f32, diag: f32) -> f32 {
+fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
     let cam = &scene.camera;
     let footprint = dist * cam.pixel_size / cam.d;
-    let _ = settings;
     (2.0 * footprint).clamp(5e-4 * diag, 0.02 * diag)
 }
 

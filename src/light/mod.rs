@@ -83,7 +83,7 @@ impl Light {
 
     /// Spot falloff for a direction making cos `cos_theta` with the axis.
     #[inline]
-    fn spot_falloff(cos_theta: f32, cos_total: f32, cos_falloff: f32) -> f32 {
+    pub(crate) fn spot_falloff(cos_theta: f32, cos_total: f32, cos_falloff: f32) -> f32 {
         smoothstep(cos_total, cos_falloff, cos_theta)
     }
 

@@ -16,7 +16,7 @@
 use crate::geometry::Ray;
 use crate::light::{EmittedPhoton, Light};
 use crate::material::bsdf::Bsdf;
-use crate::math::{Color, Frame, Vec2, Vec3};
+use crate::math::{Color, Frame, Vec3};
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
@@ -205,9 +205,8 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
     if let Light::Directional { direction, irradiance, scene_center, scene_radius } = *light {
         // Disks of the targets' projections, perpendicular to the light.
         let frame = Frame::from_z(direction);
-        let areas: Vec<f32> = targets.iter().map(|t| PI * t.1 * t.1).collect();
-        let total: f32 = areas.iter().sum();
-        let j = pick(&areas, total, u_pick)?;
+        let j = pick(targets.iter().map(|t| PI * t.1 * t.1), u_pick)?;
+        let total: f32 = targets.iter().map(|t| PI * t.1 * t.1).sum();
         let (c, r) = targets[j];
         let disk = concentric_disk(u_dir) * r;
         let q = c + frame.x * disk.x + frame.y * disk.y;
@@ -235,20 +234,18 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         }
         Light::Directional { .. } => unreachable!(),
     };
-    let cones: Vec<(Vec3, f32, f32)> = targets.iter().map(|&t| cone(p, t)).collect();
-    let solid: Vec<f32> = cones.iter().map(|c| c.2).collect();
-    let total: f32 = solid.iter().sum();
-    let j = pick(&solid, total, u_pick)?;
-    let (axis, cos_max, _) = cones[j];
+    // Cones are recomputed rather than stored: a photon allocates nothing.
+    let cones = || targets.iter().map(|&t| cone(p, t));
+    let j = pick(cones().map(|c| c.2), u_pick)?;
+    let total: f32 = cones().map(|c| c.2).sum();
+    let (axis, cos_max, _) = cone(p, targets[j]);
     let d = Frame::from_z(axis).to_world(uniform_cone(u_dir, cos_max));
-    let covering = cones.iter().filter(|(a, cm, _)| d.dot(*a) >= *cm).count().max(1);
+    let covering = cones().filter(|(a, cm, _)| d.dot(*a) >= *cm).count().max(1);
     let pdf_dir = covering as f32 / total;
     let emitted = match *light {
         Light::Point { .. } => radiance_like,
         Light::Spot { direction, cos_total, cos_falloff, .. } => {
-            let probe = Light::Spot { position: p, direction, intensity: radiance_like, cos_total, cos_falloff };
-            // The spot's intensity towards d: its irradiance at unit distance along d.
-            probe.sample(p + d, Vec2::ZERO).map_or(Color::ZERO, |s| s.irradiance)
+            radiance_like * Light::spot_falloff(d.dot(direction), cos_total, cos_falloff)
         }
         Light::Area { .. } => {
             let cos = n.dot(d);
@@ -263,16 +260,22 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
     Some(EmittedPhoton { ray: Ray::new(o, d), flux: emitted / pdf_dir, n: n_out })
 }
 
-fn pick(weights: &[f32], total: f32, u: f32) -> Option<usize> {
+/// Index chosen from `weights` in proportion to them, by the uniform number `u`.
+fn pick(weights: impl Iterator<Item = f32> + Clone, u: f32) -> Option<usize> {
+    let total: f32 = weights.clone().sum();
     if !(total > 0.0) {
         return None;
     }
     let mut x = u * total;
-    for (i, w) in weights.iter().enumerate() {
-        if x < *w {
+    let mut last = None;
+    for (i, w) in weights.enumerate() {
+        if x < w {
             return Some(i);
         }
         x -= w;
+        if w > 0.0 {
+            last = Some(i);
+        }
     }
-    weights.iter().rposition(|w| *w > 0.0)
+    last
 }

@@ -405,7 +405,7 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
             && !(r > 0.0 && r.is_finite())
         {
             return Err(SceneError::File {
-                path: name_of(&cx),
+                path: cx.path.to_string(),
                 message: format!("photon {name} must be a positive number, got {r}"),
             });
         }
@@ -471,10 +471,6 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path, overrides: &Overrides
         },
         info,
     })
-}
-
-fn name_of(cx: &Cx) -> String {
-    cx.path.to_string()
 }
 
 fn default_material(materials: &mut Vec<Material>, names: &mut Vec<String>, index: &mut HashMap<String, u32>) -> u32 {
