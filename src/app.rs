@@ -1,10 +1,12 @@
 //! The `render` command as a library function: load, check the output, render on a pool of the
 //! requested size, write the image. `main.rs` only parses arguments and reports errors.
 
+use crate::film::LAYER_NAMES;
 use crate::film::output::{OutputError, check_writable, write_image};
-use crate::integrator::{IntegratorKind, LAYER_NAMES, PathTracer, PhotonIntegrator, Whitted};
-use crate::render::{RenderControl, RenderSettings, RenderStats, render_layers};
-use crate::scene::{Overrides, SceneError, load_scene};
+use crate::integrator::Integrator;
+use crate::render::{RenderControl, RenderSettings, RenderStats};
+use crate::scene::desc::{IntegratorDesc, IntegratorKind, LoadInfo};
+use crate::scene::{LoadOptions, Overrides, Scene, SceneDescription, SceneError, load_scene};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -15,6 +17,8 @@ pub struct RenderOptions {
     /// Output image; defaults to the scene's file name with `.png` in the current folder.
     pub output: Option<PathBuf>,
     pub overrides: Overrides,
+    /// How the file is read (Mitsuba `-D` parameters, `--strict`).
+    pub load: LoadOptions,
     /// Worker threads; all cores when `None`.
     pub threads: Option<usize>,
     pub time_limit: Option<Duration>,
@@ -58,27 +62,58 @@ pub fn default_output(scene: &Path) -> PathBuf {
     PathBuf::from(format!("{stem}.png"))
 }
 
+/// A scene loaded, with the command-line overrides applied and built: ready to render.
+pub struct LoadedScene {
+    pub scene: Scene,
+    pub settings: RenderSettings,
+    pub integrator: IntegratorDesc,
+    pub info: LoadInfo,
+    /// What the loader could not render exactly, each `file:line:col: message`.
+    pub warnings: Vec<String>,
+}
+
+/// Loads a scene file, applies `overrides` (the one place they meet the file's values) and
+/// builds the scene.
+pub fn load(path: &Path, options: &LoadOptions, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+    prepare(load_scene(path, options)?, overrides)
+}
+
+/// `load` for a scene in caustic's TOML format given as text (`name` in messages, mesh paths
+/// relative to `base`).
+pub fn load_toml_str(text: &str, name: &str, base: &Path, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+    prepare(crate::scene::load_scene_str(text, name, base)?, overrides)
+}
+
+/// Applies the overrides to a description and builds it.
+pub fn prepare(mut desc: SceneDescription, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+    desc.apply(overrides);
+    let warnings = std::mem::take(&mut desc.warnings);
+    let built = desc.build()?;
+    Ok(LoadedScene {
+        settings: RenderSettings::new(&built.sampling),
+        scene: built.scene,
+        integrator: built.integrator,
+        info: built.info,
+        warnings,
+    })
+}
+
+impl LoadedScene {
+    /// Renders with the scene's own integrator and settings (no time limit, progress or
+    /// cancellation).
+    pub fn render(&self) -> crate::render::RenderOutput {
+        let integrator = Integrator::new(&self.integrator, &self.scene, &self.settings);
+        integrator.render(&self.scene, &self.settings, &RenderControl::uncancelled())
+    }
+}
+
 /// Bytes the render of `loaded` with `settings` will allocate: the film (with its layers), the
 /// output image, and the integrator's own data (photon maps, SPPM state). Geometry is already
 /// loaded by then and is not counted.
-pub fn estimate_render_bytes(loaded: &crate::scene::load::LoadedScene, settings: &RenderSettings) -> u64 {
-    let pixels = settings.width as u64 * settings.height as u64;
+pub fn estimate_render_bytes(loaded: &LoadedScene, settings: &RenderSettings) -> u64 {
     let per_pixel = 16 + 12 + if settings.layers { 48 + 4 * 12 } else { 0 };
-    let film = pixels * per_pixel;
-    let integrator = match loaded.integrator.kind {
-        IntegratorKind::Whitted | IntegratorKind::Path => 0,
-        IntegratorKind::Photon => {
-            let c = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
-            // Up to four stored bounces per global photon, plus the irradiance records.
-            crate::integrator::photon::estimated_map_bytes(c.photons.saturating_mul(5))
-                + crate::integrator::photon::estimated_map_bytes(c.caustic_photons)
-        }
-        IntegratorKind::Sppm => {
-            let c = loaded.integrator.photon.sppm(&loaded.integrator, pixels);
-            crate::integrator::sppm::estimated_bytes(pixels, c.photons_per_iter)
-        }
-    };
-    film.saturating_add(integrator)
+    let film = settings.pixels() * per_pixel;
+    film.saturating_add(crate::integrator::estimated_bytes(&loaded.integrator, &loaded.scene, settings))
 }
 
 /// `out.png` -> `out.direct.png` for layer `direct`.
@@ -121,7 +156,13 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         .build()
         .map_err(|e| AppError::Threads { threads: opts.threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
-        let loaded = load_scene(&opts.scene, &opts.overrides)?;
+        let loaded = load(&opts.scene, &opts.load, &opts.overrides)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        for w in crate::integrator::limitations(loaded.integrator.kind, &loaded.scene) {
+            eprintln!("warning: {w}");
+        }
         let info = &loaded.info;
         log(
             opts.quiet,
@@ -145,6 +186,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         settings.time_limit = opts.time_limit;
         settings.checkpoint = opts.checkpoint;
         settings.progress = !opts.quiet;
+        settings.layers = opts.layers;
         if opts.time_limit.is_some() && opts.overrides.spp.is_none() && opts.overrides.spp_axis.is_none() {
             // A time budget without a sample count renders until the time is up.
             settings.spp = u32::MAX;
@@ -154,7 +196,6 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             Err(e) => eprintln!("warning: checkpoint failed: {e}"),
         };
         let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
-        settings.layers = opts.layers;
         // Everything big the render will allocate, estimated before any of it is.
         let need = estimate_render_bytes(&loaded, &settings);
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
@@ -162,52 +203,50 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         if need > limit {
             return Err(AppError::Memory { need_mib: need.div_ceil(1 << 20), limit_mib: limit >> 20 });
         }
-        let (image, layers, stats) = match loaded.integrator.kind {
-            IntegratorKind::Whitted => {
-                render_layers(&loaded.scene, &Whitted::new(&loaded.integrator), &settings, &control)
-            }
-            IntegratorKind::Path => {
-                render_layers(&loaded.scene, &PathTracer { max_depth: loaded.integrator.max_depth }, &settings, &control)
-            }
-            IntegratorKind::Sppm => {
-                let pixels = settings.width as u64 * settings.height as u64;
-                let config = loaded.integrator.photon.sppm(&loaded.integrator, pixels);
-                if opts.layers {
-                    eprintln!("warning: --layers is not available with sppm; writing the image only");
-                }
-                let (img, stats) = crate::integrator::sppm::render_sppm(&loaded.scene, &config, &settings, &control);
-                log(
-                    opts.quiet,
-                    format_args!(
-                        "sppm: {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
-                        stats.passes,
-                        config.photons_per_iter,
-                        stats.passes as f64 / stats.wall.as_secs_f64().max(1e-9),
-                        stats.memory_bytes as f64 / 1048576.0
-                    ),
-                );
-                (img, Vec::new(), stats)
-            }
-            IntegratorKind::Photon => {
-                let config = loaded.integrator.photon.resolve(&loaded.scene, &loaded.integrator, settings.seed);
-                log(opts.quiet, format_args!(
+        if loaded.integrator.kind == IntegratorKind::Photon {
+            let c = crate::integrator::photon::PhotonConfig::new(
+                &loaded.integrator.photon,
+                &loaded.integrator,
+                &loaded.scene,
+                settings.seed,
+            );
+            log(
+                opts.quiet,
+                format_args!(
                     "photon maps: up to {} global photons (bounces included) and {} caustic photons",
-                    config.photons.saturating_mul(4), config.caustic_photons));
-                let pm = PhotonIntegrator::build(&loaded.scene, config);
-                let s = &pm.stats;
-                log(opts.quiet, format_args!(
-                    "photons: global {} emitted, {} stored ({:.1} MiB); caustic {} emitted, {} stored ({:.1} MiB){}; traced in {:.2} s, maps built in {:.2} s",
-                    s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
-                    s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
-                    if s.caustic_capped { " (emission cap reached)" } else { "" },
-                    s.trace_time.as_secs_f64(), s.build_time.as_secs_f64()));
-                render_layers(&loaded.scene, &pm, &settings, &control)
-            }
-        };
-        for (img, name) in layers.iter().zip(LAYER_NAMES) {
+                    c.photons.saturating_mul(4),
+                    c.caustic_photons
+                ),
+            );
+        }
+        let integrator = Integrator::new(&loaded.integrator, &loaded.scene, &settings);
+        if let Integrator::Photon(pm) = &integrator {
+            let s = &pm.stats;
+            log(opts.quiet, format_args!(
+                "photons: global {} emitted, {} stored ({:.1} MiB); caustic {} emitted, {} stored ({:.1} MiB){}; traced in {:.2} s, maps built in {:.2} s",
+                s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
+                s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
+                if s.caustic_capped { " (emission cap reached)" } else { "" },
+                s.trace_time.as_secs_f64(), s.build_time.as_secs_f64()));
+        }
+        let out = integrator.render(&loaded.scene, &settings, &control);
+        let stats = out.stats;
+        if let Integrator::Sppm(sppm) = &integrator {
+            log(
+                opts.quiet,
+                format_args!(
+                    "sppm: {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
+                    stats.samples_per_pixel,
+                    sppm.config.photons_per_iter,
+                    stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
+                    stats.memory_bytes as f64 / 1048576.0
+                ),
+            );
+        }
+        for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
             write_image(img, &layer_path(&output, name))?;
         }
-        write_image(&image, &output)?;
+        write_image(&out.image, &output)?;
         if stats.nonfinite_samples > 0 {
             eprintln!("warning: {} samples were NaN or infinite and were dropped", stats.nonfinite_samples);
         }

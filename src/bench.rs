@@ -1,14 +1,13 @@
 //! Fixed benchmark scenes and throughput measurements, shared by `caustic bench` and
 //! `cargo bench`. The scenes are compiled in, so the numbers never depend on files on disk.
 
+use crate::app::{LoadedScene, load_toml_str};
 use crate::geometry::Ray;
-use crate::integrator::Whitted;
 use crate::math::Vec2;
-use crate::render::{RenderControl, RenderStats, render};
-use crate::scene::{Overrides, load::LoadedScene, load_scene_str};
+use crate::render::RenderStats;
+use crate::scene::Overrides;
 use rayon::prelude::*;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// A 102,400-triangle torus knot filling a 1024 x 1024 frame.
@@ -25,7 +24,7 @@ pub fn load(text: &str, name: &str) -> LoadedScene {
 }
 
 fn load_sized(text: &str, name: &str, o: &Overrides) -> LoadedScene {
-    match load_scene_str(text, name, Path::new("."), o) {
+    match load_toml_str(text, name, Path::new("."), o) {
         Ok(s) => s,
         Err(e) => panic!("built-in benchmark scene {name} is invalid: {e}"),
     }
@@ -52,9 +51,7 @@ pub fn primary_rays(s: &LoadedScene) -> (u64, u64, Duration) {
 
 /// A full Whitted render of a loaded scene with its own settings.
 pub fn whitted_render(s: &LoadedScene) -> RenderStats {
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
-    render(&s.scene, &Whitted::new(&s.integrator), &s.settings, &control).1
+    s.render().stats
 }
 
 /// Prints a line, ignoring a closed stdout (e.g. piped into `head`).

@@ -37,6 +37,95 @@ pub enum ViewPlane {
     Distance(f32),
 }
 
+/// Which extent of the image a field-of-view angle spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Diagonal,
+    /// The smaller of the two sides.
+    Smaller,
+    /// The larger of the two sides.
+    Larger,
+}
+
+/// The field of view as a scene describes it; angles are resolved against the final image size
+/// (which the command line may change), so a horizontal angle stays horizontal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FieldOfView {
+    Angle {
+        degrees: f64,
+        axis: FovAxis,
+    },
+    /// Suffern's view-plane distance in pixel units.
+    ViewDistance(f32),
+}
+
+/// Where the camera is and which way it looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Placement {
+    /// At `eye`, looking at `target`, with `up` giving the image's vertical.
+    LookAt { eye: Vec3, target: Vec3, up: Vec3 },
+    /// An orthonormal frame: looking along `z` with `y` up; the image's x axis runs along -`x`
+    /// (Mitsuba's sensor convention, which also keeps a mirroring frame mirrored).
+    Frame { origin: Vec3, x: Vec3, y: Vec3, z: Vec3 },
+}
+
+/// A camera as a scene file describes it; `build` makes the camera for an image size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    pub placement: Placement,
+    pub fov: FieldOfView,
+    pub lens_radius: f32,
+    pub focal_distance: f32,
+}
+
+impl CameraDesc {
+    /// The camera for a `width` x `height` image.
+    pub fn build(&self, width: u32, height: u32) -> Camera {
+        let aspect = width as f64 / height as f64;
+        let (view, horizontal_tan) = match self.fov {
+            FieldOfView::ViewDistance(d) => (ViewPlane::Distance(d), None),
+            FieldOfView::Angle { degrees, axis } => {
+                let axis = match axis {
+                    FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
+                    FovAxis::Smaller => FovAxis::X,
+                    FovAxis::Larger if aspect > 1.0 => FovAxis::X,
+                    FovAxis::Larger => FovAxis::Y,
+                    a => a,
+                };
+                // An angle along y is our own convention; any other is turned into the tangent
+                // of half the horizontal angle, which fixes the pixel size.
+                let vertical = axis == FovAxis::Y || (axis == FovAxis::X && width == height);
+                if vertical {
+                    (ViewPlane::Fov(degrees as f32), None)
+                } else {
+                    let half = (degrees.to_radians() * 0.5).tan();
+                    let tan_x = match axis {
+                        FovAxis::X => half,
+                        _ => half / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
+                    };
+                    let fov_y = (2.0 * (tan_x / aspect).atan()).to_degrees() as f32;
+                    (ViewPlane::Fov(fov_y), Some(tan_x))
+                }
+            }
+        };
+        let (lens, focus) = (self.lens_radius, self.focal_distance);
+        let mut camera = match self.placement {
+            Placement::LookAt { eye, target, up } => Camera::new(eye, target, up, view, width, height, lens, focus),
+            Placement::Frame { origin, x, y, z } => {
+                let mut c = Camera::new(origin, origin + z, y, view, width, height, lens, focus);
+                c.u = -x.normalize();
+                c
+            }
+        };
+        if let Some(tan_x) = horizontal_tan {
+            camera.pixel_size = (2.0 * tan_x / width as f64) as f32 * camera.d;
+        }
+        camera
+    }
+}
+
 impl Camera {
     /// A camera at `eye` looking at `look_at`. The caller guarantees `eye != look_at`, `up` not
     /// parallel to the view direction and a valid view plane (the scene loader checks these).

@@ -2,9 +2,9 @@
 
 use anyhow::Result;
 use caustic::app::{AppError, RenderOptions, render_file};
-use caustic::integrator::IntegratorKind;
 use caustic::sampling::SamplerKind;
-use caustic::scene::Overrides;
+use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+use caustic::scene::{LoadOptions, Overrides};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -153,9 +153,7 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
             integrator: args.integrator,
             sampler: args.sampler,
             antialias: args.no_antialias.then_some(false),
-            defines: args.define,
-            strict: args.strict,
-            photon: caustic::integrator::PhotonOptions {
+            photon: PhotonOptions {
                 photons: args.photons,
                 caustic_photons: args.caustic_photons,
                 gather: args.gather,
@@ -166,6 +164,7 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
                 ..Default::default()
             },
         },
+        load: LoadOptions { defines: args.define, strict: args.strict },
         layers: args.layers,
         max_memory: args.max_memory.map(|m| m.saturating_mul(1 << 20)),
         threads: args.threads,

@@ -72,7 +72,7 @@ fn obj_mesh_loads_with_smooth_normals() {
     )
     .unwrap();
     let text = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"mesh\"\nfile = \"tri.obj\"\n";
-    let s = caustic::scene::load_scene_str(text, "t.toml", &dir, &Default::default()).unwrap().scene;
+    let s = caustic::app::load_toml_str(text, "t.toml", &dir, &Default::default()).unwrap().scene;
     let h = s.intersect(&Ray::new(Vec3::new(0.0, 0.99, 5.0), -Vec3::Z), f32::INFINITY).unwrap();
     // Near the third vertex the shading normal leans towards its normal (0.6, 0, 0.8).
     assert!(h.ns.x > 0.5, "{}", h.ns);

@@ -3,29 +3,42 @@
 //! Mitsuba's conventions (camera, fov axis, depth, transforms), and a table of malformed inputs
 //! that must each give an error naming the problem, file and line.
 
+use caustic::app::{LoadedScene, prepare};
 use caustic::film::Image;
 use caustic::film::output::read_exr;
-use caustic::integrator::{IntegratorKind, PathTracer, PhotonIntegrator, Whitted};
 use caustic::math::{Color, Vec3, luminance};
-use caustic::render::{RenderControl, render};
-use caustic::scene::load::LoadedScene;
+use caustic::scene::desc::{IntegratorKind, PhotonOptions};
 use caustic::scene::mitsuba::load_mitsuba_str;
-use caustic::scene::{Overrides, SceneError, load_scene};
+use caustic::scene::{LoadOptions, Overrides, SceneError};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn load(rel: &str, o: &Overrides) -> LoadedScene {
-    let path = root().join(rel);
-    load_scene(&path, o).unwrap_or_else(|e| panic!("{rel} failed to load: {e}"))
+    load_with(rel, &LoadOptions::default(), o)
 }
 
-/// Loads Mitsuba XML text as the file `case.xml` in `base`.
+fn load_with(rel: &str, lo: &LoadOptions, o: &Overrides) -> LoadedScene {
+    let path = root().join(rel);
+    caustic::app::load(&path, lo, o).unwrap_or_else(|e| panic!("{rel} failed to load: {e}"))
+}
+
+/// Loads Mitsuba XML text as the file `case.xml` in `base`, with its warnings.
+fn xml_opts(
+    text: &str,
+    base: &Path,
+    lo: &LoadOptions,
+    o: &Overrides,
+) -> Result<(LoadedScene, Vec<String>), SceneError> {
+    let mut s = prepare(load_mitsuba_str(text, "case.xml", base, lo)?, o)?;
+    let warnings = std::mem::take(&mut s.warnings);
+    Ok((s, warnings))
+}
+
 fn xml_in(text: &str, base: &Path, o: &Overrides) -> Result<(LoadedScene, Vec<String>), SceneError> {
-    load_mitsuba_str(text, "case.xml", base, o)
+    xml_opts(text, base, &LoadOptions::default(), o)
 }
 
 fn xml(text: &str) -> (LoadedScene, Vec<String>) {
@@ -33,21 +46,7 @@ fn xml(text: &str) -> (LoadedScene, Vec<String>) {
 }
 
 fn render_with(s: &LoadedScene) -> Image {
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
-    match s.integrator.kind {
-        IntegratorKind::Path => {
-            render(&s.scene, &PathTracer { max_depth: s.integrator.max_depth }, &s.settings, &control).0
-        }
-        IntegratorKind::Whitted => render(&s.scene, &Whitted::new(&s.integrator), &s.settings, &control).0,
-        IntegratorKind::Photon => {
-            let config = s.integrator.photon.resolve(&s.scene, &s.integrator, s.settings.seed);
-            let pm = PhotonIntegrator::build(&s.scene, config);
-            render(&s.scene, &pm, &s.settings, &control).0
-        }
-        #[allow(unreachable_patterns)]
-        _ => panic!("integrator not covered by this test"),
-    }
+    s.render().image
 }
 
 fn mean_luminance(img: &Image) -> f64 {
@@ -112,7 +111,7 @@ fn the_cornell_box_is_identical_with_every_integrator() {
             height: Some(24),
             spp: Some(2),
             integrator: Some(kind),
-            photon: caustic::integrator::PhotonOptions {
+            photon: PhotonOptions {
                 photons: Some(20_000),
                 caustic_photons: Some(0),
                 gather: Some(2),
@@ -121,11 +120,9 @@ fn the_cornell_box_is_identical_with_every_integrator() {
             ..Default::default()
         };
         let x = load("scenes/mitsuba/cornell-box.xml", &o);
-        let mut t = load("scenes/mitsuba/cornell-box.toml", &o);
-        // Mitsuba's max_depth 9 means 8 bounces for the path tracer but 7 specular bounces
-        // before direct light for Whitted and photon mapping; give the twin the same.
-        t.integrator.max_depth = x.integrator.max_depth;
-        assert_eq!(x.integrator.max_depth, 7);
+        let t = load("scenes/mitsuba/cornell-box.toml", &o);
+        // Mitsuba's max_depth 9 is 8 bounces, for every integrator.
+        assert_eq!((x.integrator.max_depth, t.integrator.max_depth), (Some(8), Some(8)));
         let (a, b) = (render_with(&x), render_with(&t));
         assert!(mean_luminance(&a) > 1e-3);
         assert!(a.pixels == b.pixels, "{kind:?}: images differ (rmse {})", rmse(&a, &b));
@@ -148,7 +145,7 @@ fn cornell_box_matches_mitsubas_own_render() {
     let ours = |seed: u64| {
         let o = Overrides { seed: Some(seed), ..Default::default() };
         let defines = vec![("res".to_string(), "64".to_string()), ("spp".to_string(), spp.to_string())];
-        render_with(&load("scenes/mitsuba/cornell-box.xml", &Overrides { defines, ..o }))
+        render_with(&load_with("scenes/mitsuba/cornell-box.xml", &LoadOptions { defines, strict: false }, &o))
     };
     let (a, b) = (ours(1), ours(2));
     // Our noise per image, from two independent renders; Mitsuba's from its sample count.
@@ -179,24 +176,27 @@ fn cornell_box_matches_mitsubas_own_render() {
 // ---------------------------------------------------------------------------------------------
 
 #[test]
-fn max_depth_counts_vertices_as_mitsuba_does() {
+fn max_depth_counts_segments_as_mitsuba_does() {
     let with = |depth: &str, kind: Option<IntegratorKind>| {
         let text =
             wrap(&format!(r#"<integrator type="path"><integer name="max_depth" value="{depth}"/></integrator>"#));
         let o = Overrides { integrator: kind, ..Default::default() };
-        xml_in(&text, &root(), &o).unwrap().0.integrator
+        let i = xml_in(&text, &root(), &o).unwrap().0.integrator;
+        i.depth_limit(i.kind)
     };
-    assert_eq!(with("2", None).max_depth, 1, "2 vertices = direct light = 1 bounce");
-    assert_eq!(with("9", None).kind, IntegratorKind::Path);
-    assert_eq!(with("9", None).max_depth, 8);
-    assert_eq!(with("-1", None).max_depth, 1000);
-    assert_eq!(with("9", Some(IntegratorKind::Whitted)).max_depth, 7);
-    assert_eq!(with("-1", Some(IntegratorKind::Whitted)).max_depth, 5);
+    assert_eq!(with("2", None), 1, "2 segments = direct light = 1 bounce");
+    assert_eq!(with("9", None), 8);
+    assert_eq!(with("-1", None), 1000);
+    // One meaning for every integrator; "unlimited" keeps Whitted's branching recursion at the
+    // default.
+    assert_eq!(with("9", Some(IntegratorKind::Whitted)), 8);
+    assert_eq!(with("9", Some(IntegratorKind::Photon)), 8);
+    assert_eq!(with("-1", Some(IntegratorKind::Whitted)), 6);
     // No integrator: Mitsuba's default path tracer, unlimited.
     let s = xml(&wrap("")).0;
-    assert_eq!((s.integrator.kind, s.integrator.max_depth), (IntegratorKind::Path, 1000));
-    // `direct` is a two-vertex path.
-    assert_eq!(xml(&wrap(r#"<integrator type="direct"/>"#)).0.integrator.max_depth, 1);
+    assert_eq!((s.integrator.kind, s.integrator.max_depth), (IntegratorKind::Path, None));
+    // `direct` is a two-segment path.
+    assert_eq!(xml(&wrap(r#"<integrator type="direct"/>"#)).0.integrator.max_depth, Some(1));
     // The command line's value is ours, unchanged.
     let o = Overrides { max_depth: Some(3), ..Default::default() };
     assert_eq!(
@@ -205,7 +205,7 @@ fn max_depth_counts_vertices_as_mitsuba_does() {
             .0
             .integrator
             .max_depth,
-        3
+        Some(3)
     );
 }
 
@@ -374,8 +374,8 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     }
     // The checkerboard's mean (0.4 + 0.2) / 2 is used.
     assert!(s.scene.materials.iter().any(|m| m.color == Color::splat(0.3)));
-    let strict = Overrides { strict: true, ..Default::default() };
-    let e = xml_in(&text, &root(), &strict).err().expect("strict must fail");
+    let strict = LoadOptions { strict: true, ..Default::default() };
+    let e = xml_opts(&text, &root(), &strict, &Overrides::default()).err().expect("strict must fail");
     assert!(e.to_string().starts_with("case.xml:7:") && e.message().contains("--strict"), "{e}");
 }
 
@@ -384,9 +384,12 @@ fn constant_emitter_becomes_the_background() {
     let (s, w) = xml(&wrap(r#"<emitter type="constant"><rgb name="radiance" value="0.1, 0.2, 0.3"/></emitter>"#));
     assert_eq!(s.scene.background, Color::new(0.1, 0.2, 0.3));
     assert!(w.is_empty());
-    let o = Overrides { integrator: Some(IntegratorKind::Photon), ..Default::default() };
-    let (_, w) = xml_in(&wrap(r#"<emitter type="constant"/>"#), &root(), &o).unwrap();
-    assert!(w.iter().any(|w| w.contains("photon")), "{w:?}");
+    // Photon mapping and SPPM say they cannot light from the background.
+    for kind in [IntegratorKind::Photon, IntegratorKind::Sppm] {
+        let (s, _) = xml(&wrap(r#"<emitter type="constant"/>"#));
+        let w = caustic::integrator::limitations(kind, &s.scene);
+        assert!(w.iter().any(|w| w.contains("photons")), "{w:?}");
+    }
 }
 
 #[test]
@@ -394,8 +397,8 @@ fn defaults_are_overridden_from_the_command_line() {
     let text = r#"<scene version="3.0.0"><default name="w" value="20"/>
       <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="$w"/></film></sensor></scene>"#;
     assert_eq!(xml(text).0.settings.width, 20);
-    let o = Overrides { defines: vec![("w".into(), "12".into())], ..Default::default() };
-    assert_eq!(xml_in(text, &root(), &o).unwrap().0.settings.width, 12);
+    let lo = LoadOptions { defines: vec![("w".into(), "12".into())], ..Default::default() };
+    assert_eq!(xml_opts(text, &root(), &lo, &Overrides::default()).unwrap().0.settings.width, 12);
 }
 
 #[test]
@@ -638,6 +641,25 @@ fn every_malformed_input_names_the_problem_file_and_line() {
 
 #[test]
 fn a_missing_scene_file_is_an_error() {
-    let e = load_scene(&root().join("scenes/mitsuba/none.xml"), &Overrides::default()).err().unwrap();
+    let e = caustic::app::load(&root().join("scenes/mitsuba/none.xml"), &LoadOptions::default(), &Overrides::default())
+        .err()
+        .unwrap();
     assert!(e.to_string().contains("none.xml"), "{e}");
+}
+
+/// Issue 10: elements nested thousands deep used to overflow the stack and abort the process.
+#[test]
+fn deeply_nested_elements_are_an_error_not_a_crash() {
+    for depth in [1_000usize, 5_000, 100_000] {
+        for tag in ["a", "bsdf"] {
+            let text = format!(
+                "<scene version=\"3.0.0\">{}{}</scene>",
+                format!("<{tag} type=\"diffuse\">").repeat(depth),
+                format!("</{tag}>").repeat(depth)
+            );
+            let e = xml_in(&text, &root(), &Overrides::default()).err().expect("deep nesting must be refused");
+            assert!(e.to_string().contains("nested more than"), "{depth} deep: {e}");
+            assert!(e.to_string().starts_with("case.xml:1:"), "{e}");
+        }
+    }
 }

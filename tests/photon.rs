@@ -2,19 +2,19 @@
 
 mod common;
 
+use caustic::app::LoadedScene;
 use caustic::film::Image;
+use caustic::integrator::photon::PhotonConfig;
 use caustic::integrator::{PathTracer, PhotonIntegrator};
 use caustic::math::{Color, Vec3, luminance};
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};
 use caustic::photon::{Gathered, Photon, PhotonMap};
-use caustic::render::RenderControl;
+use caustic::render::{RenderControl, render_rays};
 use caustic::scene::Overrides;
-use caustic::scene::load::LoadedScene;
 use std::f32::consts::PI;
-use std::sync::atomic::AtomicBool;
 
 fn photon_integrator(s: &LoadedScene) -> PhotonIntegrator {
-    let config = s.integrator.photon.resolve(&s.scene, &s.integrator, s.settings.seed);
+    let config = PhotonConfig::new(&s.integrator.photon, &s.integrator, &s.scene, s.settings.seed);
     PhotonIntegrator::build(&s.scene, config)
 }
 
@@ -176,13 +176,11 @@ fn furnace_path_tracer() {
 fn furnace_photon_mapping() {
     let s = furnace(5);
     let pm = photon_integrator(&s);
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
     let mut settings = s.settings.clone();
     settings.layers = true;
-    let (img, layers, _) = caustic::render::render_layers(&s.scene, &pm, &settings, &control);
-    let gi = luminance(img.mean());
-    let direct = luminance(layers[caustic::integrator::DIRECT].mean());
+    let out = render_rays(&s.scene, &pm, &settings, &RenderControl::uncancelled());
+    let gi = luminance(out.image.mean());
+    let direct = luminance(out.layers[caustic::film::DIRECT].mean());
     assert!((gi - 1.0).abs() < 0.03, "photon mapping, all bounces: {gi}");
     assert!((direct - 0.5).abs() < 0.015, "photon mapping, direct only: {direct}");
 }
@@ -247,7 +245,7 @@ fn caustic_under_the_glass_sphere_is_bright_and_absent_without_caustics() {
     // real L D S D path.)
     let mut no_caustics = s.integrator.clone();
     no_caustics.photon.caustic_photons = Some(0);
-    let config = no_caustics.photon.resolve(&s.scene, &no_caustics, 0);
+    let config = PhotonConfig::new(&no_caustics.photon, &no_caustics, &s.scene, 0);
     let pm0 = PhotonIntegrator::build(&s.scene, config);
     assert_eq!(pm0.stats.caustic_stored, 0);
     let without = common::render_with(&s, &pm0);

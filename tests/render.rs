@@ -5,9 +5,8 @@ mod common;
 use caustic::app::{RenderOptions, render_file};
 use caustic::film::Image;
 use caustic::film::output::read_exr;
-use caustic::integrator::Whitted;
-use caustic::render::{RenderControl, render};
-use caustic::scene::Overrides;
+use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+use caustic::scene::{LoadOptions, Overrides};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
@@ -23,11 +22,10 @@ fn scenes() -> Vec<PathBuf> {
 }
 
 fn render_with_threads(path: &std::path::Path, threads: usize, o: &Overrides) -> Image {
-    let loaded = caustic::scene::load_scene(path, o).unwrap();
+    let o = Overrides { integrator: Some(IntegratorKind::Whitted), ..o.clone() };
+    let loaded = caustic::app::load(path, &LoadOptions::default(), &o).unwrap();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
-    pool.install(|| render(&loaded.scene, &Whitted::new(&loaded.integrator), &loaded.settings, &control).0)
+    pool.install(|| loaded.render().image)
 }
 
 #[test]
@@ -55,7 +53,7 @@ fn render_cli(scene: &str, integrator: &str, threads: usize, out: &std::path::Pa
             spp: Some(4),
             seed: Some(11),
             integrator: Some(integrator.parse().unwrap()),
-            photon: caustic::integrator::PhotonOptions {
+            photon: PhotonOptions {
                 photons: Some(50_000),
                 caustic_photons: Some(20_000),
                 gather: Some(4),
@@ -131,17 +129,8 @@ fn thin_lens_with_zero_radius_renders_the_pinhole_image_bit_for_bit() {
     let lens = text.replace("fov = 45", "fov = 45\nlens_radius = 0.0\nfocal_distance = 2.5");
     assert_ne!(text, lens);
     let o = Overrides { width: Some(64), height: Some(48), spp: Some(4), ..Default::default() };
-    let render_text = |t: &str| {
-        let s = caustic::scene::load_scene_str(t, "lens.toml", path.parent().unwrap(), &o).unwrap();
-        let cancel = AtomicBool::new(false);
-        render(
-            &s.scene,
-            &Whitted::new(&s.integrator),
-            &s.settings,
-            &RenderControl { cancel: &cancel, on_checkpoint: None },
-        )
-        .0
-    };
+    let render_text =
+        |t: &str| caustic::app::load_toml_str(t, "lens.toml", path.parent().unwrap(), &o).unwrap().render().image;
     let (a, b) = (render_text(&text), render_text(&lens));
     assert!(
         a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))

@@ -2,13 +2,14 @@
 
 mod common;
 
-use caustic::scene::{Overrides, SceneError, load_scene, load_scene_str};
+use caustic::app::{load as load_file, load_toml_str};
+use caustic::scene::{LoadOptions, Overrides, SceneError};
 use std::path::Path;
 
 const CAMERA: &str = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
 
 fn load(text: &str) -> Result<(), SceneError> {
-    load_scene_str(text, "bad.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &Overrides::default()).map(|_| ())
+    load_toml_str(text, "bad.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &Overrides::default()).map(|_| ())
 }
 
 /// (name, scene text, words the message must contain, line the error must point at)
@@ -99,18 +100,20 @@ fn malformed_scenes_report_problem_and_place() {
 
 #[test]
 fn unreadable_files_are_named() {
-    let e = load_scene(Path::new("/definitely/not/here.toml"), &Overrides::default()).err().unwrap();
+    let e = load_file(Path::new("/definitely/not/here.toml"), &LoadOptions::default(), &Overrides::default())
+        .err()
+        .unwrap();
     assert!(e.to_string().contains("/definitely/not/here.toml"));
     let dir = common::scratch("binary");
     let p = dir.join("binary.toml");
     std::fs::write(&p, [0xffu8, 0xfe, 0x00, 0x41]).unwrap();
-    let e = load_scene(&p, &Overrides::default()).err().unwrap();
+    let e = load_file(&p, &LoadOptions::default(), &Overrides::default()).err().unwrap();
     assert!(e.to_string().contains("binary.toml"), "{e}");
 }
 
 #[test]
 fn image_size_overrides_are_checked() {
     let o = Overrides { width: Some(0), ..Default::default() };
-    let e = load_scene_str(CAMERA, "x.toml", Path::new("."), &o).err().unwrap();
+    let e = load_toml_str(CAMERA, "x.toml", Path::new("."), &o).err().unwrap();
     assert!(e.to_string().contains("out of range"));
 }

@@ -3,27 +3,26 @@
 
 mod common;
 
+use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::integrator::PathTracer;
-use caustic::integrator::sppm::{SppmConfig, render_sppm};
+use caustic::integrator::sppm::{Sppm, SppmConfig};
 use caustic::math::luminance;
 use caustic::render::{RenderControl, RenderStats};
 use caustic::scene::Overrides;
-use caustic::scene::load::LoadedScene;
-use std::sync::atomic::AtomicBool;
+use caustic::scene::desc::IntegratorKind;
 
 fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) {
-    let cancel = AtomicBool::new(false);
-    let control = RenderControl { cancel: &cancel, on_checkpoint: None };
     let mut settings = s.settings.clone();
     settings.spp = iterations;
     let config = SppmConfig {
         photons_per_iter: photons,
         initial_radius: None,
         alpha: 2.0 / 3.0,
-        max_depth: s.integrator.max_depth,
+        max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
     };
-    render_sppm(&s.scene, &config, &settings, &control)
+    let out = Sppm { config }.render(&s.scene, &settings, &RenderControl::uncancelled());
+    (out.image, out.stats)
 }
 
 #[test]

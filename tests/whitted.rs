@@ -4,11 +4,12 @@
 mod common;
 
 use caustic::geometry::Ray;
-use caustic::integrator::{Integrator, RayStats, Whitted};
+use caustic::integrator::Whitted;
 use caustic::math::{Color, Vec3};
+use caustic::render::{RayIntegrator, RayStats};
 use caustic::sampling::{Sampler, SamplerKind};
 
-fn radiance(s: &caustic::scene::load::LoadedScene, ray: Ray, depth: u32) -> Color {
+fn radiance(s: &caustic::app::LoadedScene, ray: Ray, depth: u32) -> Color {
     let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, 0, 1);
     let l = Whitted { max_depth: depth, area_samples: 16 }.radiance(
         &s.scene,
@@ -45,7 +46,7 @@ fn diffuse_plane_receives_kd_i_cos_over_d2() {
     for target in [Vec3::new(0.0, 0.0, 0.0), Vec3::new(-2.0, 0.0, 1.5), Vec3::new(3.0, 0.0, -4.0)] {
         let eye = Vec3::new(0.3, 2.0, 4.0);
         let ray = Ray::new(eye, (target - eye).normalize());
-        let c = radiance(&s, ray, 0);
+        let c = radiance(&s, ray, 1);
         let to_light = light - target;
         let d2 = to_light.length_squared();
         let cos = to_light.normalize().y;
@@ -62,18 +63,18 @@ fn shadow_ray_blocked_and_unblocked() {
     let s = common::scene(&text);
     let eye = Vec3::new(0.0, 2.0, 4.0);
     // The sphere sits halfway between the light and the origin: the origin is in shadow.
-    let shadowed = radiance(&s, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 0);
+    let shadowed = radiance(&s, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 1);
     assert_eq!(shadowed, Color::ZERO);
     // A point off to the side sees the light.
     let lit_target = Vec3::new(-2.0, 0.0, 1.5);
-    let lit = radiance(&s, Ray::new(eye, (lit_target - eye).normalize()), 0);
+    let lit = radiance(&s, Ray::new(eye, (lit_target - eye).normalize()), 1);
     assert!(lit.x > 0.1, "{lit}");
     // A blocker beyond the light does not cast a shadow.
     let beyond = format!(
         "{PLANE_UNDER_LIGHT}\n[[objects]]\ntype = \"sphere\"\ncenter = [1.5, 4.5, -0.75]\nradius = 0.3\nmaterial = \"white\"\n"
     );
     let s2 = common::scene(&beyond);
-    let c = radiance(&s2, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 0);
+    let c = radiance(&s2, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 1);
     assert!(c.x > 0.1, "a sphere behind the light shadowed the floor: {c}");
 }
 
@@ -99,10 +100,10 @@ edge2 = [0, 2, 0]
 material = "mirror"
 "#,
     );
-    let c = radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 3);
+    let c = radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 4);
     assert!((c - Vec3::new(0.2, 0.4, 0.6) * 0.75).abs().max_element() < 1e-6, "{c}");
-    // At depth 0 the recursion is cut: no reflection.
-    assert_eq!(radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 0), Color::ZERO);
+    // With one bounce (direct light only) the recursion is cut: no reflection.
+    assert_eq!(radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 1), Color::ZERO);
 }
 
 #[test]
@@ -128,7 +129,7 @@ material = "glass"
 "#,
     );
     for y in [0.0f32, 0.3, 0.7, 0.95, 0.999] {
-        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 40);
+        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 41);
         assert!((c - Vec3::ONE).abs().max_element() < 1e-3, "offset {y}: {c}");
     }
 }
@@ -158,7 +159,7 @@ material = "glass"
     let mut darkest = 1.0f32;
     for i in 0..200 {
         let y = i as f32 / 200.0;
-        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 60);
+        let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 61);
         darkest = darkest.min(c.x);
     }
     assert!(darkest > 0.99, "darkest pixel {darkest}: a ring from total internal reflection");

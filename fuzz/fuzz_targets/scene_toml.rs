@@ -3,7 +3,8 @@
 #![no_main]
 
 use caustic::math::Vec2;
-use caustic::scene::{Overrides, load_scene_str};
+use caustic::app::load_toml_str;
+use caustic::scene::Overrides;
 use libfuzzer_sys::fuzz_target;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -42,7 +43,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     }
-    let Ok(loaded) = load_scene_str(text, "fuzz.toml", mesh_dir(), &Overrides::default()) else { return };
+    let Ok(loaded) = load_toml_str(text, "fuzz.toml", mesh_dir(), &Overrides::default()) else { return };
     // Trace a few camera rays through the accepted scene.
     let scene = &loaded.scene;
     let (w, h) = (loaded.settings.width as f32, loaded.settings.height as f32);

@@ -8,6 +8,19 @@ pub mod output;
 
 use crate::math::Color;
 
+/// The light arriving along a camera ray, split by where it came from. The parts sum to the
+/// pixel's value:
+/// - `DIRECT`: emission seen directly and light sampled at the first non-specular surface;
+/// - `SPECULAR`: everything seen through mirrors and glass (camera paths starting with S+);
+/// - `CAUSTIC`: light reaching the first non-specular surface through mirrors and glass (L S+ D);
+/// - `INDIRECT`: light reaching it after at least one more non-specular bounce.
+pub type Layers = [Color; 4];
+pub const DIRECT: usize = 0;
+pub const SPECULAR: usize = 1;
+pub const CAUSTIC: usize = 2;
+pub const INDIRECT: usize = 3;
+pub const LAYER_NAMES: [&str; 4] = ["direct", "specular", "caustic", "indirect"];
+
 pub const TILE_SIZE: u32 = 16;
 
 /// A rectangle of pixels with its accumulated sums.
@@ -21,6 +34,26 @@ pub struct Tile {
     pub count: Vec<u32>,
     /// Per-pixel sums of the four layers (empty when layers are not wanted).
     pub layers: Vec<[Color; 4]>,
+}
+
+impl Tile {
+    /// Adds one sample (its layers) to pixel `k` of the tile; a sample that is not finite is
+    /// dropped and `false` returned.
+    #[inline]
+    pub fn add(&mut self, k: usize, layers: &Layers) -> bool {
+        let c = layers[0] + layers[1] + layers[2] + layers[3];
+        if !c.is_finite() {
+            return false;
+        }
+        self.sum[k] += c;
+        self.count[k] += 1;
+        if let Some(l) = self.layers.get_mut(k) {
+            for (acc, v) in l.iter_mut().zip(layers) {
+                *acc += *v;
+            }
+        }
+        true
+    }
 }
 
 pub struct Film {

@@ -4,15 +4,16 @@
 //! combined with BSDF sampling by multiple importance sampling (power heuristic, Veach 1997) for
 //! area lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
 
-use super::{CAUSTIC, DIRECT, INDIRECT, Integrator, Layers, RayStats, SPECULAR};
+use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::Ray;
 use crate::material::bsdf::{Bsdf, Transport};
 use crate::math::{Color, Vec3};
+use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
 pub struct PathTracer {
-    /// Longest path in bounces (1 = direct light only).
+    /// Longest path in bounces (0 = emitters only, 1 = direct light only).
     pub max_depth: u32,
 }
 
@@ -22,7 +23,7 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-impl Integrator for PathTracer {
+impl RayIntegrator for PathTracer {
     type Scratch = ();
 
     fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {

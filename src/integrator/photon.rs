@@ -11,15 +11,17 @@
 //! and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do not
 //! leak light into each other. Everything is in physical units; nothing is scaled by hand.
 
-use super::{CAUSTIC, DIRECT, INDIRECT, Integrator, Layers, RayStats, SPECULAR};
+use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::material::bsdf::{Bsdf, Transport};
 use crate::math::{Color, Vec3};
 use crate::photon::trace::{self, PhotonPass};
 use crate::photon::{Gathered, Photon, PhotonMap};
+use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::sampling::warp::cosine_hemisphere;
 use crate::scene::Scene;
+use crate::scene::desc::{IntegratorDesc, PhotonOptions};
 use std::f32::consts::PI;
 use std::time::{Duration, Instant};
 
@@ -46,9 +48,34 @@ pub struct PhotonConfig {
     pub cone_k: f32,
     /// Shadow rays per area light at each shading point.
     pub light_samples: u32,
-    /// Specular bounces followed from the camera.
+    /// Depth limit in bounces: specular bounces are followed from the camera while the next
+    /// surface is still within it.
     pub max_depth: u32,
     pub seed: u64,
+}
+
+impl PhotonConfig {
+    /// Full settings for `scene`: radii default to fractions of the scene's size (so any scene
+    /// scale works), counts to values that render the bundled Cornell boxes cleanly.
+    pub fn new(o: &PhotonOptions, desc: &IntegratorDesc, scene: &Scene, seed: u64) -> Self {
+        let b = scene.bounds();
+        let diag = if b.is_empty() || !b.diagonal().is_finite() { 1.0 } else { b.diagonal() };
+        let caustic_photons = o.caustic_photons.unwrap_or(200_000);
+        PhotonConfig {
+            photons: o.photons.unwrap_or(500_000),
+            caustic_photons,
+            caustic_cap: caustic_photons.saturating_mul(200).max(1_000_000),
+            gather_rays: o.gather.unwrap_or(16),
+            gather_k: o.gather_k.unwrap_or(64).max(1),
+            caustic_k: o.caustic_k.unwrap_or(64).max(1),
+            max_radius: o.max_radius.unwrap_or(0.05 * diag),
+            caustic_radius: o.caustic_radius.unwrap_or(0.02 * diag),
+            cone_k: 1.1,
+            light_samples: desc.light_samples,
+            max_depth: desc.depth_limit(desc.kind),
+            seed,
+        }
+    }
 }
 
 /// What building the maps did, for the log.
@@ -295,7 +322,7 @@ fn precompute_irradiance(hits: &[trace::PhotonHit], map: &PhotonMap, k: usize, m
     PhotonMap::build(records)
 }
 
-impl Integrator for PhotonIntegrator {
+impl RayIntegrator for PhotonIntegrator {
     type Scratch = Gathered;
 
     fn radiance(
@@ -310,7 +337,7 @@ impl Integrator for PhotonIntegrator {
         let mut beta = Color::ONE;
         let mut ray = *ray;
         let mut prefix_specular = false;
-        for depth in 0..=self.config.max_depth {
+        for depth in 0.. {
             stats.rays += 1;
             let first = if prefix_specular { SPECULAR } else { DIRECT };
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
@@ -325,9 +352,13 @@ impl Integrator for PhotonIntegrator {
                 }
                 break;
             }
+            // This surface is bounce depth + 1: lit only within the depth limit.
+            if depth >= self.config.max_depth {
+                break;
+            }
             let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
             if bsdf.is_specular_only() {
-                if depth == self.config.max_depth {
+                if depth + 1 >= self.config.max_depth {
                     break;
                 }
                 let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };

@@ -8,11 +8,12 @@
 //! reflection sending everything into S, and Fresnel weights (eq. 5-8) for dielectrics.
 //! The medium outside every object is air (index 1).
 
-use super::{DIRECT, Integrator, Layers, RayStats, SPECULAR};
+use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::material::MaterialKind;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::math::{Color, Vec3};
+use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
@@ -20,13 +21,15 @@ use crate::scene::Scene;
 const MAX_SHADOW_CROSSINGS: usize = 16;
 
 pub struct Whitted {
-    /// Reflection/refraction bounces after the camera ray (the recursion depth limit).
+    /// The most bounces a path may have (see `IntegratorDesc::max_depth`): the surface a ray
+    /// meets at recursion depth r is bounce r + 1, lit by the lights when r + 1 <= max_depth,
+    /// and reflection and refraction recurse while r + 1 < max_depth.
     pub max_depth: u32,
     /// Shadow rays per area light at each shading point.
     pub area_samples: u32,
 }
 
-impl Integrator for Whitted {
+impl RayIntegrator for Whitted {
     type Scratch = ();
 
     /// Layers: the local shading of the first surface is `DIRECT`, what its reflection and
@@ -39,10 +42,6 @@ impl Integrator for Whitted {
 }
 
 impl Whitted {
-    pub fn new(c: &super::IntegratorConfig) -> Self {
-        Whitted { max_depth: c.max_depth, area_samples: c.light_samples }
-    }
-
     fn trace_total(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
         let (local, secondary) = self.trace(scene, ray, depth, sampler, stats);
         local + secondary
@@ -67,10 +66,14 @@ impl Whitted {
         let (n, ng) = if front { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
         let wo = -ray.d;
 
-        let mut c = m.color * scene.ambient * m.ka;
+        let mut c = Color::ZERO;
         if m.is_emitter() && front {
             c += m.emission;
         }
+        if depth >= self.max_depth {
+            return (c, Color::ZERO);
+        }
+        c += m.color * scene.ambient * m.ka;
         if m.kd > 0.0 || m.ks > 0.0 {
             for light in &scene.lights {
                 // Delta lights need one sample; area lights are averaged over several.
@@ -94,7 +97,7 @@ impl Whitted {
             }
         }
 
-        if depth >= self.max_depth {
+        if depth + 1 >= self.max_depth {
             return (c, Color::ZERO);
         }
         let local = c;

@@ -4,6 +4,7 @@
 //! (seed, photon index), never from a thread or the clock, so any thread count gives the same
 //! image (pbrt-v4 `StartPixelSample`).
 
+pub mod chi2;
 pub mod sampler;
 pub mod warp;
 

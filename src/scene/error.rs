@@ -3,6 +3,9 @@
 
 use std::ops::Range;
 
+/// Characters of a long line quoted around the place of an error.
+const SNIPPET_WIDTH: usize = 100;
+
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("cannot read scene file `{path}`: {source}")]
@@ -22,13 +25,24 @@ impl SceneError {
     pub fn at(path: &str, text: &str, span: Range<usize>, message: impl Into<String>) -> Self {
         let (line, column) = line_column(text, span.start);
         let line_text = text.lines().nth(line - 1).unwrap_or("");
-        let width = span.end.saturating_sub(span.start).clamp(1, line_text.len().saturating_sub(column - 1).max(1));
+        let chars: Vec<char> = line_text.chars().collect();
+        // Long lines (a whole XML file on one line) are quoted as a window around the column.
+        let (from, to) = if chars.len() > SNIPPET_WIDTH {
+            let from = (column - 1).saturating_sub(SNIPPET_WIDTH / 2).min(chars.len() - SNIPPET_WIDTH);
+            (from, from + SNIPPET_WIDTH)
+        } else {
+            (0, chars.len())
+        };
+        let shown: String = chars[from..to].iter().collect();
+        let (before, after) = (if from > 0 { "..." } else { "" }, if to < chars.len() { "..." } else { "" });
+        let caret_at = before.len() + (column - 1).saturating_sub(from);
+        let width = span.end.saturating_sub(span.start).clamp(1, (to + 1).saturating_sub(column).max(1));
         let gutter = line.to_string().len();
         let snippet = format!(
-            "{:gutter$} |\n{line} | {line_text}\n{:gutter$} | {}{}",
+            "{:gutter$} |\n{line} | {before}{shown}{after}\n{:gutter$} | {}{}",
             "",
             "",
-            " ".repeat(line_text.chars().take(column - 1).count()),
+            " ".repeat(caret_at),
             "^".repeat(width.min(80)),
         );
         SceneError::At { path: path.to_string(), line, column, message: message.into(), snippet }
@@ -77,5 +91,13 @@ mod tests {
         let shown = e.to_string();
         assert!(shown.starts_with("s.toml:2:10: radius must be positive"), "{shown}");
         assert!(shown.contains("radius = -2") && shown.contains("^^"), "{shown}");
+        // A very long line is quoted as a window around the column, caret under the place.
+        let long = format!("{}<bad>{}", "x".repeat(5000), "y".repeat(5000));
+        let e = SceneError::at("l.xml", &long, 5000..5005, "bad");
+        let shown = e.to_string();
+        assert!(shown.len() < 400, "{} characters", shown.len());
+        let lines: Vec<&str> = shown.lines().collect();
+        let caret = lines[3].find('^').unwrap();
+        assert_eq!(&lines[2][caret..caret + 5], "<bad>", "{shown}");
     }
 }

@@ -1,13 +1,17 @@
-//! The scene as the renderer sees it (geometry in a BVH, materials, lights, camera), and the
-//! loader that builds it from a scene file.
+//! Scenes: files turned into plain data ([`desc::SceneDescription`], by the loaders `native`
+//! for caustic's TOML format and `mitsuba` for Mitsuba 3 XML), assembled by one
+//! [`builder::SceneBuilder`] into the runtime [`Scene`] the integrators trace rays against.
+//! Nothing here knows about integrators or the render loop.
 
+pub mod builder;
 mod de;
+pub mod desc;
 pub mod error;
-pub mod load;
 pub mod mitsuba;
+pub mod native;
 
+pub use desc::{BuiltScene, LoadOptions, Overrides, SceneDescription};
 pub use error::SceneError;
-pub use load::{Overrides, load_scene, load_scene_str};
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
@@ -16,7 +20,24 @@ use crate::light::{Light, LightPicker};
 use crate::material::Material;
 use crate::math::Color;
 use crate::shape::{Plane, TriangleMesh};
+use std::path::Path;
 
+/// Reads a scene file: Mitsuba 3 XML for `.xml`, caustic's TOML format otherwise.
+pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription, SceneError> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        return mitsuba::load_mitsuba(path, options);
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    native::load_toml_str(&text, &path.display().to_string(), &base)
+}
+
+/// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
+/// paths resolve against `base`.
+pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
+    native::load_toml_str(text, name, base)
+}
 pub struct Scene {
     pub bvh: Bvh,
     /// Unbounded planes, tested after the BVH, with their material index.

@@ -9,7 +9,7 @@ mod triangle;
 
 pub use mesh::TriangleMesh;
 pub use plane::Plane;
-pub use quad::{Quad, intersect_quad};
+pub use quad::{Quad, box_faces, intersect_quad, transformed_quad};
 pub use sphere::Sphere;
 pub use triangle::{RayShear, Triangle, intersect_triangle};
 

@@ -2,7 +2,7 @@
 //! so rectangles and the faces of boxes are quads.
 
 use super::{PrimHit, SurfacePoint};
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::{Aabb, Ray, Transform};
 use crate::math::Vec3;
 use crate::math::float::gamma;
 
@@ -46,6 +46,28 @@ impl Quad {
         let p_error = gamma(6) * (self.p0.abs() + a.abs() + b.abs());
         SurfacePoint { p, p_error, ng: self.n, ns: self.n }
     }
+}
+
+/// Corner and edges of the six faces of the box [m, mx], each with its normal (e1 x e2)
+/// pointing out.
+pub fn box_faces(m: Vec3, mx: Vec3) -> [(Vec3, Vec3, Vec3); 6] {
+    let e = mx - m;
+    let (ex, ey, ez) = (Vec3::new(e.x, 0.0, 0.0), Vec3::new(0.0, e.y, 0.0), Vec3::new(0.0, 0.0, e.z));
+    [
+        (m, ez, ey),
+        (Vec3::new(mx.x, m.y, m.z), ey, ez),
+        (m, ex, ez),
+        (Vec3::new(m.x, mx.y, m.z), ez, ex),
+        (m, ey, ex),
+        (Vec3::new(m.x, m.y, mx.z), ex, ey),
+    ]
+}
+
+/// The quad (corner, e1, e2) moved by `t`; the edges are swapped under a mirroring transform so
+/// the normal still points to the side the untransformed normal did. `None` when it has no area.
+pub fn transformed_quad(t: &Transform, corner: Vec3, e1: Vec3, e2: Vec3) -> Option<Quad> {
+    let (p0, a, b) = (t.point(corner), t.vector(e1), t.vector(e2));
+    if t.m.determinant() < 0.0 { Quad::new(p0, b, a) } else { Quad::new(p0, a, b) }
 }
 
 /// Ray-parallelogram test from the corner and edges alone (the BVH keeps only these).

@@ -1,23 +1,19 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use caustic::app::{LoadedScene, load, load_toml_str};
 use caustic::film::Image;
-use caustic::integrator::Integrator;
-use caustic::render::{RenderControl, render};
-use caustic::scene::{Overrides, load::LoadedScene, load_scene_str};
+use caustic::render::{RayIntegrator, RenderControl, render_rays};
+use caustic::scene::{LoadOptions, Overrides};
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 /// Loads a scene from TOML text (mesh paths relative to the crate root).
 pub fn scene(text: &str) -> LoadedScene {
-    match load_scene_str(text, "test.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &Overrides::default()) {
-        Ok(s) => s,
-        Err(e) => panic!("test scene failed to load: {e}"),
-    }
+    scene_with(text, &Overrides::default())
 }
 
 pub fn scene_with(text: &str, o: &Overrides) -> LoadedScene {
-    match load_scene_str(text, "test.toml", Path::new(env!("CARGO_MANIFEST_DIR")), o) {
+    match load_toml_str(text, "test.toml", Path::new(env!("CARGO_MANIFEST_DIR")), o) {
         Ok(s) => s,
         Err(e) => panic!("test scene failed to load: {e}"),
     }
@@ -34,11 +30,10 @@ pub fn scratch(name: &str) -> std::path::PathBuf {
 /// Loads a bundled scene from `scenes/` with overrides.
 pub fn bundled(name: &str, o: &Overrides) -> LoadedScene {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
-    caustic::scene::load_scene(&path, o).unwrap()
+    load(&path, &LoadOptions::default(), o).unwrap()
 }
 
-/// Renders a loaded scene with its own settings and `integrator`.
-pub fn render_with<I: Integrator>(s: &LoadedScene, integrator: &I) -> Image {
-    let cancel = AtomicBool::new(false);
-    render(&s.scene, integrator, &s.settings, &RenderControl { cancel: &cancel, on_checkpoint: None }).0
+/// Renders a loaded scene with its own settings and a ray integrator made by the test.
+pub fn render_with<I: RayIntegrator>(s: &LoadedScene, integrator: &I) -> Image {
+    render_rays(&s.scene, integrator, &s.settings, &RenderControl::uncancelled()).image
 }

@@ -1,5 +1,9 @@
 //! Triangle meshes: indexed vertex arrays, loaded from OBJ files or generated procedurally.
 
+mod ply;
+
+pub use ply::load_ply;
+
 use super::Triangle;
 use crate::geometry::Transform;
 use crate::math::Vec3;

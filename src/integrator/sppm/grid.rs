@@ -1,0 +1,107 @@
+//! The photons of one SPPM iteration in a hash grid: entries sorted by (bucket, cell), so a
+//! pixel's query visits its photons in a fixed order whatever the thread count.
+
+use crate::math::Vec3;
+use crate::photon::trace::PhotonHit;
+use rayon::prelude::*;
+
+/// Photons of one iteration sorted into a hash grid: entries sorted by (bucket, cell).
+pub(super) struct PhotonGrid {
+    pub(super) cell: f32,
+    origin: Vec3,
+    mask: u64,
+    /// bucket -> range in `entries`.
+    pub(super) starts: Vec<u32>,
+    /// (cell key, photon index)
+    pub(super) entries: Vec<(u64, u32)>,
+}
+
+#[inline]
+fn cell_key(c: [i32; 3]) -> u64 {
+    // Distinct cells get distinct keys for coordinates within +-2^20.
+    let m = |v: i32| (v as i64 + (1 << 20)) as u64 & 0x1f_ffff;
+    m(c[0]) | m(c[1]) << 21 | m(c[2]) << 42
+}
+
+impl PhotonGrid {
+    pub(super) fn build(hits: &[PhotonHit], cell: f32, origin: Vec3) -> Self {
+        let size = hits.len().next_power_of_two().max(1);
+        let mask = size as u64 - 1;
+        let mut entries: Vec<(u64, u32)> =
+            hits.par_iter().enumerate().map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32)).collect();
+        let bucket = |k: u64| crate::sampling::mix64(k) & mask;
+        entries.par_sort_unstable_by_key(|&(k, i)| (bucket(k), k, i));
+        let mut starts = vec![0u32; size + 1];
+        for &(k, _) in &entries {
+            starts[bucket(k) as usize + 1] += 1;
+        }
+        for b in 0..size {
+            starts[b + 1] += starts[b];
+        }
+        PhotonGrid { cell, origin, mask, starts, entries }
+    }
+
+    #[inline]
+    fn coords(p: Vec3, origin: Vec3, cell: f32) -> [i32; 3] {
+        let c = ((p - origin) / cell).floor();
+        [c.x.clamp(-1e6, 1e6) as i32, c.y.clamp(-1e6, 1e6) as i32, c.z.clamp(-1e6, 1e6) as i32]
+    }
+
+    /// Calls `f(photon index)` for every photon in the cells overlapping the sphere (p, r), each
+    /// once, in a fixed order.
+    #[inline]
+    pub(super) fn for_each_near(&self, p: Vec3, r: f32, mut f: impl FnMut(u32)) {
+        let lo = Self::coords(p - Vec3::splat(r), self.origin, self.cell);
+        let hi = Self::coords(p + Vec3::splat(r), self.origin, self.cell);
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    let key = cell_key([x, y, z]);
+                    let b = (crate::sampling::mix64(key) & self.mask) as usize;
+                    let range = self.starts[b] as usize..self.starts[b + 1] as usize;
+                    for &(k, i) in &self.entries[range] {
+                        if k == key {
+                            f(i);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Color;
+
+    #[test]
+    fn grid_finds_each_nearby_photon_once() {
+        let mut rng = crate::sampling::Rng32::new(1);
+        let hits: Vec<PhotonHit> = (0..5000)
+            .map(|_| PhotonHit {
+                p: Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0,
+                dir: -Vec3::Y,
+                flux: Color::ONE,
+                flags: 0,
+                n: Vec3::Y,
+            })
+            .collect();
+        let r = 0.3;
+        let grid = PhotonGrid::build(&hits, r, Vec3::splat(-2.0));
+        for _ in 0..200 {
+            let q = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
+            let mut found = Vec::new();
+            grid.for_each_near(q, r, |i| {
+                if (hits[i as usize].p - q).length() <= r {
+                    found.push(i)
+                }
+            });
+            let mut brute: Vec<u32> =
+                (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length() <= r).collect();
+            found.sort();
+            brute.sort();
+            assert_eq!(found, brute);
+        }
+    }
+}

@@ -1,0 +1,416 @@
+//! Stochastic progressive photon mapping (Hachisuka, Ogaki and Jensen 2008; Hachisuka and Jensen
+//! 2009): converges to the correct image with bounded memory, and renders what a path tracer
+//! cannot, such as caustics from a point light seen directly and through glass.
+//!
+//! Each iteration runs three passes:
+//! 1. `visible_points`: one camera sample per pixel (pixel jitter and lens re-sampled every
+//!    iteration) follows mirrors and glass to the first non-specular surface, adds emitted and
+//!    directly sampled light there, and leaves a visible point (position, BSDF, throughput);
+//! 2. `photon_pass`: photons from the lights, stored where they land on diffuse surfaces after at
+//!    least one bounce (direct light is already counted), in a hash grid whose cells are as large
+//!    as the largest search radius;
+//! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
+//!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
+//!
+//! Pixels query the photons (rather than photons the pixels), so every pixel sums its photons in
+//! a fixed order and the image is the same for any thread count. Memory is the per-pixel state
+//! plus one iteration's visible points and photons, whatever the number of iterations.
+//!
+//! Iterations are the sample indices of the shared render driver, which runs them in passes and
+//! owns the time limit, cancellation, checkpoints and progress. Layers: light found at a visible
+//! point reached through mirrors or glass is `SPECULAR`; otherwise emitted and direct light is
+//! `DIRECT`, photons that came only through mirrors and glass `CAUSTIC`, and the rest `INDIRECT`.
+
+mod grid;
+
+use super::path::direct_light;
+use crate::film::{CAUSTIC, DIRECT, INDIRECT, Image, SPECULAR};
+use crate::material::bsdf::{Bsdf, Transport};
+use crate::math::{Color, Vec3};
+use crate::photon::trace::{self, PhotonHit};
+use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
+use crate::sampling::hash_seed;
+use crate::scene::Scene;
+use crate::scene::desc::IntegratorDesc;
+use grid::PhotonGrid;
+use rayon::iter::Either;
+use rayon::prelude::*;
+use std::cell::{Cell, RefCell};
+use std::f32::consts::PI;
+
+/// SPPM settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppmConfig {
+    /// Photons emitted per iteration.
+    pub photons_per_iter: u64,
+    /// Search radius every pixel starts with; `None` derives it per pixel (see `initial_radius`).
+    pub initial_radius: Option<f32>,
+    /// Fraction of new photons kept (Hachisuka 2008): 2/3.
+    pub alpha: f32,
+    /// Depth limit in bounces: specular bounces are followed from the camera while the next
+    /// surface is still within it.
+    pub max_depth: u32,
+}
+
+impl SppmConfig {
+    /// Settings from the scene's description, for an image of `pixels` pixels.
+    pub fn new(desc: &IntegratorDesc, pixels: u64) -> Self {
+        SppmConfig {
+            photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
+            initial_radius: desc.photon.initial_radius,
+            alpha: 2.0 / 3.0,
+            max_depth: desc.depth_limit(desc.kind),
+        }
+    }
+}
+
+/// The SPPM integrator.
+pub struct Sppm {
+    pub config: SppmConfig,
+}
+
+/// Working memory of an SPPM render of `pixels` pixels and `photons_per_iter` photons per
+/// iteration (photons are stored up to a few times each as they bounce).
+pub fn estimated_bytes(pixels: u64, photons_per_iter: u64, layers: bool) -> u64 {
+    let layer_bytes = if layers { std::mem::size_of::<PixelLayers>() } else { 0 };
+    let per_pixel =
+        (std::mem::size_of::<PixelStats>() + std::mem::size_of::<Option<VisiblePoint>>() + layer_bytes) as u64;
+    let per_photon = 3 * (std::mem::size_of::<PhotonHit>() + std::mem::size_of::<(u64, u32)>() + 4) as u64;
+    pixels.saturating_mul(per_pixel).saturating_add(photons_per_iter.saturating_mul(per_photon))
+}
+
+/// What one pixel has gathered so far.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelStats {
+    /// Sum over iterations of emitted and direct light.
+    pub ld: Color,
+    /// Accumulated photon count N (fractional after the alpha reduction).
+    pub n: f32,
+    /// Current search radius; 0 until the pixel has had a visible point.
+    pub r: f32,
+    /// Accumulated flux tau (already rescaled to the current radius).
+    pub tau: Color,
+}
+
+impl PixelStats {
+    /// The progressive radiance estimate update for one iteration in which `m` photons within
+    /// radius r brought flux `phi` (Hachisuka 2008 eq. 6, 7, 9 and 10): keep a fraction alpha of
+    /// the new photons, shrink the disc so its density matches, and scale the flux to the
+    /// new disc.
+    /// Returns the factor the accumulated flux was scaled by (1 without photons).
+    pub fn update(&mut self, m: u32, phi: Color, alpha: f32) -> f32 {
+        if m == 0 {
+            return 1.0;
+        }
+        let m = m as f32;
+        let n_new = self.n + alpha * m;
+        let ratio = n_new / (self.n + m);
+        self.tau = (self.tau + phi) * ratio;
+        self.r *= ratio.sqrt();
+        self.n = n_new;
+        ratio
+    }
+
+    /// Radiance after `iterations` iterations of photons whose flux was already divided by the
+    /// number emitted per iteration.
+    pub fn radiance(&self, iterations: u32) -> Color {
+        let it = iterations.max(1) as f32;
+        let photon = if self.r > 0.0 { self.tau / (it * PI * self.r * self.r) } else { Color::ZERO };
+        self.ld / it + photon
+    }
+}
+
+/// A pixel's light split into layers (kept only when layers are asked for): emitted and direct
+/// light by `DIRECT` / `SPECULAR`, and the accumulated flux by `SPECULAR` / `CAUSTIC` /
+/// `INDIRECT`, each flux part rescaled with the pixel's radius like `tau`.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelLayers {
+    ld: [Color; 2],
+    tau: [Color; 3],
+}
+
+/// A camera path's first non-specular hit.
+#[derive(Clone, Copy)]
+struct VisiblePoint {
+    p: Vec3,
+    wo: Vec3,
+    bsdf: Bsdf,
+    beta: Color,
+    /// Distance travelled from the camera (for the initial radius).
+    dist: f32,
+    /// The path reached it through mirrors or glass.
+    specular_prefix: bool,
+}
+
+/// What one iteration's camera sample of a pixel found.
+struct CameraSample {
+    /// Emitted and directly sampled light, and whether it came through mirrors or glass.
+    ld: Color,
+    specular: bool,
+    point: Option<VisiblePoint>,
+}
+
+impl Sppm {
+    /// Renders `settings.spp` iterations (or until the time limit), one camera sample per pixel
+    /// per iteration.
+    pub fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
+        let n_pixels = settings.pixels() as usize;
+        let state = RefCell::new(State {
+            pixels: vec![PixelStats::default(); n_pixels],
+            layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
+            peak_bytes: 0,
+        });
+        let iterations = Cell::new(0u32);
+        let mut driver = Driver::new(settings, control, "sppm", settings.pixels());
+        let mut stats = driver.run(
+            |driver, range| {
+                let mut state = state.borrow_mut();
+                for it in range {
+                    if driver.cancelled() {
+                        return PassOutcome::Interrupted;
+                    }
+                    self.iteration(scene, driver, &mut state, it);
+                    iterations.set(iterations.get() + 1);
+                }
+                PassOutcome::Complete
+            },
+            || (state.borrow().image(settings, iterations.get()), iterations.get()),
+        );
+        let state = state.into_inner();
+        let it = iterations.get();
+        stats.samples_per_pixel = it;
+        stats.memory_bytes = state.peak_bytes as u64;
+        let layers = (0..if settings.layers { 4 } else { 0 }).map(|k| state.layer_image(settings, it, k)).collect();
+        RenderOutput { image: state.image(settings, it), layers, stats }
+    }
+
+    /// One iteration: visible points, photons, statistics.
+    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) {
+        let config = &self.config;
+        let settings = driver.settings;
+        let w = settings.width;
+        let n_pixels = state.pixels.len();
+        let diag = {
+            let b = scene.bounds();
+            if b.is_empty() || !b.diagonal().is_finite() { 1.0 } else { b.diagonal() }
+        };
+        // Pass 1: visible points, with emitted and direct light added to each pixel.
+        let vps: Vec<Option<VisiblePoint>> = state
+            .pixels
+            .par_iter_mut()
+            .zip(layers_of(&mut state.layers, n_pixels))
+            .enumerate()
+            .with_min_len(64)
+            .map(|(k, (px, layers))| {
+                let mut stats = RayStats::default();
+                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
+                let mut bad = 0;
+                if sample.ld.is_finite() {
+                    px.ld += sample.ld;
+                    if let Some(l) = layers {
+                        l.ld[usize::from(sample.specular)] += sample.ld;
+                    }
+                } else {
+                    bad = 1;
+                }
+                driver.record(&stats, bad, 0);
+                let vp = sample.point;
+                if let Some(v) = &vp
+                    && px.r == 0.0
+                {
+                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, v.dist, diag));
+                }
+                vp
+            })
+            .collect();
+        // Pass 2: photons, without their first hits (direct light is traced above).
+        let seed = hash_seed(&[settings.seed, it as u64]);
+        let pass = trace::trace_global(scene, config.photons_per_iter, seed);
+        let hits: Vec<PhotonHit> = pass.hits.into_iter().filter(|h| h.flags & trace::DIRECT == 0).collect();
+        let max_r = state.pixels.iter().map(|p| p.r).fold(0.0f32, f32::max);
+        // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
+        let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
+            + state.layers.len() * std::mem::size_of::<PixelLayers>()
+            + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
+            + hits.capacity() * std::mem::size_of::<PhotonHit>();
+        if max_r > 0.0 && !hits.is_empty() {
+            let grid = PhotonGrid::build(&hits, max_r, scene.bounds().min.min(Vec3::ZERO));
+            bytes += grid.entries.capacity() * std::mem::size_of::<(u64, u32)>() + grid.starts.capacity() * 4;
+            let layers = layers_of(&mut state.layers, n_pixels);
+            state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
+                |((px, layers), vp)| {
+                    let Some(v) = vp else { return };
+                    let r2 = px.r * px.r;
+                    // The flux in all, and the part that came only through mirrors and glass.
+                    let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
+                    grid.for_each_near(v.p, px.r, |i| {
+                        let ph = &hits[i as usize];
+                        if (ph.p - v.p).length_squared() > r2 || ph.dir.dot(v.bsdf.normal()) >= 0.0 {
+                            return;
+                        }
+                        let f = v.bsdf.f(v.wo, -ph.dir);
+                        if f != Color::ZERO {
+                            m += 1;
+                            phi += f * ph.flux;
+                            if ph.flags & trace::CAUSTIC != 0 {
+                                phi_caustic += f * ph.flux;
+                            }
+                        }
+                    });
+                    let total = v.beta * phi;
+                    if !total.is_finite() {
+                        driver.record(&RayStats::default(), 1, 0);
+                        return;
+                    }
+                    let ratio = px.update(m, total, config.alpha);
+                    if let Some(l) = layers {
+                        let caustic = v.beta * phi_caustic;
+                        let parts = if v.specular_prefix {
+                            [total, Color::ZERO, Color::ZERO]
+                        } else {
+                            [Color::ZERO, caustic, total - caustic]
+                        };
+                        for (t, p) in l.tau.iter_mut().zip(parts) {
+                            *t = (*t + p) * ratio;
+                        }
+                    }
+                },
+            );
+        }
+        state.peak_bytes = state.peak_bytes.max(bytes);
+        driver.record(&RayStats::default(), 0, settings.pixels());
+    }
+
+    /// Traces the camera sample of pixel `xy` in iteration `it` to its first non-specular
+    /// surface, with the emitted and direct light it finds on the way.
+    fn camera_sample(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        (x, y): (u32, u32),
+        it: u32,
+        stats: &mut RayStats,
+    ) -> CameraSample {
+        let config = &self.config;
+        let (mut sampler, mut ray) = settings.camera_sample(scene, x, y, it);
+        let mut beta = Color::ONE;
+        let mut dist = 0.0;
+        let mut ld = Color::ZERO;
+        let mut specular = false;
+        for depth in 0.. {
+            stats.rays += 1;
+            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+                ld += beta * scene.background;
+                break;
+            };
+            dist += hit.t;
+            let m = scene.material(&hit);
+            let wo = -ray.d;
+            if m.is_emitter() {
+                if hit.is_front(ray.d) {
+                    ld += beta * m.emission;
+                }
+                break;
+            }
+            // This surface is bounce depth + 1: lit only within the depth limit.
+            if depth >= config.max_depth {
+                break;
+            }
+            let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+            if bsdf.is_specular_only() {
+                if depth + 1 >= config.max_depth {
+                    break;
+                }
+                let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
+                    break;
+                };
+                beta *= s.weight;
+                specular = true;
+                ray = scene.spawn(&hit, s.wi);
+                continue;
+            }
+            ld += beta * direct_light(scene, &hit, &bsdf, wo, &mut sampler, stats, false);
+            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta, dist, specular_prefix: specular });
+            return CameraSample { ld, specular, point };
+        }
+        CameraSample { ld, specular, point: None }
+    }
+}
+
+/// The layers of each pixel, or `None` for every pixel when there are none.
+fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterator<Item = Option<&mut PixelLayers>> {
+    if layers.is_empty() {
+        Either::Right((0..n).into_par_iter().map(|_| None))
+    } else {
+        Either::Left(layers.par_iter_mut().map(Some))
+    }
+}
+
+/// The per-pixel state of a render.
+struct State {
+    pixels: Vec<PixelStats>,
+    /// Per-pixel layers, empty unless asked for.
+    layers: Vec<PixelLayers>,
+    peak_bytes: usize,
+}
+
+impl State {
+    fn image(&self, settings: &RenderSettings, iterations: u32) -> Image {
+        let mut img = Image::new(settings.width, settings.height);
+        for (k, p) in self.pixels.iter().enumerate() {
+            let c = p.radiance(iterations);
+            img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
+        }
+        img
+    }
+
+    fn layer_image(&self, settings: &RenderSettings, iterations: u32, layer: usize) -> Image {
+        let mut img = Image::new(settings.width, settings.height);
+        let it = iterations.max(1) as f32;
+        for (k, (p, l)) in self.pixels.iter().zip(&self.layers).enumerate() {
+            let area = it * PI * p.r * p.r;
+            let flux = |t: Color| if p.r > 0.0 { t / area } else { Color::ZERO };
+            let c = match layer {
+                DIRECT => l.ld[0] / it,
+                SPECULAR => l.ld[1] / it + flux(l.tau[0]),
+                CAUSTIC => flux(l.tau[1]),
+                INDIRECT => flux(l.tau[2]),
+                _ => Color::ZERO,
+            };
+            img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
+        }
+        img
+    }
+}
+
+/// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
+/// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.
+fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
+    let cam = &scene.camera;
+    let footprint = dist * cam.pixel_size / cam.d;
+    (2.0 * footprint).clamp(5e-4 * diag, 0.02 * diag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn update_follows_hachisuka_formulas() {
+        // N = 10, r = 1, tau = 5; M = 6 new photons with flux 3, alpha = 2/3:
+        // N' = 10 + 4 = 14, r'^2 = r^2 N'/(N + M) = 14/16, tau' = (5 + 3) 14/16 = 7.
+        let mut p = PixelStats { ld: Color::ZERO, n: 10.0, r: 1.0, tau: Color::splat(5.0) };
+        p.update(6, Color::splat(3.0), 2.0 / 3.0);
+        assert!((p.n - 14.0).abs() < 1e-6);
+        assert!((p.r * p.r - 14.0 / 16.0).abs() < 1e-6);
+        assert!((p.tau.x - 7.0).abs() < 1e-6);
+        // No photons: nothing changes.
+        let before = p;
+        p.update(0, Color::ZERO, 2.0 / 3.0);
+        assert_eq!((p.n, p.r, p.tau), (before.n, before.r, before.tau));
+        // The estimate: tau / (iterations pi r^2) plus the mean direct light.
+        p.ld = Color::splat(4.0);
+        let l = p.radiance(2);
+        assert!((l.x - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
+    }
+}

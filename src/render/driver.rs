@@ -1,0 +1,140 @@
+//! The progressive loop every integrator runs in: passes of sample indices until the sample
+//! count is reached, the time budget is used or the render is cancelled, with checkpoints and
+//! progress in between. A pass is whatever the integrator does for a range of sample indices
+//! over the whole image (camera samples over tiles, or SPPM iterations).
+
+use super::progress::Progress;
+use super::{RayStats, RenderControl, RenderSettings, RenderStats};
+use crate::film::Image;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// How a pass ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassOutcome {
+    /// Every sample of the range was taken.
+    Complete,
+    /// The cancel flag stopped it part-way; its samples may be partly taken.
+    Interrupted,
+}
+
+/// Runs a render's passes and keeps its statistics; shared by reference with the passes.
+pub struct Driver<'a> {
+    pub settings: &'a RenderSettings,
+    control: &'a RenderControl<'a>,
+    start: Instant,
+    progress: Progress,
+    rays: AtomicU64,
+    shadow_rays: AtomicU64,
+    nonfinite: AtomicU64,
+}
+
+impl<'a> Driver<'a> {
+    /// A driver whose passes together do `units_per_sample` units of work per sample index
+    /// (pixels, for progress).
+    pub fn new(
+        settings: &'a RenderSettings,
+        control: &'a RenderControl<'a>,
+        phase: &str,
+        units_per_sample: u64,
+    ) -> Self {
+        let total = if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul(settings.spp as u64) };
+        let progress = Progress::new(settings.progress, phase, total, settings.time_limit);
+        Driver {
+            settings,
+            control,
+            start: Instant::now(),
+            progress,
+            rays: AtomicU64::new(0),
+            shadow_rays: AtomicU64::new(0),
+            nonfinite: AtomicU64::new(0),
+        }
+    }
+
+    /// True once the render has been asked to stop.
+    #[inline]
+    pub fn cancelled(&self) -> bool {
+        self.control.cancel.load(Ordering::Relaxed)
+    }
+
+    /// Adds a worker's counts: rays traced, samples dropped as NaN or infinite, work units done.
+    pub fn record(&self, stats: &RayStats, nonfinite: u64, units: u64) {
+        self.rays.fetch_add(stats.rays, Ordering::Relaxed);
+        self.shadow_rays.fetch_add(stats.shadow_rays, Ordering::Relaxed);
+        if nonfinite > 0 {
+            self.nonfinite.fetch_add(nonfinite, Ordering::Relaxed);
+        }
+        if units > 0 {
+            self.progress.inc(units);
+        }
+    }
+
+    /// Runs `pass` over growing ranges of sample indices until `settings.spp` are done, the time
+    /// limit is reached or the render is cancelled; `snapshot` gives the image so far and its
+    /// samples per pixel for checkpoints. Returns the statistics (`memory_bytes` left at 0).
+    pub fn run(
+        &mut self,
+        mut pass: impl FnMut(&Self, Range<u32>) -> PassOutcome,
+        snapshot: impl Fn() -> (Image, u32),
+    ) -> RenderStats {
+        let settings = self.settings;
+        let mut done = 0u32;
+        let mut passes = 0u32;
+        let mut interrupted = false;
+        let mut last_checkpoint = Instant::now();
+        // Pass sizes grow until a pass takes about `target`, so a stop request, a checkpoint or
+        // the end of a time budget is never more than about that far away.
+        let progressive = settings.time_limit.is_some() || settings.checkpoint.is_some();
+        let target = Duration::from_millis(if progressive { 500 } else { 2000 });
+        let mut pass_size = 1u32;
+        while done < settings.spp {
+            if let Some(limit) = settings.time_limit
+                && self.start.elapsed() >= limit
+            {
+                break;
+            }
+            if self.cancelled() {
+                interrupted = true;
+                break;
+            }
+            let n = pass_size.min(settings.spp - done);
+            let pass_start = Instant::now();
+            if pass(self, done..done + n) == PassOutcome::Interrupted {
+                interrupted = true;
+                break;
+            }
+            done += n;
+            passes += 1;
+            let per_sample = pass_start.elapsed().as_secs_f64() / n as f64;
+            let mut next = ((target.as_secs_f64() / per_sample.max(1e-9)) as u32).clamp(1, n.saturating_mul(2));
+            if let Some(limit) = settings.time_limit {
+                // Do not start a pass that would run far past the budget.
+                let left = limit.saturating_sub(self.start.elapsed()).as_secs_f64();
+                next = next.min(((left / per_sample.max(1e-9)) as u32).max(1));
+            }
+            pass_size = next;
+            if let (Some(every), Some(cb)) = (settings.checkpoint, self.control.on_checkpoint)
+                && last_checkpoint.elapsed() >= every
+                && done < settings.spp
+            {
+                let (image, spp) = snapshot();
+                cb(&image, spp);
+                last_checkpoint = Instant::now();
+            }
+        }
+        self.progress.finish();
+        RenderStats {
+            wall: self.start.elapsed(),
+            rays: RayStats {
+                rays: self.rays.load(Ordering::Relaxed),
+                shadow_rays: self.shadow_rays.load(Ordering::Relaxed),
+            },
+            samples_per_pixel: 0,
+            passes,
+            nonfinite_samples: self.nonfinite.load(Ordering::Relaxed),
+            interrupted,
+            memory_bytes: 0,
+        }
+    }
+}

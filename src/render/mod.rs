@@ -1,0 +1,163 @@
+//! The render loop shared by every integrator (pbrt-v4's split): the [`Driver`] owns the time
+//! limit, cancellation, checkpoints, progress and statistics of a progressive render made of
+//! passes; [`render_rays`] runs passes of camera samples over tiles for any [`RayIntegrator`]
+//! (a per-ray `radiance`), and multi-pass methods such as SPPM drive their own passes through the
+//! same [`Driver`].
+
+mod driver;
+pub mod progress;
+mod tiles;
+
+pub use driver::{Driver, PassOutcome};
+pub use tiles::render_rays;
+
+use crate::film::{Image, Layers};
+use crate::geometry::Ray;
+use crate::sampling::{Sampler, SamplerKind};
+use crate::scene::Scene;
+use crate::scene::desc::Sampling;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+/// How a render runs: the image and its sampling (from the scene description, with overrides)
+/// and how long and how visibly to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel to take (the cap when a time budget is also given).
+    pub spp: u32,
+    /// Strata per axis of the jittered sampler (N of the N x N pattern).
+    pub strata: u32,
+    pub seed: u64,
+    pub sampler: SamplerKind,
+    /// With anti-aliasing off, every ray goes through the pixel centre (only the lens is sampled).
+    pub antialias: bool,
+    /// Stop starting new passes after this long.
+    pub time_limit: Option<Duration>,
+    /// Call the checkpoint callback at least this often.
+    pub checkpoint: Option<Duration>,
+    pub progress: bool,
+    /// Also accumulate the direct, specular, caustic and indirect layers.
+    pub layers: bool,
+}
+
+impl RenderSettings {
+    /// Settings for a scene's resolved sampling, with no time limit, checkpoints, progress or
+    /// layers.
+    pub fn new(s: &Sampling) -> Self {
+        RenderSettings {
+            width: s.width,
+            height: s.height,
+            spp: s.spp,
+            strata: s.strata,
+            seed: s.seed,
+            sampler: s.sampler,
+            antialias: s.antialias,
+            time_limit: None,
+            checkpoint: None,
+            progress: false,
+            layers: false,
+        }
+    }
+
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// The sampler of sample `index` of pixel (x, y), and the camera ray it makes.
+    #[inline]
+    pub fn camera_sample(&self, scene: &Scene, x: u32, y: u32, index: u32) -> (Sampler, Ray) {
+        let mut sampler = Sampler::new(self.sampler, self.seed, x, y, index, self.strata);
+        let jitter = sampler.pixel();
+        let offset = if self.antialias { jitter } else { crate::math::Vec2::splat(0.5) };
+        let lens = sampler.lens();
+        let ray = scene.camera.generate_ray(crate::math::Vec2::new(x as f32, y as f32) + offset, lens);
+        (sampler, ray)
+    }
+}
+
+/// Rays traced, counted per tile (or pixel) and summed, so counting costs no atomics per ray.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayStats {
+    /// Camera and secondary rays.
+    pub rays: u64,
+    /// Shadow rays (each transparent surface crossed counts as one more).
+    pub shadow_rays: u64,
+}
+
+impl RayStats {
+    pub fn add(&mut self, o: &RayStats) {
+        self.rays += o.rays;
+        self.shadow_rays += o.shadow_rays;
+    }
+
+    pub fn total(&self) -> u64 {
+        self.rays + self.shadow_rays
+    }
+}
+
+/// An integrator that computes the radiance along one camera ray at a time.
+pub trait RayIntegrator: Sync {
+    /// Reusable per-worker buffers (created once per tile, so the hot path allocates nothing).
+    type Scratch: Default;
+
+    /// Radiance arriving along `ray` (towards its origin), by layer. Must not allocate or lock.
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        scratch: &mut Self::Scratch,
+        stats: &mut RayStats,
+    ) -> Layers;
+}
+
+/// What a finished (or stopped) render reports.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub wall: Duration,
+    pub rays: RayStats,
+    /// Samples per pixel in the image (every pixel has at least this many).
+    pub samples_per_pixel: u32,
+    pub passes: u32,
+    /// Samples dropped because the integrator returned NaN or infinity.
+    pub nonfinite_samples: u64,
+    /// The render was stopped by the cancel flag before reaching its sample count.
+    pub interrupted: bool,
+    /// Largest working memory an iteration needed, in bytes (measured by SPPM; 0 elsewhere).
+    pub memory_bytes: u64,
+}
+
+impl RenderStats {
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays.total() as f64 / self.wall.as_secs_f64().max(1e-9) / 1e6
+    }
+}
+
+/// A finished render: the image, its layers (when asked for) and what it took.
+pub struct RenderOutput {
+    pub image: Image,
+    /// The direct, specular, caustic and indirect layers, in that order (empty unless asked).
+    pub layers: Vec<Image>,
+    pub stats: RenderStats,
+}
+
+/// Receives the image so far and its samples per pixel.
+pub type CheckpointFn<'a> = &'a (dyn Fn(&Image, u32) + Sync);
+
+/// Hooks into a running render.
+pub struct RenderControl<'a> {
+    /// Set (e.g. by Ctrl-C) to stop after the tiles in flight.
+    pub cancel: &'a AtomicBool,
+    /// Receives the current image every `checkpoint` interval.
+    pub on_checkpoint: Option<CheckpointFn<'a>>,
+}
+
+impl<'a> RenderControl<'a> {
+    /// No cancellation (the flag is never set) and no checkpoints.
+    pub fn uncancelled() -> RenderControl<'static> {
+        static NEVER: AtomicBool = AtomicBool::new(false);
+        RenderControl { cancel: &NEVER, on_checkpoint: None }
+    }
+}

@@ -1,0 +1,158 @@
+//! The one place a scene is assembled: both loaders add materials, shapes, meshes and lights
+//! here, and `finish` turns them into a [`Scene`] with its BVH.
+//!
+//! Area-light primitives are added after all other geometry, whatever the order in the file, so
+//! a TOML scene and its Mitsuba twin give the same primitives in the same order (and so the same
+//! image bit for bit).
+
+use super::Scene;
+use super::desc::{LoadInfo, ShadingDesc};
+use crate::accel::Bvh;
+use crate::camera::Camera;
+use crate::geometry::Aabb;
+use crate::light::{Emitter, Light, LightPicker};
+use crate::material::Material;
+use crate::math::Vec3;
+use crate::shape::{Plane, Primitive, Shape, TriangleMesh};
+use std::time::Instant;
+
+/// Geometry, materials and lights collected while a scene file is read.
+#[derive(Default)]
+pub struct SceneBuilder {
+    materials: Vec<Material>,
+    material_names: Vec<String>,
+    prims: Vec<Primitive>,
+    planes: Vec<(Plane, u32)>,
+    meshes: Vec<TriangleMesh>,
+    lights: Vec<Light>,
+    /// Primitives of area lights, placed after all other primitives by `finish`.
+    area_prims: Vec<Primitive>,
+    /// Bounding spheres of mirror and glass objects: where caustic photons are aimed.
+    specular_targets: Vec<(Vec3, f32)>,
+    triangles: usize,
+    degenerate_triangles: usize,
+}
+
+impl SceneBuilder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a material; returns its index.
+    pub fn add_material(&mut self, name: impl Into<String>, m: Material) -> u32 {
+        self.materials.push(m);
+        self.material_names.push(name.into());
+        (self.materials.len() - 1) as u32
+    }
+
+    pub fn material(&self, index: u32) -> &Material {
+        &self.materials[index as usize]
+    }
+
+    pub fn material_count(&self) -> usize {
+        self.materials.len()
+    }
+
+    /// Adds one object made of `shapes` (a sphere, a quad, the six faces of a box).
+    pub fn add_object(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
+        let first = self.prims.len();
+        self.prims.extend(shapes.into_iter().map(|shape| Primitive { shape, material }));
+        self.note_specular(first, material);
+    }
+
+    /// Adds a triangle mesh (zero-area triangles are skipped and counted).
+    pub fn add_mesh(&mut self, mesh: TriangleMesh, material: u32) {
+        let first = self.prims.len();
+        let id = self.meshes.len() as u32;
+        let (tris, skipped) = mesh.triangles(id);
+        self.triangles += tris.len();
+        self.degenerate_triangles += skipped;
+        self.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material }));
+        self.meshes.push(mesh);
+        self.note_specular(first, material);
+    }
+
+    pub fn add_plane(&mut self, plane: Plane, material: u32) {
+        self.planes.push((plane, material));
+    }
+
+    /// Adds a light that has no surface (point, spot, directional).
+    pub fn add_light(&mut self, light: Light) {
+        self.lights.push(light);
+    }
+
+    /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
+    /// reflects with (a reflecting emitter); `None` makes it black.
+    pub fn add_area_light(&mut self, emitter: Emitter, radiance: crate::math::Color, surface: Option<Material>) {
+        let light_index = self.lights.len() as u32;
+        let mut material = surface.unwrap_or_else(|| Material::emitter(radiance, light_index));
+        material.emission = radiance;
+        material.light = light_index;
+        let m = self.add_material(format!("(area light {})", light_index + 1), material);
+        let prim = self.area_prims.len() as u32;
+        let shape = match emitter {
+            Emitter::Quad(q) => Shape::Quad(q),
+            Emitter::Sphere(s) => Shape::Sphere(s),
+        };
+        self.area_prims.push(Primitive { shape, material: m });
+        self.lights.push(Light::Area { emitter, radiance, prim });
+    }
+
+    /// Records the bounding sphere of the object whose primitives start at `first`, when its
+    /// material is a mirror or glass.
+    fn note_specular(&mut self, first: usize, material: u32) {
+        if !self.materials[material as usize].is_specular() || self.prims.len() <= first {
+            return;
+        }
+        let target = match self.prims[first].shape {
+            Shape::Sphere(s) if self.prims.len() == first + 1 => (s.center, s.radius),
+            _ => self.prims[first..].iter().fold(Aabb::EMPTY, |b, p| b.union(p.shape.bounds())).bounding_sphere(),
+        };
+        self.specular_targets.push(target);
+    }
+
+    /// Builds the BVH and the scene seen through `camera`.
+    pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> (Scene, LoadInfo) {
+        self.prims.append(&mut self.area_prims);
+        let t0 = Instant::now();
+        let bvh = Bvh::build(self.prims);
+        let info = LoadInfo {
+            primitives: bvh.prims.len(),
+            triangles: self.triangles,
+            degenerate_triangles: self.degenerate_triangles,
+            bvh_nodes: bvh.node_count(),
+            bvh_build: t0.elapsed(),
+        };
+        let bounds = bvh.bounds();
+        let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };
+        let (scene_center, scene_radius) = if bounds.is_empty() { (Vec3::ZERO, 1.0) } else { bounds.bounding_sphere() };
+        for l in &mut self.lights {
+            if let Light::Directional { scene_center: c, scene_radius: r, .. } = l {
+                // Planes are unbounded: the bounding sphere of the finite geometry is where
+                // photons from the sun are useful.
+                *c = scene_center;
+                *r = scene_radius.max(1e-3);
+            }
+        }
+        let any_transmissive = self.materials.iter().any(Material::transmits);
+        let scene = Scene {
+            bvh,
+            planes: self.planes,
+            meshes: self.meshes,
+            materials: self.materials,
+            material_names: self.material_names,
+            light_picker: LightPicker::new(&self.lights),
+            lights: self.lights,
+            camera,
+            background: shading.background,
+            ambient: shading.ambient,
+            // Error-bound offsets already keep rays off their own surface; the seed's bias along
+            // the direction is kept as a tiny margin relative to the scene size.
+            ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
+            transparent_shadows: shading.transparent_shadows,
+            any_transmissive,
+            specular_targets: self.specular_targets,
+        };
+        (scene, info)
+    }
+}

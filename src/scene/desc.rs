@@ -1,0 +1,338 @@
+//! A scene as its file describes it: plain data, before anything is built from it.
+//!
+//! Both loaders (TOML and Mitsuba XML) produce a [`SceneDescription`]: the geometry, materials
+//! and lights collected in a [`SceneBuilder`], the camera, the film, the sampler, and the
+//! integrator *as described* (its kind and options). Command-line overrides are applied to it
+//! once, by [`SceneDescription::apply`], and it is then built into a runtime [`Scene`] with its
+//! BVH by [`SceneDescription::build`]. The integrators read this description; nothing here knows
+//! how they work (pbrt-v4's `BasicScene` plays the same part).
+
+use super::builder::SceneBuilder;
+use super::{Scene, SceneError};
+use crate::camera::CameraDesc;
+use crate::math::Color;
+use crate::sampling::SamplerKind;
+use std::time::Duration;
+
+/// Largest image side accepted, and largest pixel count (about 268 megapixels).
+pub const MAX_SIDE: u32 = 1 << 16;
+pub const MAX_PIXELS: u64 = 1 << 28;
+/// Largest depth limit a scene or the command line may ask for; also what "unlimited" means for
+/// integrators that end paths by Russian roulette.
+pub const MAX_DEPTH_LIMIT: u32 = 1000;
+/// The depth limit when a scene gives none: five reflections or refractions after the first
+/// surface, as the seed report's examples use.
+pub const DEFAULT_MAX_DEPTH: u32 = 6;
+/// Most strata per axis of the jittered sampler.
+pub const MAX_STRATA: u32 = 4096;
+
+/// Which integrator renders the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegratorKind {
+    /// Classic Whitted ray tracing with the seed report's Phong model.
+    #[default]
+    Whitted,
+    /// Unidirectional path tracing with next-event estimation and MIS: the reference.
+    Path,
+    /// Photon mapping: global and caustic maps, final gathering (Jensen 2001).
+    Photon,
+    /// Stochastic progressive photon mapping (Hachisuka and Jensen 2009).
+    Sppm,
+}
+
+impl IntegratorKind {
+    pub const ALL: [IntegratorKind; 4] =
+        [IntegratorKind::Whitted, IntegratorKind::Path, IntegratorKind::Photon, IntegratorKind::Sppm];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Whitted => "whitted",
+            IntegratorKind::Path => "path",
+            IntegratorKind::Photon => "photon",
+            IntegratorKind::Sppm => "sppm",
+        }
+    }
+}
+
+impl std::str::FromStr for IntegratorKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        IntegratorKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown integrator `{s}` (expected whitted, path, photon or sppm)"))
+    }
+}
+
+/// Photon-mapping settings as given; defaults that depend on the scene are filled in when the
+/// integrator is built.
+#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhotonOptions {
+    pub photons: Option<u64>,
+    pub caustic_photons: Option<u64>,
+    pub gather: Option<u32>,
+    pub gather_k: Option<usize>,
+    pub caustic_k: Option<usize>,
+    pub max_radius: Option<f32>,
+    pub caustic_radius: Option<f32>,
+    /// SPPM: photons per iteration (default: one per pixel).
+    pub photons_per_iter: Option<u64>,
+    /// SPPM: starting search radius (default: from the pixel footprint and the scene's size).
+    pub initial_radius: Option<f32>,
+}
+
+impl PhotonOptions {
+    /// `self` with every value `other` gives replaced.
+    pub fn overridden_by(&self, other: &PhotonOptions) -> PhotonOptions {
+        PhotonOptions {
+            photons: other.photons.or(self.photons),
+            caustic_photons: other.caustic_photons.or(self.caustic_photons),
+            gather: other.gather.or(self.gather),
+            gather_k: other.gather_k.or(self.gather_k),
+            caustic_k: other.caustic_k.or(self.caustic_k),
+            max_radius: other.max_radius.or(self.max_radius),
+            caustic_radius: other.caustic_radius.or(self.caustic_radius),
+            photons_per_iter: other.photons_per_iter.or(self.photons_per_iter),
+            initial_radius: other.initial_radius.or(self.initial_radius),
+        }
+    }
+}
+
+/// The integrator as the scene file describes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntegratorDesc {
+    pub kind: IntegratorKind,
+    /// The most bounces (surface interactions) a path may have from the camera to a light, in
+    /// every integrator: 0 shows only what emits, 1 adds direct lighting, and each further one
+    /// adds a reflection or refraction (pbrt-v4's `maxdepth`; Mitsuba's `max_depth` is one
+    /// more). `None` is unlimited (see [`IntegratorDesc::depth_limit`]).
+    pub max_depth: Option<u32>,
+    /// Shadow rays per area light at each shading point (Whitted and photon mapping).
+    pub light_samples: u32,
+    pub photon: PhotonOptions,
+}
+
+impl Default for IntegratorDesc {
+    fn default() -> Self {
+        IntegratorDesc {
+            kind: IntegratorKind::Whitted,
+            max_depth: Some(DEFAULT_MAX_DEPTH),
+            light_samples: 16,
+            photon: PhotonOptions::default(),
+        }
+    }
+}
+
+impl IntegratorDesc {
+    /// The depth limit `kind` works with: the given one, or for "unlimited" the largest limit
+    /// (Russian roulette ends paths long before it), except for the Whitted integrator, whose
+    /// recursion branches at every glass surface and so keeps the default.
+    pub fn depth_limit(&self, kind: IntegratorKind) -> u32 {
+        match (self.max_depth, kind) {
+            (Some(d), _) => d,
+            (None, IntegratorKind::Whitted) => DEFAULT_MAX_DEPTH,
+            (None, _) => MAX_DEPTH_LIMIT,
+        }
+    }
+}
+
+/// How pixels are sampled, as described (sample counts not yet resolved).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplerDesc {
+    pub kind: SamplerKind,
+    /// Total samples per pixel, when given.
+    pub spp: Option<u32>,
+    /// N of N x N strata, when given.
+    pub spp_axis: Option<u32>,
+    pub seed: u64,
+    /// Without anti-aliasing every ray goes through the pixel centre (only the lens is sampled).
+    pub antialias: bool,
+}
+
+impl Default for SamplerDesc {
+    fn default() -> Self {
+        SamplerDesc { kind: SamplerKind::Jittered, spp: None, spp_axis: None, seed: 0, antialias: true }
+    }
+}
+
+/// The image and its sampling, resolved: what the render loop needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sampling {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Strata per axis of the jittered sampler (N of the N x N pattern).
+    pub strata: u32,
+    pub seed: u64,
+    pub sampler: SamplerKind,
+    pub antialias: bool,
+}
+
+/// Settings that change how surfaces are shaded and rays spawned, not what is in the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadingDesc {
+    pub background: Color,
+    /// Ambient light I_a of seed eq. 1.
+    pub ambient: Color,
+    /// Extra offset of spawned rays along their direction; `None`: 1e-6 x the scene's diagonal.
+    pub ray_bias: Option<f32>,
+    pub transparent_shadows: bool,
+}
+
+impl Default for ShadingDesc {
+    fn default() -> Self {
+        ShadingDesc { background: Color::ZERO, ambient: Color::ZERO, ray_bias: None, transparent_shadows: true }
+    }
+}
+
+/// Values given on the command line; each replaces the scene file's value when present.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp_axis: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorKind>,
+    pub sampler: Option<SamplerKind>,
+    pub antialias: Option<bool>,
+    pub photon: PhotonOptions,
+}
+
+/// How a file is read (not part of the scene): Mitsuba parameters and strictness.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// `-D name=value`: values of `$name` parameters in Mitsuba scenes (they win over `<default>`).
+    pub defines: Vec<(String, String)>,
+    /// Unsupported parts of a Mitsuba scene are errors instead of warnings.
+    pub strict: bool,
+}
+
+/// Everything a scene file describes.
+pub struct SceneDescription {
+    /// The file, for messages.
+    pub name: String,
+    pub geometry: SceneBuilder,
+    pub camera: CameraDesc,
+    pub width: u32,
+    pub height: u32,
+    pub sampler: SamplerDesc,
+    pub integrator: IntegratorDesc,
+    pub shading: ShadingDesc,
+    /// Things the loader could not render exactly, each `file:line:col: message`.
+    pub warnings: Vec<String>,
+}
+
+/// Facts about the built geometry, for the log.
+#[derive(Clone, Debug, Default)]
+pub struct LoadInfo {
+    pub primitives: usize,
+    pub triangles: usize,
+    pub degenerate_triangles: usize,
+    pub bvh_nodes: usize,
+    pub bvh_build: Duration,
+}
+
+/// A built scene with its resolved sampling and the integrator it asks for.
+pub struct BuiltScene {
+    pub scene: Scene,
+    pub sampling: Sampling,
+    pub integrator: IntegratorDesc,
+    pub info: LoadInfo,
+}
+
+impl SceneDescription {
+    fn error(&self, message: String) -> SceneError {
+        SceneError::File { path: self.name.clone(), message }
+    }
+
+    /// Applies command-line overrides: the one place where they meet the scene's values.
+    pub fn apply(&mut self, o: &Overrides) {
+        if let Some(w) = o.width {
+            self.width = w;
+        }
+        if let Some(h) = o.height {
+            self.height = h;
+        }
+        // A sample count on the command line replaces both of the file's (`--spp-axis 2` means 4
+        // samples even where the file says `spp = 16`).
+        if o.spp.is_some() || o.spp_axis.is_some() {
+            self.sampler.spp = o.spp;
+            self.sampler.spp_axis = o.spp_axis;
+        }
+        if let Some(s) = o.seed {
+            self.sampler.seed = s;
+        }
+        if let Some(k) = o.sampler {
+            self.sampler.kind = k;
+        }
+        if let Some(a) = o.antialias {
+            self.sampler.antialias = a;
+        }
+        if let Some(k) = o.integrator {
+            self.integrator.kind = k;
+        }
+        if let Some(d) = o.max_depth {
+            self.integrator.max_depth = Some(d);
+        }
+        self.integrator.photon = self.integrator.photon.overridden_by(&o.photon);
+    }
+
+    /// Checks the final values and resolves the sample counts.
+    pub fn sampling(&self) -> Result<Sampling, SceneError> {
+        let (width, height) = (self.width, self.height);
+        if width == 0
+            || height == 0
+            || width > MAX_SIDE
+            || height > MAX_SIDE
+            || width as u64 * height as u64 > MAX_PIXELS
+        {
+            return Err(self.error(format!(
+                "image size {width} x {height} is out of range (each side 1 to {MAX_SIDE}, at most {MAX_PIXELS} pixels)"
+            )));
+        }
+        let s = &self.sampler;
+        let (spp, strata) = match (s.spp, s.spp_axis) {
+            (Some(spp), axis) => (spp, axis.unwrap_or((spp as f64).sqrt() as u32)),
+            (None, Some(n)) => (n.saturating_mul(n), n),
+            // The seed report's default for a lens without anti-aliasing: 8 x 8 lens samples.
+            (None, None) if !s.antialias && self.camera.lens_radius > 0.0 => (64, 8),
+            // Without anti-aliasing or a lens every sample would be the same ray.
+            (None, None) if !s.antialias => (1, 1),
+            (None, None) => (4, 2),
+        };
+        if spp == 0 || strata == 0 || strata > MAX_STRATA {
+            return Err(self.error(format!(
+                "samples per pixel must be at least 1 (got spp {spp}, samples per axis {strata}; at most {MAX_STRATA} per axis)"
+            )));
+        }
+        Ok(Sampling { width, height, spp, strata, seed: s.seed, sampler: s.kind, antialias: s.antialias })
+    }
+
+    /// Builds the runtime scene (BVH included) with the final image size.
+    pub fn build(self) -> Result<BuiltScene, SceneError> {
+        let sampling = self.sampling()?;
+        if let Some(d) = self.integrator.max_depth
+            && d > MAX_DEPTH_LIMIT
+        {
+            return Err(self.error(format!("max_depth {d} is too large (at most {MAX_DEPTH_LIMIT})")));
+        }
+        for (what, v) in [
+            ("max_radius", self.integrator.photon.max_radius),
+            ("caustic_radius", self.integrator.photon.caustic_radius),
+        ] {
+            if let Some(r) = v
+                && !(r > 0.0 && r.is_finite())
+            {
+                return Err(self.error(format!("photon {what} must be a positive number, got {r}")));
+            }
+        }
+        let camera = self.camera.build(sampling.width, sampling.height);
+        let (scene, info) = self.geometry.finish(camera, &self.shading);
+        scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
+        Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
+    }
+}

@@ -1,0 +1,214 @@
+//! Mitsuba 3 scene import: reads a scene written in Mitsuba's XML format into the same
+//! [`SceneDescription`] the TOML loader produces, so any of our integrators can render it.
+//!
+//! Conventions follow Mitsuba 3 (its documentation and plugin sources were the reference; no code
+//! is copied): transforms compose in the order written, rectangles are the square [-1, 1]^2 at
+//! z = 0 facing +z, the sensor looks along +z of its `to_world` frame with +y up and the image's
+//! x axis along local -x, `fov` applies to the image's x axis unless `fov_axis` says otherwise,
+//! and light units are physical (W/sr, W/(m^2 sr), W/m^2) on both sides, so values are used as
+//! they are. What we cannot render is reported as a warning with its file and line (or an error
+//! with `--strict`); malformed input is an error with file, line and column, never a panic.
+//!
+//! The reading is done in two steps: the XML (with its `<include>`s) becomes a small owned tree
+//! that remembers where each element and attribute came from (`xml`), and the scene is then
+//! built from that tree with `$name` parameters substituted and `<ref>`s resolved on the way
+//! (`props`), one file per kind of object: `bsdf`, `shapes`, `emitters`, `sensor`, `transform`.
+
+mod bsdf;
+mod emitters;
+mod props;
+mod sensor;
+mod shapes;
+mod transform;
+mod xml;
+
+use super::SceneError;
+use super::builder::SceneBuilder;
+use super::desc::{IntegratorDesc, IntegratorKind, LoadOptions, SceneDescription, ShadingDesc};
+use crate::math::Color;
+use props::Cx;
+use std::collections::HashMap;
+use std::path::Path;
+use xml::{El, Src};
+
+/// Loads a Mitsuba 3 XML scene file. Its warnings are in the description's `warnings`.
+pub fn load_mitsuba(path: &Path, options: &LoadOptions) -> Result<SceneDescription, SceneError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
+    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    load_mitsuba_str(&text, &path.display().to_string(), &base, options)
+}
+
+/// Loads a Mitsuba scene from `text`; `name` is used in messages, and files (meshes, includes)
+/// resolve against `base`.
+pub fn load_mitsuba_str(
+    text: &str,
+    name: &str,
+    base: &Path,
+    options: &LoadOptions,
+) -> Result<SceneDescription, SceneError> {
+    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf() }];
+    let root = xml::parse_source(&mut srcs, 0, 0)?;
+    let mut cx =
+        Cx { srcs: &srcs, defines: HashMap::new(), ids: HashMap::new(), warnings: Vec::new(), strict: options.strict };
+    for (k, v) in &options.defines {
+        cx.defines.insert(k.clone(), v.clone());
+    }
+    let mut desc = cx.build(&root)?;
+    desc.warnings = cx.warnings;
+    Ok(desc)
+}
+
+/// Mitsuba's `max_depth` and the element that gave it.
+type Depth<'a> = (i64, &'a El);
+
+/// The state while the scene's objects are read.
+struct Build {
+    geometry: SceneBuilder,
+    /// Material index of each `<bsdf>` element already built (by address).
+    bsdf_cache: HashMap<usize, u32>,
+    default_material: Option<u32>,
+    background: Color,
+}
+
+impl<'a> Cx<'a> {
+    fn build(&mut self, root: &'a El) -> Result<SceneDescription, SceneError> {
+        self.check_version(root)?;
+        self.index(root)?;
+        let mut b = Build {
+            geometry: SceneBuilder::new(),
+            bsdf_cache: HashMap::new(),
+            default_material: None,
+            background: Color::ZERO,
+        };
+        let mut sensor: Option<&'a El> = None;
+        let mut integrator: Option<&'a El> = None;
+        for child in &root.children {
+            match child.tag.as_str() {
+                "default" => {}
+                "shape" => self.shape(child, &mut b)?,
+                "emitter" => self.emitter(child, &mut b)?,
+                "sensor" => {
+                    if sensor.is_some() {
+                        self.warn(child, "only the first <sensor> is rendered")?;
+                    } else {
+                        sensor = Some(child);
+                    }
+                }
+                "integrator" => {
+                    if integrator.is_some() {
+                        self.warn(child, "only the first <integrator> is used")?;
+                    } else {
+                        integrator = Some(child);
+                    }
+                }
+                // Declarations used through references; unreferenced ones do nothing, as in Mitsuba.
+                "bsdf" | "texture" => {
+                    if self.attr(child, "id")?.is_none() {
+                        self.warn(child, format!("a top-level <{}> without an id is never used", child.tag))?;
+                    }
+                }
+                "film" | "sampler" | "rfilter" => {
+                    self.warn(child, format!("a top-level <{}> is ignored: put it inside the <sensor>", child.tag))?;
+                }
+                "medium" | "phase" | "volume" => {
+                    let kind = self.attr(child, "type")?.map_or(String::new(), |t| t.0);
+                    self.warn(
+                        child,
+                        format!("participating media are not supported: <{} type=\"{kind}\"> is ignored", child.tag),
+                    )?;
+                }
+                other => {
+                    return Err(self.err(
+                        child,
+                        format!("unknown element <{other}> in <scene>; expected shape, bsdf, emitter, sensor, integrator, texture, default or include"),
+                    ));
+                }
+            }
+        }
+        let (kind, depth) = match integrator {
+            Some(el) => self.integrator(el)?,
+            None => (IntegratorKind::Path, None),
+        };
+        let max_depth = self.map_depth(depth)?;
+        let sensor = self.sensor(sensor, root)?;
+        Ok(SceneDescription {
+            name: self.srcs[0].name.clone(),
+            geometry: b.geometry,
+            camera: sensor.camera,
+            width: sensor.width,
+            height: sensor.height,
+            sampler: sensor.sampler,
+            integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
+            shading: ShadingDesc { background: b.background, ..ShadingDesc::default() },
+            warnings: Vec::new(),
+        })
+    }
+
+    fn check_version(&mut self, root: &'a El) -> Result<(), SceneError> {
+        let Some((v, span)) = self.attr(root, "version")? else {
+            return Err(self.err(root, "<scene> needs a `version` attribute, e.g. version=\"3.0.0\""));
+        };
+        match v.split('.').next().and_then(|m| m.trim().parse::<u32>().ok()) {
+            None => Err(self.err_span(root, span, format!("expected a version such as 3.0.0, found `{v}`"))),
+            Some(m) if m < 2 => self.warn(root, format!("scene version {v} is older than Mitsuba 2: names such as toWorld or intIOR are not recognised; upgrade the file with Mitsuba's converter")),
+            _ => Ok(()),
+        }
+    }
+
+    /// Our depth limit for Mitsuba's `max_depth`. Mitsuba counts the segments of a path from
+    /// the camera (1 shows only emitters seen directly, 2 adds direct lighting, -1 is
+    /// unlimited); caustic counts its bounces (0 = emitters only, 1 = direct lighting), so it
+    /// takes max_depth - 1, and `None` (unlimited) for -1 or when the scene gives none.
+    fn map_depth(&mut self, depth: Option<Depth<'a>>) -> Result<Option<u32>, SceneError> {
+        let Some((d, el)) = depth else { return Ok(None) };
+        if d < -1 {
+            return Err(self.err(el, format!("max_depth must be -1 (unlimited) or at least 0, found {d}")));
+        }
+        if d == -1 {
+            return Ok(None);
+        }
+        if d == 0 {
+            self.warn(el, "max_depth 0 renders a black image in Mitsuba; here emitters stay visible")?;
+        }
+        let limit = crate::scene::desc::MAX_DEPTH_LIMIT as i64 + 1;
+        if d > limit {
+            return Err(self.err(el, format!("max_depth {d} is too large (at most {limit})")));
+        }
+        Ok(Some((d as u32).saturating_sub(1)))
+    }
+
+    fn integrator(&mut self, el: &'a El) -> Result<(IntegratorKind, Option<Depth<'a>>), SceneError> {
+        let p = self.props(el)?;
+        let (kind, depth) = match p.kind.as_str() {
+            "path" | "volpath" | "volpathmis" | "prb" | "prb_basic" | "prbvolpath" | "ptracer" => {
+                let depth = self.integer(&p, "max_depth")?;
+                // Russian roulette only changes noise, not the expected image.
+                let _ = self.integer(&p, "rr_depth")?;
+                if self.boolean(&p, "hide_emitters")? == Some(true) {
+                    self.warn(el, "hide_emitters is not supported: emitters seen directly are rendered")?;
+                }
+                (IntegratorKind::Path, depth)
+            }
+            "direct" => {
+                for name in ["emitter_samples", "bsdf_samples"] {
+                    let _ = self.integer(&p, name)?;
+                }
+                if self.boolean(&p, "hide_emitters")? == Some(true) {
+                    self.warn(el, "hide_emitters is not supported: emitters seen directly are rendered")?;
+                }
+                // Direct lighting is a path of two segments.
+                (IntegratorKind::Path, Some((2, el)))
+            }
+            other => {
+                self.warn(el, format!("integrator `{other}` is not supported; the path tracer is used"))?;
+                for u in &p.used {
+                    u.set(true);
+                }
+                (IntegratorKind::Path, None)
+            }
+        };
+        self.finish(&p)?;
+        Ok((kind, depth))
+    }
+}

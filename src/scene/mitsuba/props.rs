@@ -1,0 +1,539 @@
+//! Reading the properties of Mitsuba objects: `$name` substitution, `<ref>`s, typed values
+//! (numbers, colours, points, indices of refraction) with their file positions, and reports of
+//! what was not read (a warning, or an error with `--strict`).
+
+use super::xml::{Attr, El, Src};
+use crate::geometry::Transform;
+use crate::math::{Color, Vec3};
+use crate::scene::SceneError;
+use std::cell::Cell;
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// Object (plugin) tags of the format.
+pub(super) const OBJECT_TAGS: &[&str] = &[
+    "shape",
+    "bsdf",
+    "emitter",
+    "sensor",
+    "film",
+    "sampler",
+    "integrator",
+    "texture",
+    "rfilter",
+    "medium",
+    "phase",
+    "volume",
+];
+/// Property tags of the format.
+pub(super) const PROPERTY_TAGS: &[&str] =
+    &["integer", "float", "boolean", "string", "rgb", "point", "vector", "spectrum", "transform"];
+
+/// Indices of refraction of Mitsuba's named materials (measured values at about 589 nm, as
+/// tabulated in Hecht's *Optics*).
+const NAMED_IOR: &[(&str, f32)] = &[
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// The reading state: the source files, `$name` parameter values, objects by id, and the
+/// warnings so far.
+pub(super) struct Cx<'a> {
+    pub srcs: &'a [Src],
+    pub defines: HashMap<String, String>,
+    pub ids: HashMap<String, &'a El>,
+    pub warnings: Vec<String>,
+    pub strict: bool,
+}
+
+/// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).
+pub(super) struct Xform {
+    pub t: Transform,
+    pub lookat: Option<(Vec3, Vec3, Vec3)>,
+}
+
+/// One entry of an object's body.
+pub(super) enum Entry<'a> {
+    /// A property element (`<float name=...>` etc.).
+    Prop { name: String, el: &'a El },
+    /// A nested object or a `<ref>`: `el` is the object itself, `at` where it is used.
+    Object { name: Option<String>, el: &'a El, at: &'a El },
+}
+
+/// The body of an object element: its properties and nested objects, with a flag per entry
+/// saying whether it was read (unread ones are reported).
+pub(super) struct Props<'a> {
+    pub el: &'a El,
+    pub kind: String,
+    pub entries: Vec<Entry<'a>>,
+    pub used: Vec<Cell<bool>>,
+}
+
+impl<'a> Cx<'a> {
+    pub(super) fn src(&self, el: &El) -> &'a Src {
+        &self.srcs[el.src]
+    }
+
+    pub(super) fn err(&self, el: &El, message: impl Into<String>) -> SceneError {
+        let s = self.src(el);
+        SceneError::at(&s.name, &s.text, el.span.clone(), message)
+    }
+
+    pub(super) fn err_span(&self, el: &El, span: Range<usize>, message: impl Into<String>) -> SceneError {
+        let s = self.src(el);
+        SceneError::at(&s.name, &s.text, span, message)
+    }
+
+    /// Reports something we do not render: a warning, or an error with `--strict`.
+    pub(super) fn warn(&mut self, el: &El, message: impl Into<String>) -> Result<(), SceneError> {
+        let message = message.into();
+        if self.strict {
+            return Err(self.err(el, format!("{message} (an error with --strict)")));
+        }
+        let s = self.src(el);
+        let (line, column) = crate::scene::error::line_column(&s.text, el.span.start);
+        self.warnings.push(format!("{}:{line}:{column}: {message}", s.name));
+        Ok(())
+    }
+
+    /// An attribute's value with `$name` parameters substituted.
+    pub(super) fn attr(&self, el: &El, name: &str) -> Result<Option<(String, Range<usize>)>, SceneError> {
+        let Some(a) = el.attrs.iter().find(|a| a.name == name) else { return Ok(None) };
+        Ok(Some((self.substitute(el, a)?, a.span.clone())))
+    }
+
+    pub(super) fn required_attr(&self, el: &El, name: &str) -> Result<(String, Range<usize>), SceneError> {
+        self.attr(el, name)?.ok_or_else(|| self.err(el, format!("<{}> needs a `{name}` attribute", el.tag)))
+    }
+
+    pub(super) fn substitute(&self, el: &El, a: &Attr) -> Result<String, SceneError> {
+        if !a.value.contains('$') {
+            return Ok(a.value.clone());
+        }
+        let mut out = String::new();
+        let mut rest = a.value.as_str();
+        while let Some(i) = rest.find('$') {
+            out.push_str(&rest[..i]);
+            let after = &rest[i + 1..];
+            let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
+            let key = &after[..len];
+            if key.is_empty() {
+                return Err(self.err_span(el, a.span.clone(), "`$` must be followed by a parameter name"));
+            }
+            match self.defines.get(key) {
+                Some(v) => out.push_str(v),
+                None => {
+                    return Err(self.err_span(
+                        el,
+                        a.span.clone(),
+                        format!("parameter `${key}` has no value: declare <default name=\"{key}\" value=\"...\"/> or pass -D {key}=VALUE"),
+                    ));
+                }
+            }
+            rest = &after[len..];
+        }
+        out.push_str(rest);
+        Ok(out)
+    }
+
+    /// Collects `<default>`s (command-line values win) and object ids of the whole tree.
+    pub(super) fn index(&mut self, root: &'a El) -> Result<(), SceneError> {
+        for child in &root.children {
+            if child.tag == "default" {
+                let (name, _) = self.required_attr(child, "name")?;
+                let (value, _) = self.required_attr(child, "value")?;
+                self.defines.entry(name).or_insert(value);
+            }
+        }
+        self.index_ids(root)
+    }
+
+    pub(super) fn index_ids(&mut self, el: &'a El) -> Result<(), SceneError> {
+        for child in &el.children {
+            if OBJECT_TAGS.contains(&child.tag.as_str())
+                && let Some((id, span)) = self.attr(child, "id")?
+            {
+                if self.ids.contains_key(&id) {
+                    return Err(self.err_span(child, span, format!("id `{id}` is used by more than one object")));
+                }
+                self.ids.insert(id, child);
+            }
+            self.index_ids(child)?;
+        }
+        Ok(())
+    }
+
+    /// Resolves a `<ref id=.../>`.
+    pub(super) fn resolve(&self, r: &El) -> Result<&'a El, SceneError> {
+        let (id, span) = self.required_attr(r, "id")?;
+        self.ids.get(&id).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = self.ids.keys().map(String::as_str).collect();
+            known.sort();
+            self.err_span(
+                r,
+                span,
+                format!(
+                    "no object with id `{id}` (ids defined: {})",
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            )
+        })
+    }
+
+    /// Reads an object element's body.
+    pub(super) fn props(&self, el: &'a El) -> Result<Props<'a>, SceneError> {
+        let kind = match self.attr(el, "type")? {
+            Some((t, _)) => t,
+            None => return Err(self.err(el, format!("<{}> needs a `type` attribute (the plugin name)", el.tag))),
+        };
+        let mut entries = Vec::new();
+        let mut names: HashMap<String, &El> = HashMap::new();
+        for child in &el.children {
+            let tag = child.tag.as_str();
+            let name = self.attr(child, "name")?;
+            let entry = if PROPERTY_TAGS.contains(&tag) {
+                let (name, _) =
+                    name.ok_or_else(|| self.err(child, format!("<{tag}> property needs a `name` attribute")))?;
+                Entry::Prop { name, el: child }
+            } else if OBJECT_TAGS.contains(&tag) {
+                Entry::Object { name: name.map(|n| n.0), el: child, at: child }
+            } else if tag == "ref" {
+                Entry::Object { name: name.map(|n| n.0), el: self.resolve(child)?, at: child }
+            } else {
+                return Err(self.err(
+                    child,
+                    format!(
+                        "unknown property type <{tag}>; expected one of: {}, or a nested object ({}) or <ref>",
+                        PROPERTY_TAGS.join(", "),
+                        OBJECT_TAGS.join(", ")
+                    ),
+                ));
+            };
+            let key = match &entry {
+                Entry::Prop { name, .. } => Some(name.clone()),
+                Entry::Object { name, .. } => name.clone(),
+            };
+            if let Some(key) = key {
+                if names.contains_key(&key) {
+                    return Err(self.err(child, format!("property `{key}` is given more than once")));
+                }
+                names.insert(key, child);
+            }
+            entries.push(entry);
+        }
+        let used = entries.iter().map(|_| Cell::new(false)).collect();
+        Ok(Props { el, kind, entries, used })
+    }
+
+    /// Warns about every entry of `p` nothing read.
+    pub(super) fn finish(&mut self, p: &Props<'a>) -> Result<(), SceneError> {
+        for (e, used) in p.entries.iter().zip(&p.used) {
+            if used.get() {
+                continue;
+            }
+            match e {
+                Entry::Prop { name, el } => {
+                    self.warn(
+                        el,
+                        format!(
+                            "property `{name}` of <{} type=\"{}\"> is not supported and is ignored",
+                            p.el.tag, p.kind
+                        ),
+                    )?;
+                }
+                Entry::Object { el, at, .. } => {
+                    let kind = self.attr(el, "type")?.map_or(String::new(), |t| t.0);
+                    self.warn(
+                        at,
+                        format!(
+                            "<{} type=\"{kind}\"> inside <{} type=\"{}\"> is not supported and is ignored",
+                            el.tag, p.el.tag, p.kind
+                        ),
+                    )?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    // --- typed property getters ---------------------------------------------------------------
+
+    /// The property element named `name`, marked as read.
+    pub(super) fn prop(&self, p: &Props<'a>, name: &str) -> Option<&'a El> {
+        p.entries.iter().zip(&p.used).find_map(|(e, used)| match e {
+            Entry::Prop { name: n, el } if n == name => {
+                used.set(true);
+                Some(*el)
+            }
+            _ => None,
+        })
+    }
+
+    /// A nested object named `name`, or (when `tag` matches) an unnamed one; marked as read.
+    pub(super) fn object(&self, p: &Props<'a>, name: Option<&str>, tag: &str) -> Vec<(&'a El, &'a El)> {
+        let mut out = Vec::new();
+        for (e, used) in p.entries.iter().zip(&p.used) {
+            if let Entry::Object { name: n, el, at } = e {
+                let hit = match (name, n) {
+                    (Some(want), Some(n)) => want == n,
+                    (Some(_), None) => false,
+                    (None, _) => el.tag == tag,
+                };
+                if hit {
+                    used.set(true);
+                    out.push((*el, *at));
+                }
+            }
+        }
+        out
+    }
+
+    pub(super) fn value(&self, el: &El) -> Result<(String, Range<usize>), SceneError> {
+        self.required_attr(el, "value")
+    }
+
+    pub(super) fn wrong_type(&self, el: &El, name: &str, want: &str) -> SceneError {
+        self.err(el, format!("property `{name}` must be {want}, found <{}>", el.tag))
+    }
+
+    pub(super) fn parse_f32(&self, el: &El, s: &str, span: Range<usize>) -> Result<f32, SceneError> {
+        match s.trim().parse::<f32>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(self.err_span(el, span, format!("expected a number, found `{s}`"))),
+        }
+    }
+
+    /// Numbers separated by commas and/or spaces.
+    pub(super) fn parse_list(&self, el: &El, s: &str, span: Range<usize>) -> Result<Vec<f32>, SceneError> {
+        s.split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|t| !t.is_empty())
+            .map(|t| self.parse_f32(el, t, span.clone()))
+            .collect()
+    }
+
+    pub(super) fn float(&self, p: &Props<'a>, name: &str) -> Result<Option<f32>, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(None) };
+        if el.tag != "float" && el.tag != "integer" {
+            return Err(self.wrong_type(el, name, "a <float>"));
+        }
+        let (v, span) = self.value(el)?;
+        self.parse_f32(el, &v, span).map(Some)
+    }
+
+    pub(super) fn integer(&self, p: &Props<'a>, name: &str) -> Result<Option<(i64, &'a El)>, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(None) };
+        if el.tag != "integer" {
+            return Err(self.wrong_type(el, name, "an <integer>"));
+        }
+        let (v, span) = self.value(el)?;
+        match v.trim().parse::<i64>() {
+            Ok(i) => Ok(Some((i, el))),
+            Err(_) => Err(self.err_span(el, span, format!("expected a whole number, found `{v}`"))),
+        }
+    }
+
+    pub(super) fn boolean(&self, p: &Props<'a>, name: &str) -> Result<Option<bool>, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(None) };
+        if el.tag != "boolean" {
+            return Err(self.wrong_type(el, name, "a <boolean>"));
+        }
+        let (v, span) = self.value(el)?;
+        match v.trim().to_ascii_lowercase().as_str() {
+            "true" => Ok(Some(true)),
+            "false" => Ok(Some(false)),
+            _ => Err(self.err_span(el, span, format!("expected true or false, found `{v}`"))),
+        }
+    }
+
+    pub(super) fn string(&self, p: &Props<'a>, name: &str) -> Result<Option<(String, &'a El)>, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(None) };
+        if el.tag != "string" {
+            return Err(self.wrong_type(el, name, "a <string>"));
+        }
+        Ok(Some((self.value(el)?.0, el)))
+    }
+
+    /// A point or vector: `value="x, y, z"` or `x=`, `y=`, `z=` attributes (missing ones 0).
+    pub(super) fn vec3_of(&self, el: &El) -> Result<Vec3, SceneError> {
+        if let Some((v, span)) = self.attr(el, "value")? {
+            let xs = self.parse_list(el, &v, span.clone())?;
+            return match xs.as_slice() {
+                [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
+                [s] => Ok(Vec3::splat(*s)),
+                _ => Err(self.err_span(el, span, format!("<{}> needs 3 values, found {}", el.tag, xs.len()))),
+            };
+        }
+        let mut out = [0.0f32; 3];
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            if let Some((v, span)) = self.attr(el, axis)? {
+                out[k] = self.parse_f32(el, &v, span)?;
+            }
+        }
+        Ok(Vec3::from(out))
+    }
+
+    pub(super) fn point(&self, p: &Props<'a>, name: &str) -> Result<Option<Vec3>, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(None) };
+        if el.tag != "point" && el.tag != "vector" {
+            return Err(self.wrong_type(el, name, "a <point> or <vector>"));
+        }
+        self.vec3_of(el).map(Some)
+    }
+
+    /// A colour: `<rgb>`, `<spectrum>`, `<float>`, or a texture (whose mean or grey is used).
+    pub(super) fn color(&mut self, p: &Props<'a>, name: &str) -> Result<Option<Color>, SceneError> {
+        if let Some(el) = self.prop(p, name) {
+            return self.color_of(el, name).map(Some);
+        }
+        if let Some(&(tex, at)) = self.object(p, Some(name), "texture").first() {
+            return self.texture_mean(tex, at).map(Some);
+        }
+        Ok(None)
+    }
+
+    pub(super) fn color_of(&mut self, el: &'a El, name: &str) -> Result<Color, SceneError> {
+        match el.tag.as_str() {
+            "float" | "integer" => {
+                let (v, span) = self.value(el)?;
+                Ok(Color::splat(self.parse_f32(el, &v, span)?))
+            }
+            "rgb" => {
+                let (v, span) = self.value(el)?;
+                let xs = self.parse_list(el, &v, span.clone())?;
+                let c = match xs.as_slice() {
+                    [r, g, b] => Color::new(*r, *g, *b),
+                    [s] => Color::splat(*s),
+                    _ => {
+                        return Err(self.err_span(
+                            el,
+                            span,
+                            format!("<rgb> `{name}` needs 3 values (or 1 for a grey), found {}", xs.len()),
+                        ));
+                    }
+                };
+                Ok(c)
+            }
+            "spectrum" => {
+                if let Some((f, span)) = self.attr(el, "filename")? {
+                    self.warn(el, format!("spectrum files are not supported (`{f}`): `{name}` is taken as grey 0.5"))?;
+                    let _ = span;
+                    return Ok(Color::splat(0.5));
+                }
+                let (v, span) = self.value(el)?;
+                if !v.contains(':') {
+                    let xs = self.parse_list(el, &v, span.clone())?;
+                    return match xs.as_slice() {
+                        [s] => Ok(Color::splat(*s)),
+                        _ => Err(self.err_span(
+                            el,
+                            span,
+                            format!(
+                                "<spectrum> `{name}` needs one value or wavelength:value pairs, found {} values",
+                                xs.len()
+                            ),
+                        )),
+                    };
+                }
+                // Wavelength:value pairs: no colour-matching tables here, so use the mean value
+                // over the visible range as a grey.
+                let mut pairs = Vec::new();
+                for item in v.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+                    let Some((l, x)) = item.split_once(':') else {
+                        return Err(self.err_span(el, span, format!("expected wavelength:value, found `{item}`")));
+                    };
+                    pairs.push((self.parse_f32(el, l, span.clone())?, self.parse_f32(el, x, span.clone())?));
+                }
+                let visible: Vec<f32> =
+                    pairs.iter().filter(|(l, _)| (380.0..=780.0).contains(l)).map(|p| p.1).collect();
+                let vals = if visible.is_empty() { pairs.iter().map(|p| p.1).collect() } else { visible };
+                let mean = vals.iter().sum::<f32>() / vals.len() as f32;
+                if vals.iter().any(|&x| (x - mean).abs() > 1e-6 * mean.abs().max(1.0)) {
+                    self.warn(
+                        el,
+                        format!(
+                            "wavelength-dependent spectrum `{name}` is approximated by its mean value {mean} (grey)"
+                        ),
+                    )?;
+                }
+                Ok(Color::splat(mean))
+            }
+            _ => Err(self.wrong_type(el, name, "an <rgb>, <spectrum> or <float>")),
+        }
+    }
+
+    /// Textures are not supported: a checkerboard becomes the mean of its colours, anything
+    /// else grey 0.5.
+    pub(super) fn texture_mean(&mut self, tex: &'a El, at: &'a El) -> Result<Color, SceneError> {
+        let p = self.props(tex)?;
+        let c = if p.kind == "checkerboard" {
+            let c0 = self.color(&p, "color0")?.unwrap_or(Color::splat(0.4));
+            let c1 = self.color(&p, "color1")?.unwrap_or(Color::splat(0.2));
+            for e in p.used.iter() {
+                e.set(true);
+            }
+            (c0 + c1) * 0.5
+        } else {
+            for e in p.used.iter() {
+                e.set(true);
+            }
+            Color::splat(0.5)
+        };
+        self.warn(
+            at,
+            format!("textures are not supported: <texture type=\"{}\"> is replaced by its mean colour {c}", p.kind),
+        )?;
+        Ok(c)
+    }
+
+    /// An index of refraction: a number or one of Mitsuba's named materials.
+    pub(super) fn ior(&self, p: &Props<'a>, name: &str, default: f32) -> Result<f32, SceneError> {
+        let Some(el) = self.prop(p, name) else { return Ok(default) };
+        match el.tag.as_str() {
+            "float" | "integer" => {
+                let (v, span) = self.value(el)?;
+                let x = self.parse_f32(el, &v, span.clone())?;
+                if x <= 0.0 {
+                    return Err(self.err_span(el, span, format!("`{name}` must be positive, found {x}")));
+                }
+                Ok(x)
+            }
+            "string" => {
+                let (v, span) = self.value(el)?;
+                let key = v.trim().to_ascii_lowercase();
+                NAMED_IOR.iter().find(|(n, _)| *n == key).map(|m| m.1).ok_or_else(|| {
+                    let names: Vec<&str> = NAMED_IOR.iter().map(|m| m.0).collect();
+                    self.err_span(
+                        el,
+                        span,
+                        format!(
+                            "unknown material `{v}` for `{name}`; expected a number or one of: {}",
+                            names.join(", ")
+                        ),
+                    )
+                })
+            }
+            _ => Err(self.wrong_type(el, name, "a <float> or a <string> naming a material")),
+        }
+    }
+}

@@ -1,0 +1,228 @@
+//! Mitsuba shapes: rectangles, cubes, spheres, disks and OBJ/PLY meshes, with their nested area
+//! emitters and BSDFs.
+
+use super::Build;
+use super::props::Cx;
+use super::xml::El;
+use crate::geometry::Transform;
+use crate::light::Emitter;
+use crate::math::{Color, Vec3};
+use crate::scene::SceneError;
+use crate::shape::{Quad, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
+
+/// Triangles in the fan that stands in for a `disk`.
+const DISK_SEGMENTS: u32 = 128;
+
+impl<'a> Cx<'a> {
+    /// Reads a shape and adds its geometry (or, for an emitting shape, its area lights).
+    pub(super) fn shape(&mut self, el: &'a El, b: &mut Build) -> Result<(), SceneError> {
+        let p = self.props(el)?;
+        let to_world = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
+        let flip = self.boolean(&p, "flip_normals")?.unwrap_or(false);
+
+        // A nested area emitter.
+        let emitters = self.object(&p, None, "emitter");
+        let mut radiance = None;
+        for &(eel, at) in &emitters {
+            let ep = self.props(eel)?;
+            if ep.kind != "area" {
+                return Err(
+                    self.err(at, format!("an emitter inside a shape must be type=\"area\", found `{}`", ep.kind))
+                );
+            }
+            if radiance.is_some() {
+                return Err(self.err(at, "a shape can have only one area emitter"));
+            }
+            radiance = Some(self.color(&ep, "radiance")?.unwrap_or(Color::ONE));
+            self.finish(&ep)?;
+        }
+        // Material: a nested or referenced <bsdf>, or Mitsuba's default. A `null` BSDF is an
+        // invisible surface: only its emission (if any) is kept.
+        let bsdfs = self.object(&p, None, "bsdf");
+        if bsdfs.len() > 1 {
+            self.warn(bsdfs[1].1, "a shape has one BSDF: the first is used")?;
+        }
+        let bsdf_el = bsdfs.first().map(|b| b.0);
+        let is_null = match bsdf_el {
+            Some(bel) => self.attr(bel, "type")?.is_some_and(|t| t.0 == "null"),
+            None => false,
+        };
+        let material = match bsdf_el {
+            _ if is_null => None,
+            Some(bel) => Some(self.material(bel, b)?),
+            None => Some(self.default_material(b)),
+        };
+        // Other nested objects (media etc.) are reported by `finish`.
+
+        let kind = p.kind.clone();
+        let mut emitters_out: Vec<Emitter> = Vec::new();
+        let mut mesh_out = None;
+        match kind.as_str() {
+            "rectangle" => {
+                let (c, e1, e2) = (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
+                let q =
+                    if flip { transformed_quad(&to_world, c, e2, e1) } else { transformed_quad(&to_world, c, e1, e2) };
+                let q = q.ok_or_else(|| self.err(el, "rectangle has no area after its to_world transform"))?;
+                emitters_out.push(Emitter::Quad(q));
+            }
+            "cube" => {
+                for (c, e1, e2) in box_faces(Vec3::splat(-1.0), Vec3::ONE) {
+                    let q = if flip {
+                        transformed_quad(&to_world, c, e2, e1)
+                    } else {
+                        transformed_quad(&to_world, c, e1, e2)
+                    };
+                    let q = q.ok_or_else(|| self.err(el, "cube is degenerate after its to_world transform"))?;
+                    emitters_out.push(Emitter::Quad(q));
+                }
+            }
+            "sphere" => {
+                let center = self.point(&p, "center")?.unwrap_or(Vec3::ZERO);
+                let radius = self.float(&p, "radius")?.unwrap_or(1.0);
+                if !(radius > 0.0) {
+                    return Err(self.err(el, format!("sphere radius must be positive, found {radius}")));
+                }
+                if !to_world.is_similarity() {
+                    return Err(self.err(el, "a sphere's to_world can only translate, rotate and scale uniformly"));
+                }
+                if flip {
+                    self.warn(el, "flip_normals on a sphere is not supported and is ignored")?;
+                }
+                let c = to_world.point(center);
+                let r = radius * to_world.axis_scales().x;
+                if !(r > 0.0 && r.is_finite() && c.is_finite()) {
+                    return Err(self.err(el, "sphere is degenerate after its to_world transform"));
+                }
+                emitters_out.push(Emitter::Sphere(Sphere::new(c, r)));
+            }
+            "obj" | "ply" | "disk" => {
+                let mesh = if kind == "disk" {
+                    disk_mesh(DISK_SEGMENTS)
+                } else {
+                    let (file, fel) = self.string(&p, "filename")?.ok_or_else(|| {
+                        self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
+                    })?;
+                    let path = self.src(fel).base.join(&file);
+                    let loaded = if kind == "obj" {
+                        TriangleMesh::load_obj(&path).map_err(|e| e.to_string())
+                    } else {
+                        crate::shape::mesh::load_ply(&path)
+                    };
+                    let mut mesh = loaded.map_err(|e| self.err(fel, e))?;
+                    if self.boolean(&p, "face_normals")? == Some(true) {
+                        mesh.normals = None;
+                    }
+                    let _ = self.boolean(&p, "flip_tex_coords")?;
+                    mesh
+                };
+                let mut mesh = mesh.transformed(&to_world);
+                if (to_world.m.determinant() < 0.0) != flip {
+                    for t in &mut mesh.indices {
+                        t.swap(1, 2);
+                    }
+                }
+                if flip && let Some(ns) = &mut mesh.normals {
+                    for n in ns {
+                        *n = -*n;
+                    }
+                }
+                if mesh.positions.iter().any(|v| !v.is_finite()) {
+                    return Err(self.err(el, "mesh has non-finite vertices after its to_world transform"));
+                }
+                // An emitting mesh can be a light here only when it is one parallelogram.
+                if radiance.is_some() {
+                    match parallelogram(&mesh) {
+                        Some(q) => emitters_out.push(Emitter::Quad(q)),
+                        None => {
+                            self.warn(el, format!("area emitters on `{kind}` shapes are supported only for a single planar parallelogram (two triangles): this shape does not emit"))?;
+                            radiance = None;
+                        }
+                    }
+                }
+                if emitters_out.is_empty() {
+                    mesh_out = Some(mesh);
+                }
+            }
+            other => {
+                self.warn(el, format!("shape `{other}` is not supported and is skipped"))?;
+                for u in &p.used {
+                    u.set(true);
+                }
+                self.finish(&p)?;
+                return Ok(());
+            }
+        }
+
+        let Some(material) = material else {
+            // A `null` BSDF: nothing to see, only the emission (if any).
+            if let Some(radiance) = radiance {
+                for e in emitters_out {
+                    b.geometry.add_area_light(e, radiance, None);
+                }
+            }
+            return self.finish(&p);
+        };
+        let m = *b.geometry.material(material);
+        if let Some(radiance) = radiance {
+            // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
+            // exactly our plain emitter material.
+            let reflects = m.is_specular() || (m.color * m.kd).max_element() > 0.0 || m.ks > 0.0;
+            for e in emitters_out {
+                b.geometry.add_area_light(e, radiance, reflects.then_some(m));
+            }
+            return self.finish(&p);
+        }
+        if let Some(mesh) = mesh_out {
+            b.geometry.add_mesh(mesh, material);
+        }
+        if !emitters_out.is_empty() {
+            let shapes = emitters_out.into_iter().map(|e| match e {
+                Emitter::Quad(q) => Shape::Quad(q),
+                Emitter::Sphere(s) => Shape::Sphere(s),
+            });
+            b.geometry.add_object(shapes, material);
+        }
+        self.finish(&p)
+    }
+}
+
+/// The unit disk at z = 0 facing +z as a fan of `n` triangles, its radius enlarged so the
+/// polygon has the disk's area (pi).
+fn disk_mesh(n: u32) -> TriangleMesh {
+    let step = std::f32::consts::TAU / n as f32;
+    let r = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
+    let mut positions = vec![Vec3::ZERO];
+    positions.extend((0..n).map(|i| {
+        let a = i as f32 * step;
+        Vec3::new(r * a.cos(), r * a.sin(), 0.0)
+    }));
+    let indices = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
+    let normals = Some(vec![Vec3::Z; positions.len()]);
+    TriangleMesh { positions, normals, indices }
+}
+
+/// A mesh of two triangles that form a planar parallelogram, as a quad facing the triangles'
+/// side.
+fn parallelogram(mesh: &TriangleMesh) -> Option<Quad> {
+    if mesh.indices.len() != 2 {
+        return None;
+    }
+    let tri = |k: usize| mesh.indices[k].map(|i| mesh.positions[i as usize]);
+    let (a, b) = (tri(0), tri(1));
+    let n = (a[1] - a[0]).cross(a[2] - a[0]);
+    // The vertex of the second triangle not in the first.
+    let extra: Vec<Vec3> = b.iter().copied().filter(|p| !a.contains(p)).collect();
+    let [d] = extra.as_slice() else { return None };
+    // Find the corner of the first triangle opposite to d: p0 = (sum of the two shared) - d.
+    for k in 0..3 {
+        let (p, q, r) = (a[k], a[(k + 1) % 3], a[(k + 2) % 3]);
+        // p is the corner; q and r are the neighbours; the fourth corner should be q + r - p.
+        let fourth = q + r - p;
+        let scale = (q - p).length().max((r - p).length());
+        if (fourth - *d).length() <= 1e-4 * scale {
+            let (e1, e2) = (q - p, r - p);
+            return if e1.cross(e2).dot(n) >= 0.0 { Quad::new(p, e1, e2) } else { Quad::new(p, e2, e1) };
+        }
+    }
+    None
+}

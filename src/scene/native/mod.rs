@@ -1,0 +1,303 @@
+//! Reads a TOML scene file (format in `docs/scene-format.md`) into a [`SceneDescription`].
+//!
+//! The document is parsed once into a tree that keeps every value's position. Tagged tables
+//! (materials, lights and objects, chosen by `type`) are dispatched by hand, their keys checked
+//! against the keys that kind accepts, and the rest deserialized with serde from that tree, so
+//! every error, even one found by a validating type deep inside, points at its line and column.
+//! Loading runs in named steps, one per section: render settings, camera, materials, lights,
+//! objects.
+
+mod objects;
+mod schema;
+
+use super::SceneError;
+use super::builder::SceneBuilder;
+use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
+use crate::camera::{CameraDesc, FieldOfView, FovAxis, Placement};
+use crate::material::{Material, MaterialKind};
+use crate::math::{Color, Vec3};
+use schema::{CameraTable, MaterialDesc, RenderDesc};
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::Path;
+use toml::Spanned;
+use toml::de::{DeString, DeTable, DeValue, ValueDeserializer};
+
+/// Default image size when the file gives none.
+const DEFAULT_SIZE: (u32, u32) = (640, 480);
+
+/// Loads a TOML scene from `text`; `name` is used in messages and mesh paths resolve against
+/// `base`.
+pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
+    let cx = Cx { path: name, text, base };
+    let mut sections = cx.sections()?;
+    let render: RenderDesc = match sections.remove("render") {
+        Some(v) => cx.de(v)?,
+        None => RenderDesc::default(),
+    };
+    let camera = cx.camera(sections.remove("camera"))?;
+    let mut geometry = SceneBuilder::new();
+    let materials = cx.materials(sections.remove("materials"), &mut geometry)?;
+    if let Some(v) = sections.remove("lights") {
+        cx.lights(v, &mut geometry)?;
+    }
+    if let Some(v) = sections.remove("objects") {
+        cx.objects(v, &materials, &mut geometry)?;
+    }
+    Ok(SceneDescription {
+        name: name.to_string(),
+        geometry,
+        camera,
+        width: render.width.unwrap_or(DEFAULT_SIZE.0),
+        height: render.height.unwrap_or(DEFAULT_SIZE.1),
+        sampler: SamplerDesc {
+            kind: render.sampler.unwrap_or_default(),
+            spp: render.spp,
+            spp_axis: render.spp_axis,
+            seed: render.seed.unwrap_or(0),
+            antialias: render.antialias.unwrap_or(true),
+        },
+        integrator: IntegratorDesc {
+            kind: render.integrator.unwrap_or_default(),
+            max_depth: render.max_depth.or(IntegratorDesc::default().max_depth),
+            light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
+            photon: render.photon,
+        },
+        shading: ShadingDesc {
+            background: render.background.map_or(Color::ZERO, |c| c.0),
+            ambient: render.ambient.map_or(Color::ZERO, |c| c.0),
+            ray_bias: render.ray_bias.map(|b| b.0),
+            transparent_shadows: render.transparent_shadows.unwrap_or(true),
+        },
+        warnings: Vec::new(),
+    })
+}
+
+/// Material indices by name, with a default material made on first use.
+struct MaterialNames {
+    index: HashMap<String, u32>,
+    names: Vec<String>,
+    default: std::cell::Cell<Option<u32>>,
+}
+
+/// The file being loaded, for error positions.
+struct Cx<'a> {
+    path: &'a str,
+    text: &'a str,
+    base: &'a Path,
+}
+
+impl<'a> Cx<'a> {
+    fn at(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
+        SceneError::at(self.path, self.text, span, message)
+    }
+
+    fn toml(&self, e: toml::de::Error) -> SceneError {
+        let span = e.span().unwrap_or(0..0);
+        let mut message = e.message().trim_end().to_string();
+        if message.contains("wanted exactly 1 element") {
+            message.push_str(" (each transform entry holds one operation: translate, rotate or scale)");
+        }
+        self.at(span, message)
+    }
+
+    fn de<'i, T: Deserialize<'i>>(&self, v: Spanned<DeValue<'i>>) -> Result<T, SceneError> {
+        T::deserialize(ValueDeserializer::from(v)).map_err(|e| self.toml(e))
+    }
+
+    fn array<'i>(&self, v: Spanned<DeValue<'i>>, what: &str) -> Result<Vec<Spanned<DeValue<'i>>>, SceneError> {
+        let span = v.span();
+        match v.into_inner() {
+            DeValue::Array(a) => Ok(a.into_iter().collect()),
+            _ => Err(self.at(span, format!("`{what}` must be an array of tables ([[{what}]])"))),
+        }
+    }
+
+    /// Step 1: the top-level sections by name; anything else is an error.
+    fn sections(&self) -> Result<HashMap<&'static str, Spanned<DeValue<'a>>>, SceneError> {
+        let doc = DeTable::parse(self.text).map_err(|e| self.toml(e))?;
+        let doc_span = doc.span();
+        let mut sections = HashMap::new();
+        for (key, value) in doc.into_inner() {
+            let k: &str = key.get_ref();
+            let known = ["render", "camera", "materials", "lights", "objects"].into_iter().find(|s| *s == k);
+            let Some(section) = known else {
+                return Err(self.at(
+                    key.span(),
+                    format!("unknown section `{k}`; expected one of render, camera, materials, lights, objects"),
+                ));
+            };
+            sections.insert(section, value);
+        }
+        if !sections.contains_key("camera") {
+            return Err(self.at(doc_span.start..doc_span.start, "missing [camera] section"));
+        }
+        Ok(sections)
+    }
+
+    /// Splits a table with a `type` key into (kind, the rest), checking the other keys against
+    /// those `kinds` allows for that kind.
+    fn tagged<'i>(
+        &self,
+        v: Spanned<DeValue<'i>>,
+        what: &str,
+        kinds: &[(&'static str, &[&str])],
+    ) -> Result<(&'static str, Spanned<DeValue<'i>>), SceneError> {
+        let span = v.span();
+        let DeValue::Table(mut table) = v.into_inner() else {
+            return Err(self.at(span, format!("expected a table describing a {what}")));
+        };
+        let names: Vec<&str> = kinds.iter().map(|k| k.0).collect();
+        let Some(ty) = table.remove("type") else {
+            return Err(self.at(span, format!("{what} has no `type`; expected one of: {}", names.join(", "))));
+        };
+        let ty_span = ty.span();
+        let Some(ty_str) = ty.get_ref().as_str() else {
+            return Err(self.at(ty_span, format!("`type` must be a string, one of: {}", names.join(", "))));
+        };
+        let Some((kind, allowed)) = kinds.iter().find(|k| k.0 == ty_str) else {
+            return Err(
+                self.at(ty_span, format!("unknown {what} type `{ty_str}`; expected one of: {}", names.join(", ")))
+            );
+        };
+        for key in table.keys() {
+            let k: &DeString = key.get_ref();
+            if !allowed.contains(&k.as_ref()) {
+                return Err(self.at(
+                    key.span(),
+                    format!("unknown key `{k}` for a {kind} {what}; expected one of: type, {}", allowed.join(", ")),
+                ));
+            }
+        }
+        Ok((kind, Spanned::new(span, DeValue::Table(table))))
+    }
+
+    /// Step 2: the camera (present: `sections` checked it).
+    fn camera(&self, value: Option<Spanned<DeValue<'a>>>) -> Result<CameraDesc, SceneError> {
+        let Some(value) = value else { return Err(self.at(0..0, "missing [camera] section")) };
+        let span = value.span();
+        let c: CameraTable = self.de(value)?;
+        let (eye, look_at) = (c.eye.0, c.look_at.0);
+        let up = c.up.map_or(Vec3::Y, |u| u.0);
+        let w = (eye - look_at).normalize_or_zero();
+        if w == Vec3::ZERO {
+            return Err(self.at(span, "camera `eye` and `look_at` are the same point"));
+        }
+        if up.cross(w).length() < 1e-6 {
+            return Err(self.at(span, "camera `up` is parallel to the viewing direction"));
+        }
+        let fov = match (c.fov, c.view_distance) {
+            (Some(_), Some(_)) => return Err(self.at(span, "give either `fov` or `view_distance`, not both")),
+            (Some(f), None) if f.0 >= 180.0 => {
+                return Err(self.at(span, format!("fov must be below 180 degrees, got {}", f.0)));
+            }
+            (Some(f), None) => FieldOfView::Angle { degrees: f.0 as f64, axis: FovAxis::Y },
+            (None, Some(d)) => FieldOfView::ViewDistance(d.0),
+            (None, None) => FieldOfView::Angle { degrees: 45.0, axis: FovAxis::Y },
+        };
+        let focal_distance = match (c.focal_distance, c.focus_on) {
+            (Some(_), Some(_)) => return Err(self.at(span, "give either `focal_distance` or `focus_on`, not both")),
+            (Some(f), None) => f.0,
+            (None, Some(p)) => {
+                // Distance of the point from the lens along the viewing axis.
+                let f = (p.0 - eye).dot(-w);
+                if !(f > 0.0) {
+                    return Err(self.at(span, "`focus_on` is not in front of the camera"));
+                }
+                f
+            }
+            (None, None) => (look_at - eye).length(),
+        };
+        Ok(CameraDesc {
+            placement: Placement::LookAt { eye, target: look_at, up },
+            fov,
+            lens_radius: c.lens_radius.map_or(0.0, |r| r.0),
+            focal_distance,
+        })
+    }
+
+    /// Step 3: named materials.
+    fn materials(
+        &self,
+        value: Option<Spanned<DeValue<'a>>>,
+        geometry: &mut SceneBuilder,
+    ) -> Result<MaterialNames, SceneError> {
+        let mut names = MaterialNames { index: HashMap::new(), names: Vec::new(), default: std::cell::Cell::new(None) };
+        let Some(v) = value else { return Ok(names) };
+        let span = v.span();
+        let DeValue::Table(table) = v.into_inner() else {
+            return Err(self.at(span, "`materials` must be a table of named materials ([materials.NAME])"));
+        };
+        for (name, value) in table {
+            let (kind, value) = self.tagged(value, "material", schema::MATERIAL_KINDS)?;
+            let desc: MaterialDesc = self.de(value)?;
+            let name = name.get_ref().to_string();
+            let i = geometry.add_material(name.clone(), material(&desc, kind));
+            names.index.insert(name.clone(), i);
+            names.names.push(name);
+        }
+        Ok(names)
+    }
+
+    /// The material an object names (or the default one), with an error listing the names.
+    fn material_of(
+        &self,
+        name: Option<&Spanned<String>>,
+        names: &MaterialNames,
+        geometry: &mut SceneBuilder,
+    ) -> Result<u32, SceneError> {
+        let Some(name) = name else {
+            if let Some(i) = names.default.get() {
+                return Ok(i);
+            }
+            let i = geometry.add_material("(default)", Material::default());
+            names.default.set(Some(i));
+            return Ok(i);
+        };
+        names.index.get(name.get_ref().as_str()).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = names.names.iter().map(String::as_str).collect();
+            known.sort();
+            self.at(
+                name.span(),
+                format!(
+                    "no material named `{}` (defined: {})",
+                    name.get_ref(),
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            )
+        })
+    }
+}
+
+/// A material of the seed report's model from its table.
+fn material(desc: &MaterialDesc, kind: &str) -> Material {
+    let d = Material::default();
+    let kind = match kind {
+        "diffuse" => MaterialKind::Diffuse,
+        "reflective" => MaterialKind::Reflective,
+        "transparent" => MaterialKind::Transparent,
+        _ => MaterialKind::Dielectric,
+    };
+    // Glass defaults to no diffuse term: all its light comes from reflection and refraction.
+    let clear = kind == MaterialKind::Dielectric || kind == MaterialKind::Transparent;
+    Material {
+        kind,
+        color: desc.color.map_or(if clear { Color::ONE } else { d.color }, |c| c.0),
+        ka: desc.ka.map_or(if clear { 0.0 } else { d.ka }, |v| v.0),
+        kd: desc.kd.map_or(if clear { 0.0 } else { d.kd }, |v| v.0),
+        ks: desc.ks.map_or(d.ks, |v| v.0),
+        exponent: desc.exponent.map_or(d.exponent, |v| v.0),
+        kr: desc.kr.map_or(
+            match kind {
+                MaterialKind::Reflective => 0.5,
+                MaterialKind::Transparent => 0.1,
+                _ => 0.0,
+            },
+            |v| v.0,
+        ),
+        kt: desc.kt.map_or(if kind == MaterialKind::Transparent { 0.9 } else { 0.0 }, |v| v.0),
+        ior: desc.ior.map_or(d.ior, |v| v.0),
+        ..d
+    }
+}

@@ -1,0 +1,236 @@
+//! The `[[lights]]` and `[[objects]]` sections of a TOML scene: each entry checked and added to
+//! the scene builder.
+
+use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
+use super::{Cx, MaterialNames};
+use crate::geometry::Transform;
+use crate::light::{Emitter, Light};
+use crate::math::{Color, Vec3};
+use crate::scene::SceneError;
+use crate::scene::builder::SceneBuilder;
+use crate::shape::{Plane, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
+use std::ops::Range;
+use toml::Spanned;
+use toml::de::DeValue;
+
+/// Largest procedural mesh, in triangles.
+const MAX_GENERATED_TRIANGLES: u64 = 50_000_000;
+
+impl<'a> Cx<'a> {
+    /// Step 4: lights, in the order written.
+    pub(super) fn lights(&self, value: Spanned<DeValue<'a>>, geometry: &mut SceneBuilder) -> Result<(), SceneError> {
+        for value in self.array(value, "lights")? {
+            let span = value.span();
+            let (kind, value) = self.tagged(value, "light", schema::LIGHT_KINDS)?;
+            let d: LightDesc = self.de(value)?;
+            self.light(kind, &d, span, geometry)?;
+        }
+        Ok(())
+    }
+
+    fn light(
+        &self,
+        kind: &str,
+        d: &LightDesc,
+        span: Range<usize>,
+        geometry: &mut SceneBuilder,
+    ) -> Result<(), SceneError> {
+        let power = d.color.map_or(Color::ONE, |c| c.0) * d.intensity.map_or(1.0, |i| i.0);
+        match kind {
+            "point" => {
+                geometry.add_light(Light::Point { position: d.position.map_or(Vec3::ZERO, |p| p.0), intensity: power })
+            }
+            "spot" => {
+                let position = d.position.map_or(Vec3::ZERO, |p| p.0);
+                let direction = match (d.direction, d.look_at) {
+                    (Some(_), Some(_)) => {
+                        return Err(self.at(span, "give either `direction` or `look_at`, not both"));
+                    }
+                    (Some(dir), None) => dir.0,
+                    (None, Some(t)) => (t.0 - position)
+                        .try_normalize()
+                        .ok_or_else(|| self.at(span.clone(), "spot light `look_at` is the light's own position"))?,
+                    (None, None) => -Vec3::Y,
+                };
+                let angle = d.angle.map_or(30.0, |a| a.0);
+                let falloff = d.falloff.map_or(angle * 0.75, |a| a.0);
+                if angle > 90.0 || falloff > angle {
+                    return Err(self.at(
+                        span,
+                        format!(
+                            "spot light needs falloff <= angle <= 90 degrees (got falloff {falloff}, angle {angle})"
+                        ),
+                    ));
+                }
+                geometry.add_light(Light::Spot {
+                    position,
+                    direction,
+                    intensity: power,
+                    cos_total: angle.to_radians().cos(),
+                    cos_falloff: falloff.to_radians().cos(),
+                });
+            }
+            "directional" => geometry.add_light(Light::Directional {
+                direction: d.direction.map_or(-Vec3::Y, |p| p.0),
+                irradiance: power,
+                scene_center: Vec3::ZERO,
+                scene_radius: 0.0,
+            }),
+            _ => {
+                let transform = self.transform(&d.transform, span.clone())?;
+                let emitter = match d.shape.as_deref().unwrap_or("quad") {
+                    "quad" => {
+                        // Default: a 1 x 1 square facing down, as a ceiling light.
+                        let corner = d.corner.map_or(Vec3::new(-0.5, 0.0, -0.5), |p| p.0);
+                        let e1 = d.edge1.map_or(Vec3::new(1.0, 0.0, 0.0), |p| p.0);
+                        let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, 1.0), |p| p.0);
+                        let q = transformed_quad(&transform, corner, e1, e2).ok_or_else(|| {
+                            self.at(span.clone(), "area light quad edges are parallel or zero: it has no area")
+                        })?;
+                        Emitter::Quad(q)
+                    }
+                    "sphere" => {
+                        if !transform.is_similarity() {
+                            return Err(
+                                self.at(span, "a spherical light can only be translated, rotated and scaled uniformly")
+                            );
+                        }
+                        let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
+                        let radius = d.radius.map_or(0.5, |r| r.0) * transform.axis_scales().x;
+                        Emitter::Sphere(Sphere::new(center, radius))
+                    }
+                    other => {
+                        return Err(
+                            self.at(span, format!("unknown area light shape `{other}`; expected quad or sphere"))
+                        );
+                    }
+                };
+                geometry.add_area_light(emitter, power, None);
+            }
+        }
+        Ok(())
+    }
+
+    /// Step 5: objects, each with its material.
+    pub(super) fn objects(
+        &self,
+        value: Spanned<DeValue<'a>>,
+        names: &MaterialNames,
+        geometry: &mut SceneBuilder,
+    ) -> Result<(), SceneError> {
+        for value in self.array(value, "objects")? {
+            let span = value.span();
+            let (kind, value) = self.tagged(value, "object", schema::OBJECT_KINDS)?;
+            let d: ObjectDesc = self.de(value)?;
+            let material = self.material_of(d.material.as_ref(), names, geometry)?;
+            let transform = self.transform(&d.transform, span.clone())?;
+            self.object(kind, &d, &transform, span, material, geometry)?;
+        }
+        Ok(())
+    }
+
+    fn object(
+        &self,
+        kind: &str,
+        d: &ObjectDesc,
+        transform: &Transform,
+        span: Range<usize>,
+        material: u32,
+        geometry: &mut SceneBuilder,
+    ) -> Result<(), SceneError> {
+        match kind {
+            "sphere" => {
+                let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
+                if !transform.is_similarity() {
+                    return Err(self.at(
+                        span,
+                        "a sphere can only be translated, rotated and scaled uniformly; use a mesh for an ellipsoid",
+                    ));
+                }
+                let radius = d.radius.map_or(1.0, |r| r.0) * transform.axis_scales().x;
+                if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                    return Err(self.at(span, "sphere is degenerate after its transform"));
+                }
+                geometry.add_object([Shape::Sphere(Sphere::new(center, radius))], material);
+            }
+            "plane" => {
+                let point = transform.point(d.point.map_or(Vec3::ZERO, |p| p.0));
+                let normal = transform.normal(d.normal.map_or(Vec3::Y, |n| n.0)).normalize_or_zero();
+                if normal == Vec3::ZERO || !point.is_finite() {
+                    return Err(self.at(span, "plane is degenerate after its transform"));
+                }
+                geometry.add_plane(Plane { point, normal }, material);
+            }
+            "quad" => {
+                let corner = d.corner.map_or(Vec3::new(-1.0, 0.0, 1.0), |p| p.0);
+                let e1 = d.edge1.map_or(Vec3::new(2.0, 0.0, 0.0), |p| p.0);
+                let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, -2.0), |p| p.0);
+                let q = transformed_quad(transform, corner, e1, e2)
+                    .ok_or_else(|| self.at(span, "quad edges are parallel or zero: it has no area"))?;
+                geometry.add_object([Shape::Quad(q)], material);
+            }
+            "box" => {
+                let min = d.min.map_or(Vec3::splat(-1.0), |p| p.0);
+                let max = d.max.map_or(Vec3::splat(1.0), |p| p.0);
+                if !(min.cmplt(max).all()) {
+                    return Err(self.at(span, format!("box `min` {min} must be below `max` {max} on every axis")));
+                }
+                let mut faces = Vec::with_capacity(6);
+                for (c, e1, e2) in box_faces(min, max) {
+                    let q = transformed_quad(transform, c, e1, e2)
+                        .ok_or_else(|| self.at(span.clone(), "box is degenerate after its transform"))?;
+                    faces.push(Shape::Quad(q));
+                }
+                geometry.add_object(faces, material);
+            }
+            "mesh" | "torus_knot" => {
+                let mesh = if kind == "mesh" {
+                    let file =
+                        d.file.as_ref().ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ file)"))?;
+                    let path = self.base.join(file.get_ref());
+                    TriangleMesh::load_obj(&path).map_err(|e| self.at(file.span(), e.to_string()))?
+                } else {
+                    let (segments, sides) = (d.segments.unwrap_or(256), d.sides.unwrap_or(32));
+                    if segments < 3 || sides < 3 || 2 * segments as u64 * sides as u64 > MAX_GENERATED_TRIANGLES {
+                        return Err(self.at(span, format!("torus_knot needs segments >= 3 and sides >= 3 and at most {MAX_GENERATED_TRIANGLES} triangles")));
+                    }
+                    let (p, q) = (d.p.unwrap_or(2), d.q.unwrap_or(3));
+                    if p == 0 || q == 0 || p > 1000 || q > 1000 {
+                        return Err(self.at(span, "torus_knot p and q must be from 1 to 1000"));
+                    }
+                    let (radius, tube) = (d.radius.map_or(1.0, |r| r.0), d.tube.map_or(0.25, |t| t.0));
+                    TriangleMesh::torus_knot(p, q, radius, tube, segments, sides)
+                };
+                let mut mesh = mesh.transformed(transform);
+                if transform.m.determinant() < 0.0 {
+                    // A mirroring transform reverses winding; swap to keep the outward side.
+                    for t in &mut mesh.indices {
+                        t.swap(1, 2);
+                    }
+                }
+                if mesh.positions.iter().any(|p| !p.is_finite()) {
+                    return Err(self.at(span, "mesh has non-finite vertices after its transform"));
+                }
+                geometry.add_mesh(mesh, material);
+            }
+            _ => unreachable!("kind checked by tagged()"),
+        }
+        Ok(())
+    }
+
+    /// A transform list's operations composed in the order listed.
+    fn transform(&self, ops: &Option<Vec<TransformOp>>, span: Range<usize>) -> Result<Transform, SceneError> {
+        let mut t = Transform::IDENTITY;
+        for op in ops.iter().flatten() {
+            t = t.then(match op {
+                TransformOp::Translate(v) => Transform::translate(v.0),
+                TransformOp::Rotate(r) => Transform::rotate(r.axis.0, r.degrees.0),
+                TransformOp::Scale(s) => Transform::scale(s.0),
+            });
+        }
+        if !t.is_valid() {
+            return Err(self.at(span, "transform is singular or not finite"));
+        }
+        Ok(t)
+    }
+}

@@ -1,0 +1,137 @@
+//! The shapes of the TOML scene format's tables (see `docs/scene-format.md`): serde types with
+//! validating values, and the keys each `type` of material, light and object accepts.
+
+use crate::sampling::SamplerKind;
+use crate::scene::de::{Direction, Finite, NonNegative, Point, Positive, Rgb, Scale, Unit};
+use crate::scene::desc::{IntegratorKind, PhotonOptions};
+use serde::Deserialize;
+use std::path::PathBuf;
+use toml::Spanned;
+
+pub const MATERIAL_KINDS: &[(&str, &[&str])] = &[
+    ("diffuse", &["color", "ka", "kd", "ks", "exponent"]),
+    ("reflective", &["color", "ka", "kd", "ks", "exponent", "kr"]),
+    ("transparent", &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"]),
+    ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior"]),
+];
+
+pub const LIGHT_KINDS: &[(&str, &[&str])] = &[
+    ("point", &["position", "color", "intensity"]),
+    ("spot", &["position", "direction", "look_at", "angle", "falloff", "color", "intensity"]),
+    ("directional", &["direction", "color", "intensity"]),
+    ("area", &["shape", "corner", "edge1", "edge2", "center", "radius", "transform", "color", "intensity"]),
+];
+
+pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
+    ("sphere", &["material", "transform", "center", "radius"]),
+    ("plane", &["material", "transform", "point", "normal"]),
+    ("quad", &["material", "transform", "corner", "edge1", "edge2"]),
+    ("box", &["material", "transform", "min", "max"]),
+    ("mesh", &["material", "transform", "file"]),
+    ("torus_knot", &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"]),
+];
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp_axis: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: Option<u64>,
+    pub integrator: Option<IntegratorKind>,
+    pub sampler: Option<SamplerKind>,
+    pub antialias: Option<bool>,
+    pub background: Option<Rgb>,
+    pub ambient: Option<Rgb>,
+    pub ray_bias: Option<NonNegative>,
+    pub transparent_shadows: Option<bool>,
+    pub light_samples: Option<u32>,
+    /// Photon-mapping settings.
+    #[serde(default)]
+    pub photon: PhotonOptions,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraTable {
+    pub eye: Point,
+    pub look_at: Point,
+    pub up: Option<Direction>,
+    pub fov: Option<Positive>,
+    pub view_distance: Option<Positive>,
+    pub lens_radius: Option<NonNegative>,
+    pub focal_distance: Option<Positive>,
+    pub focus_on: Option<Point>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    pub color: Option<Rgb>,
+    pub ka: Option<NonNegative>,
+    pub kd: Option<NonNegative>,
+    pub ks: Option<NonNegative>,
+    pub exponent: Option<NonNegative>,
+    pub kr: Option<Unit>,
+    pub kt: Option<Unit>,
+    pub ior: Option<Positive>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    pub position: Option<Point>,
+    pub direction: Option<Direction>,
+    pub look_at: Option<Point>,
+    /// Spot cone half-angle and the half-angle where the fall-off starts, in degrees.
+    pub angle: Option<Positive>,
+    pub falloff: Option<NonNegative>,
+    pub color: Option<Rgb>,
+    pub intensity: Option<NonNegative>,
+    pub shape: Option<String>,
+    pub corner: Option<Point>,
+    pub edge1: Option<Point>,
+    pub edge2: Option<Point>,
+    pub center: Option<Point>,
+    pub radius: Option<Positive>,
+    pub transform: Option<Vec<TransformOp>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "lowercase")]
+pub enum TransformOp {
+    Translate(Point),
+    Rotate(Rotation),
+    Scale(Scale),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    pub axis: Direction,
+    pub degrees: Finite,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub material: Option<Spanned<String>>,
+    pub transform: Option<Vec<TransformOp>>,
+    pub center: Option<Point>,
+    pub radius: Option<Positive>,
+    pub point: Option<Point>,
+    pub normal: Option<Direction>,
+    pub corner: Option<Point>,
+    pub edge1: Option<Point>,
+    pub edge2: Option<Point>,
+    pub min: Option<Point>,
+    pub max: Option<Point>,
+    pub file: Option<Spanned<PathBuf>>,
+    pub p: Option<u32>,
+    pub q: Option<u32>,
+    pub tube: Option<Positive>,
+    pub segments: Option<u32>,
+    pub sides: Option<u32>,
+}
