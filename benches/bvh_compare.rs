@@ -76,7 +76,11 @@ struct Data {
 
 fn knot_prims() -> Vec<Primitive> {
     let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, 1600, 32);
-    mesh.triangles(0).0.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material: 0 }).collect()
+    mesh.triangles(0)
+        .0
+        .into_iter()
+        .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: caustic::geometry::NO_LIGHT })
+        .collect()
 }
 
 fn obvhs_tris(prims: &[Primitive]) -> Vec<obvhs::triangle::Triangle> {

@@ -12,8 +12,12 @@ fn main() {
 #[divan::bench(sample_count = 10)]
 fn bvh_build_100k_triangles(bencher: divan::Bencher) {
     let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, 1600, 32);
-    let prims: Vec<Primitive> =
-        mesh.triangles(0).0.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material: 0 }).collect();
+    let prims: Vec<Primitive> = mesh
+        .triangles(0)
+        .0
+        .into_iter()
+        .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: caustic::geometry::NO_LIGHT })
+        .collect();
     bencher.bench(|| Bvh::build(divan::black_box(prims.clone())));
 }
 

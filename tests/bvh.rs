@@ -24,7 +24,7 @@ fn random_scene(rng: &mut Rng32) -> Vec<Primitive> {
                 None => continue,
             },
         };
-        prims.push(Primitive { shape, material: i });
+        prims.push(Primitive { shape, material: i, light: caustic::geometry::NO_LIGHT });
     }
     prims
 }
@@ -63,13 +63,18 @@ fn bvh_matches_brute_force_on_10000_rays() {
 fn degenerate_inputs_build() {
     // Empty, one primitive, and many primitives with the same centroid.
     assert!(Bvh::build(vec![]).intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
-    let s = Primitive { shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0)), material: 0 };
+    let s = Primitive {
+        shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0)),
+        material: 0,
+        light: caustic::geometry::NO_LIGHT,
+    };
     let one = Bvh::build(vec![s]);
     assert!((one.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).unwrap().1.t - 2.0).abs() < 1e-6);
     let same: Vec<Primitive> = (0..1000)
         .map(|i| Primitive {
             shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0 + i as f32 * 1e-3)),
             material: i,
+            light: caustic::geometry::NO_LIGHT,
         })
         .collect();
     let bvh = Bvh::build(same);

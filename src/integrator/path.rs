@@ -6,7 +6,8 @@
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::Ray;
-use crate::material::bsdf::{Bsdf, Transport};
+use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
@@ -60,21 +61,22 @@ impl RayIntegrator for PathTracer {
             };
             let m = scene.material(&hit);
             let wo = -ray.d;
-            if m.is_emitter() && hit.is_front(ray.d) {
-                let le = m.emission;
+            if hit.is_emitter() && hit.is_front(ray.d) {
+                let le = scene.emitted(&hit, wo);
                 let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
                 if specular_bounce {
                     layers[k] += beta * le;
                 } else {
-                    let light = &scene.lights[m.light as usize];
-                    let light_pdf = scene.light_picker.prob(m.light as usize) * light.pdf(prev_p, hit.p, hit.ng, ray.d);
+                    let light = &scene.lights[hit.light as usize];
+                    let light_pdf =
+                        scene.light_picker.prob(hit.light as usize) * light.pdf(prev_p, hit.p, hit.ng, ray.d);
                     layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
                 }
             }
             if depth >= self.max_depth {
                 break;
             }
-            let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+            let bsdf = m.bsdf(&hit, wo);
             let specular_vertex = bsdf.is_specular_only();
             if reached_x {
                 vertices_after_x += 1;
@@ -98,7 +100,7 @@ impl RayIntegrator for PathTracer {
             let u = sampler.next_2d();
             let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
             beta *= s.weight;
-            specular_bounce = s.lobe.is_specular();
+            specular_bounce = s.flags.is_specular();
             prev_pdf = s.pdf;
             prev_p = hit.p;
             depth += 1;
@@ -132,7 +134,7 @@ pub fn direct_light(
     let Some((li, p_pick)) = scene.light_picker.pick(sampler.next_1d()) else { return Color::ZERO };
     let light = &scene.lights[li];
     let Some(ls) = light.sample(hit.p, sampler.next_2d()) else { return Color::ZERO };
-    let f = bsdf.f(wo, ls.wi);
+    let f = bsdf.f(wo, ls.wi, Transport::Radiance);
     if f == Color::ZERO {
         return Color::ZERO;
     }
@@ -141,6 +143,7 @@ pub fn direct_light(
     if !scene.unoccluded(hit, ls.wi, ls.dist) {
         return Color::ZERO;
     }
-    let w = if light.is_delta() || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi)) };
-    f * ls.irradiance * (cos * w / p_pick)
+    let w =
+        if ls.delta || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi, Transport::Radiance)) };
+    f * ls.weight() * (cos * w / p_pick)
 }

@@ -13,7 +13,8 @@
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
-use crate::material::bsdf::{Bsdf, Transport};
+use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
 use crate::photon::trace::{self, PhotonPass};
 use crate::photon::{Gathered, Photon, PhotonMap};
@@ -198,7 +199,7 @@ impl PhotonIntegrator {
                 Some(kc) => 1.0 - d2.sqrt() / (kc * r),
                 None => 1.0,
             };
-            sum += bsdf.f(wo, -dir) * ph.power() * w;
+            sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
         }
         let norm = match cone {
             Some(kc) => 1.0 - 2.0 / (3.0 * kc),
@@ -223,7 +224,7 @@ impl PhotonIntegrator {
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
                 let Some(ls) = light.sample(hit.p, sampler.rng().uniform2()) else { continue };
-                let f = bsdf.f(wo, ls.wi);
+                let f = bsdf.f(wo, ls.wi, Transport::Radiance);
                 if f == Color::ZERO {
                     continue;
                 }
@@ -231,7 +232,7 @@ impl PhotonIntegrator {
                 if !scene.unoccluded(hit, ls.wi, ls.dist) {
                     continue;
                 }
-                acc += f * ls.irradiance * ls.wi.dot(bsdf.normal()).abs();
+                acc += f * ls.weight() * ls.wi.dot(bsdf.normal()).abs();
             }
             sum += acc / n_samples as f32;
         }
@@ -257,7 +258,7 @@ impl PhotonIntegrator {
         let mut sum = Color::ZERO;
         for _ in 0..n {
             let wi = frame.to_world(cosine_hemisphere(sampler.next_2d()));
-            let f = bsdf.f(wo, wi);
+            let f = bsdf.f(wo, wi, Transport::Radiance);
             if f == Color::ZERO {
                 continue;
             }
@@ -267,11 +268,11 @@ impl PhotonIntegrator {
                 stats.rays += 1;
                 let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
                 let m = scene.material(&y);
-                if m.is_emitter() {
+                if y.is_emitter() {
                     break;
                 }
                 let wo_y = -ray.d;
-                let by = Bsdf::new(m, y.ns, y.ng, wo_y);
+                let by = m.bsdf(&y, wo_y);
                 if by.is_specular_only() {
                     let Some(s) =
                         by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
@@ -346,9 +347,9 @@ impl RayIntegrator for PhotonIntegrator {
             };
             let m = scene.material(&hit);
             let wo = -ray.d;
-            if m.is_emitter() {
+            if hit.is_emitter() {
                 if hit.is_front(ray.d) {
-                    layers[first] += beta * m.emission;
+                    layers[first] += beta * scene.emitted(&hit, wo);
                 }
                 break;
             }
@@ -356,7 +357,7 @@ impl RayIntegrator for PhotonIntegrator {
             if depth >= self.config.max_depth {
                 break;
             }
-            let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+            let bsdf = m.bsdf(&hit, wo);
             if bsdf.is_specular_only() {
                 if depth + 1 >= self.config.max_depth {
                     break;

@@ -67,8 +67,8 @@ impl Whitted {
         let wo = -ray.d;
 
         let mut c = Color::ZERO;
-        if m.is_emitter() && front {
-            c += m.emission;
+        if hit.is_emitter() && front {
+            c += scene.emitted(&hit, -ray.d);
         }
         if depth >= self.max_depth {
             return (c, Color::ZERO);
@@ -92,7 +92,7 @@ impl Whitted {
                     // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
                     let r = reflect(-ls.wi, n);
                     let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
-                    c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.irradiance * vis / n_samples as f32;
+                    c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.weight() * vis / n_samples as f32;
                 }
             }
         }

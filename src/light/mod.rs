@@ -1,24 +1,20 @@
 //! Light sources, in physical units. A closed set of `Copy` variants; each can be sampled from a
-//! shading point (for shadow rays and next-event estimation) and can emit photons.
+//! shading point (for shadow rays and next-event estimation) and can emit photons. Area lights
+//! belong to an emitting primitive, which knows its light by index (`Primitive::light`), and
+//! sample through a copy of that primitive's shape (`area`).
 //!
 //! Units: point and spot intensity in W/sr, directional irradiance in W/m^2, area-light radiance
 //! in W/(m^2 sr); scene lengths count as metres. The classic Whitted integrator reads the same
 //! values as the seed report's "light intensity" (colour x intensity, falling off as 1/d^2).
 
+mod area;
+
+pub use area::{Emitter, SurfaceSample};
+
 use crate::geometry::Ray;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
 use crate::sampling::warp::{concentric_disk, cosine_hemisphere, uniform_cone, uniform_sphere};
-use crate::shape::{Quad, Sphere};
 use std::f32::consts::PI;
-
-/// The surface of an area light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Emitter {
-    /// Emits from its front side (the side e1 x e2 points to).
-    Quad(Quad),
-    /// Emits outwards.
-    Sphere(Sphere),
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
@@ -31,22 +27,34 @@ pub enum Light {
     /// `irradiance` what a surface facing it receives. `scene_radius`/`scene_center` bound the
     /// scene, for its power and photon emission.
     Directional { direction: Vec3, irradiance: Color, scene_center: Vec3, scene_radius: f32 },
-    /// A shape emitting constant radiance; `prim` is its primitive in the BVH.
-    Area { emitter: Emitter, radiance: Color, prim: u32 },
+    /// A shape emitting constant radiance from its front side.
+    Area { emitter: Emitter, radiance: Color },
 }
 
-/// Light arriving at a point from one light sample.
+/// Light arriving at a point from one light sample: its contribution to a Monte Carlo estimate
+/// is `f * radiance * |cos| / pdf`.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
     /// Unit direction from the shading point towards the light.
     pub wi: Vec3,
     /// Distance to the sampled light point along `wi` (infinite for directional lights).
     pub dist: f32,
-    /// For delta lights: irradiance at normal incidence (multiply by cos theta). For area
-    /// lights: radiance / pdf (solid angle), i.e. the Monte Carlo weight of this sample.
-    pub irradiance: Color,
-    /// Solid-angle density of the sample (0 for delta lights, which cannot be hit by rays).
+    /// Radiance arriving along `wi`; for delta lights, the light's intensity over the squared
+    /// distance (or a directional light's irradiance), which acts as radiance with a delta density.
+    pub radiance: Color,
+    /// Solid-angle density of the sample; 1 for delta lights.
     pub pdf: f32,
+    /// The light is a delta light (point, spot, directional): no ray can hit it, so it takes no
+    /// part in multiple importance sampling.
+    pub delta: bool,
+}
+
+impl LightSample {
+    /// The sample's Monte Carlo weight: radiance / pdf.
+    #[inline]
+    pub fn weight(&self) -> Color {
+        self.radiance / self.pdf
+    }
 }
 
 /// A photon leaving a light: its ray and the flux it carries (before dividing by the number of
@@ -57,12 +65,6 @@ pub struct EmittedPhoton {
     pub flux: Color,
     /// Normal at the emission point (for spawning the ray off an area light).
     pub n: Vec3,
-}
-
-/// A point just off a light's surface on the side of `n`, so photons leaving it do not hit it.
-#[inline]
-pub fn off_surface(q: Vec3, n: Vec3) -> Vec3 {
-    q + n * (1e-5 * (1.0 + q.abs().max_element()))
 }
 
 #[inline]
@@ -96,7 +98,7 @@ impl Light {
                 intensity * 2.0 * PI * ((1.0 - cos_falloff) + (cos_falloff - cos_total) * 0.5)
             }
             Light::Directional { irradiance, scene_radius, .. } => irradiance * PI * scene_radius * scene_radius,
-            Light::Area { emitter, radiance, .. } => radiance * PI * emitter.area(),
+            Light::Area { emitter, radiance } => radiance * PI * emitter.area(),
         }
     }
 
@@ -104,6 +106,7 @@ impl Light {
     /// nothing from this sample (outside a spot cone, behind an area light, at the light).
     #[inline]
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        let delta = |wi, dist, radiance| LightSample { wi, dist, radiance, pdf: 1.0, delta: true };
         match *self {
             Light::Point { position, intensity } => {
                 let v = position - p;
@@ -112,7 +115,7 @@ impl Light {
                     return None;
                 }
                 let dist = d2.sqrt();
-                Some(LightSample { wi: v / dist, dist, irradiance: intensity / d2, pdf: 0.0 })
+                Some(delta(v / dist, dist, intensity / d2))
             }
             Light::Spot { position, direction, intensity, cos_total, cos_falloff } => {
                 let v = position - p;
@@ -123,24 +126,22 @@ impl Light {
                 let dist = d2.sqrt();
                 let wi = v / dist;
                 let f = Self::spot_falloff((-wi).dot(direction), cos_total, cos_falloff);
-                (f > 0.0).then(|| LightSample { wi, dist, irradiance: intensity * (f / d2), pdf: 0.0 })
+                (f > 0.0).then(|| delta(wi, dist, intensity * (f / d2)))
             }
-            Light::Directional { direction, irradiance, .. } => {
-                Some(LightSample { wi: -direction, dist: f32::INFINITY, irradiance, pdf: 0.0 })
-            }
-            Light::Area { emitter, radiance, .. } => {
-                let (q, n, pdf) = emitter.sample_towards(p, u)?;
-                let v = q - p;
+            Light::Directional { direction, irradiance, .. } => Some(delta(-direction, f32::INFINITY, irradiance)),
+            Light::Area { emitter, radiance } => {
+                let (s, pdf) = emitter.sample_towards(p, u)?;
+                let v = s.p - p;
                 let d2 = v.length_squared();
                 if !(d2 > 0.0) || !(pdf > 0.0) {
                     return None;
                 }
                 let dist = d2.sqrt();
                 let wi = v / dist;
-                if n.dot(-wi) <= 0.0 {
+                if s.n.dot(-wi) <= 0.0 {
                     return None;
                 }
-                Some(LightSample { wi, dist, irradiance: radiance / pdf, pdf })
+                Some(LightSample { wi, dist, radiance, pdf, delta: false })
             }
         }
     }
@@ -166,7 +167,8 @@ impl Light {
 
     /// Emits a photon: position and direction from the light's emission distribution. The flux
     /// is the light's emitted radiance (or intensity) divided by the sampling densities, so its
-    /// mean over many photons is the light's power.
+    /// mean over many photons is the light's power. Photons leave area lights from just outside
+    /// the sampled point's error bound.
     pub fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmittedPhoton> {
         match *self {
             Light::Point { position, intensity } => {
@@ -188,11 +190,12 @@ impl Light {
                 let area = PI * scene_radius * scene_radius;
                 Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance * area, n: direction })
             }
-            Light::Area { emitter, radiance, .. } => {
-                let (q, n, area) = emitter.sample_area(u_pos);
-                let d = Frame::from_z(n).to_world(cosine_hemisphere(u_dir));
+            Light::Area { emitter, radiance } => {
+                let s = emitter.sample_area(u_pos);
+                let d = Frame::from_z(s.n).to_world(cosine_hemisphere(u_dir));
                 // L cos / (pdf_area * cos / pi) = L * area * pi.
-                Some(EmittedPhoton { ray: Ray::new(off_surface(q, n), d), flux: radiance * (area * PI), n })
+                let ray = Ray::spawn(s.p, s.p_error, s.n, d, 0.0);
+                Some(EmittedPhoton { ray, flux: radiance * (emitter.area() * PI), n: s.n })
             }
         }
     }
@@ -203,91 +206,11 @@ impl Light {
     }
 }
 
-impl Emitter {
-    pub fn area(&self) -> f32 {
-        match self {
-            Emitter::Quad(q) => q.area(),
-            Emitter::Sphere(s) => 4.0 * PI * s.radius * s.radius,
-        }
-    }
-
-    /// A uniformly distributed point on the surface: (point, normal, area).
-    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, f32) {
-        match self {
-            Emitter::Quad(q) => (q.p0 + q.e1 * u.x + q.e2 * u.y, q.n, q.area()),
-            Emitter::Sphere(s) => {
-                let n = uniform_sphere(u);
-                (s.center + n * s.radius, n, self.area())
-            }
-        }
-    }
-
-    /// A point for shading point `p`: (point, normal, solid-angle pdf). Quads are sampled by area;
-    /// spheres by the cone they subtend (uniform in solid angle), or by area from inside.
-    #[inline]
-    pub fn sample_towards(&self, p: Vec3, u: Vec2) -> Option<(Vec3, Vec3, f32)> {
-        match self {
-            Emitter::Quad(q) => {
-                let x = q.p0 + q.e1 * u.x + q.e2 * u.y;
-                let v = x - p;
-                let d2 = v.length_squared();
-                let cos = q.n.dot(-v) / d2.sqrt();
-                if !(cos > 0.0) {
-                    return None;
-                }
-                Some((x, q.n, d2 / (cos * q.area())))
-            }
-            Emitter::Sphere(s) => {
-                let to_c = s.center - p;
-                let dc2 = to_c.length_squared();
-                let r2 = s.radius * s.radius;
-                if dc2 <= r2 * 1.0001 {
-                    return None;
-                }
-                let dc = dc2.sqrt();
-                let sin2_max = r2 / dc2;
-                let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-                let frame = Frame::from_z(to_c / dc);
-                let dir = frame.to_world(uniform_cone(u, cos_max));
-                // Where the direction meets the sphere (nearest root; grazing rounds to tangent).
-                let b = dir.dot(to_c);
-                let disc = (b * b - (dc2 - r2)).max(0.0);
-                let t = b - disc.sqrt();
-                let x = p + dir * t;
-                let n = (x - s.center).normalize();
-                Some((x, n, 1.0 / (2.0 * PI * (1.0 - cos_max))))
-            }
-        }
-    }
-
-    /// Density of `sample_towards` for the point `q` (normal `n`) seen from `p` along `wi`.
-    #[inline]
-    pub fn pdf_towards(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Emitter::Quad(quad) => {
-                let cos = n.dot(-wi);
-                if cos <= 0.0 {
-                    return 0.0;
-                }
-                (q - p).length_squared() / (cos * quad.area())
-            }
-            Emitter::Sphere(s) => {
-                let dc2 = (s.center - p).length_squared();
-                let r2 = s.radius * s.radius;
-                if dc2 <= r2 * 1.0001 {
-                    return 0.0;
-                }
-                let cos_max = (1.0 - r2 / dc2).max(0.0).sqrt();
-                1.0 / (2.0 * PI * (1.0 - cos_max))
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::Rng32;
+    use crate::shape::{Quad, Sphere};
 
     #[test]
     fn photon_flux_averages_to_power() {
@@ -307,12 +230,12 @@ mod tests {
                 scene_center: Vec3::ZERO,
                 scene_radius: 3.0,
             },
-            Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0), prim: 0 },
+            Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0) },
             Light::Area {
-                emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
-                radiance: Color::splat(1.5),
-                prim: 0,
+                emitter: Emitter::Triangle([Vec3::ZERO, Vec3::X * 2.0, Vec3::new(0.3, 1.5, -0.2)]),
+                radiance: Color::splat(2.5),
             },
+            Light::Area { emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)), radiance: Color::splat(1.5) },
         ];
         let mut rng = Rng32::new(3);
         for l in lights {
@@ -336,7 +259,8 @@ mod tests {
         let mut rng = Rng32::new(9);
         let p = Vec3::ZERO;
         for _ in 0..1000 {
-            let (q, n, pdf) = s.sample_towards(p, rng.uniform2()).unwrap();
+            let (ss, pdf) = s.sample_towards(p, rng.uniform2()).unwrap();
+            let (q, n) = (ss.p, ss.n);
             assert!(((q - Vec3::new(0.0, 0.0, -4.0)).length() - 1.0).abs() < 1e-4);
             let wi = (q - p).normalize();
             assert!((s.pdf_towards(p, q, n, wi) - pdf).abs() < 1e-4 * pdf);
@@ -350,7 +274,7 @@ mod tests {
         let mut omega = 0.0f64;
         let n = 100_000;
         for _ in 0..n {
-            let (_, _, pdf) = quad.sample_towards(above, rng.uniform2()).unwrap();
+            let (_, pdf) = quad.sample_towards(above, rng.uniform2()).unwrap();
             omega += 1.0 / pdf as f64;
         }
         omega /= n as f64;

@@ -3,9 +3,13 @@
 //! refraction, and the four kinds the report mixes in one scene.
 
 pub mod bsdf;
+pub mod bxdf;
 pub mod fresnel;
 
-use crate::math::Color;
+use crate::geometry::Hit;
+use crate::math::{Color, Vec3};
+use bsdf::Bsdf;
+use bxdf::{Bxdf, Dielectric, Lambert, Mirror, Phong, Transmission};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MaterialKind {
@@ -35,10 +39,6 @@ pub struct Material {
     pub kt: f32,
     /// Index of refraction of the inside of the object (Transparent, Dielectric).
     pub ior: f32,
-    /// Radiance emitted from the front side (area lights only).
-    pub emission: Color,
-    /// The area light this material belongs to (`u32::MAX` for none).
-    pub light: u32,
 }
 
 impl Default for Material {
@@ -53,16 +53,14 @@ impl Default for Material {
             kr: 0.0,
             kt: 0.0,
             ior: 1.5,
-            emission: Color::ZERO,
-            light: u32::MAX,
         }
     }
 }
 
 impl Material {
-    /// The material of an area light's surface: black, emitting `radiance`.
-    pub fn emitter(radiance: Color, light: u32) -> Self {
-        Material { color: Color::ZERO, ka: 0.0, kd: 0.0, emission: radiance, light, ..Material::default() }
+    /// A surface that reflects nothing (the surface of a plain area light).
+    pub fn black() -> Self {
+        Material { color: Color::ZERO, ka: 0.0, kd: 0.0, ..Material::default() }
     }
 
     /// True when the material has a perfectly specular (mirror or refracting) part, so light
@@ -76,9 +74,44 @@ impl Material {
         }
     }
 
-    #[inline]
-    pub fn is_emitter(&self) -> bool {
-        self.light != u32::MAX
+    /// The physical reading of the material at `hit`, seen from direction `wo` (towards the
+    /// viewer): a Lambertian lobe with albedo k_d x colour, a normalised Phong lobe with k_s,
+    /// a mirror with k_r, a fixed-transmittance refraction with k_t (`Transparent`), or the two
+    /// Fresnel-weighted lobes of a smooth dielectric. If the lobes' albedos add up to more than
+    /// one they are scaled down together, so no surface reflects more than it receives.
+    pub fn bsdf(&self, hit: &Hit, wo: Vec3) -> Bsdf {
+        let front = wo.dot(hit.ng) >= 0.0;
+        let mut bsdf = Bsdf::new(hit.shading_frame(), hit.ng, wo);
+        // The index of the side light enters over the side it comes from.
+        let eta = if front { self.ior } else { 1.0 / self.ior };
+        if self.kind == MaterialKind::Dielectric {
+            // A smooth dielectric is only its two Fresnel lobes: the classic model's diffuse and
+            // highlight terms on glass have no physical counterpart (highlights of area lights
+            // show up in the mirror lobe by themselves).
+            bsdf.add(Bxdf::Dielectric(Dielectric { eta }));
+            return bsdf;
+        }
+        let mut diffuse = self.color * self.kd;
+        let mut glossy = self.ks;
+        let (mut mirror, mut transmit) = match self.kind {
+            MaterialKind::Reflective => (Color::splat(self.kr), 0.0),
+            MaterialKind::Transparent => (Color::splat(self.kr), self.kt),
+            _ => (Color::ZERO, 0.0),
+        };
+        // Energy conservation: the lobes share at most all the light.
+        let total = (diffuse + Color::splat(glossy) + mirror + Color::splat(transmit)).max_element();
+        if total > 1.0 {
+            let s = 1.0 / total;
+            diffuse *= s;
+            glossy *= s;
+            mirror *= s;
+            transmit *= s;
+        }
+        bsdf.add(Bxdf::Lambert(Lambert { r: diffuse }));
+        bsdf.add(Bxdf::Phong(Phong { ks: glossy, exponent: self.exponent }));
+        bsdf.add(Bxdf::Mirror(Mirror { r: mirror }));
+        bsdf.add(Bxdf::Transmission(Transmission { t: transmit, eta }));
+        bsdf
     }
 
     /// True when light passes through the surface (refraction happens).

@@ -34,6 +34,25 @@ impl Frame {
         Frame { x, y, z: n }
     }
 
+    /// A frame around unit `n` whose x axis is `t` made perpendicular to `n` (Gram-Schmidt);
+    /// falls back to `from_z` when `t` is zero, not finite or parallel to `n`.
+    #[inline]
+    pub fn from_z_x(n: Vec3, t: Vec3) -> Self {
+        let x = t - n * n.dot(t);
+        let len2 = x.length_squared();
+        if !(len2 > 1e-12 * t.length_squared()) || !len2.is_finite() {
+            return Self::from_z(n);
+        }
+        let x = x / len2.sqrt();
+        Frame { x, y: n.cross(x), z: n }
+    }
+
+    /// The same frame seen from the other side: z reversed, x kept, y reversed (right-handed).
+    #[inline]
+    pub fn flipped(&self) -> Self {
+        Frame { x: self.x, y: -self.y, z: -self.z }
+    }
+
     #[inline]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.x * v.x + self.y * v.y + self.z * v.z
@@ -72,6 +91,16 @@ mod tests {
             assert!(f.y.dot(n).abs() < 1e-5);
             let v = Vec3::new(0.2, -0.5, 0.7);
             assert!(f.to_local(f.to_world(v)).abs_diff_eq(v, 1e-5));
+            // Built from a tangent: x follows it, and the frame is right-handed.
+            let t = Vec3::new(1.0, 2.0, -0.5);
+            let g = Frame::from_z_x(n, t);
+            assert!(g.x.dot(t) > 0.0 && g.x.dot(n).abs() < 1e-5 && (g.x.length() - 1.0).abs() < 1e-5);
+            assert!(g.x.cross(g.y).abs_diff_eq(g.z, 1e-5));
+            let h = g.flipped();
+            assert!(h.x.cross(h.y).abs_diff_eq(h.z, 1e-5) && h.z.abs_diff_eq(-n, 1e-6));
+            // A tangent along the normal falls back to an arbitrary frame.
+            let k = Frame::from_z_x(n, n * 3.0);
+            assert!(k.x.dot(n).abs() < 1e-5 && (k.x.length() - 1.0).abs() < 1e-5);
         }
     }
 }

@@ -16,6 +16,7 @@
 use crate::geometry::Ray;
 use crate::light::{EmittedPhoton, Light};
 use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
 use crate::math::{Color, Frame, Vec3};
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, hash_seed};
@@ -144,12 +145,12 @@ pub fn trace_photon(
     let mut only_specular = true;
     for depth in 0..MAX_BOUNCES {
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
-        let m = scene.material(&hit);
-        if m.is_emitter() {
+        if hit.is_emitter() {
             return;
         }
+        let m = scene.material(&hit);
         let wo = -ray.d;
-        let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+        let bsdf = m.bsdf(&hit, wo);
         if bsdf.has_diffuse() {
             let caustic = depth > 0 && only_specular;
             let n = bsdf.normal();
@@ -168,19 +169,38 @@ pub fn trace_photon(
             };
             out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
         }
-        let Some(s) = bsdf.scatter_photon(wo, rng.uniform(), rng.uniform2()) else { return };
-        if !s.lobe.is_specular() {
+        let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };
+        if !flags.is_specular() {
             only_specular = false;
             if caustic_only {
                 return;
             }
         }
-        flux *= s.weight;
-        if !flux.is_finite() || flux.max_element() <= 0.0 {
-            return;
-        }
-        ray = scene.spawn(&hit, s.wi);
+        flux = scattered;
+        ray = scene.spawn(&hit, wi);
     }
+}
+
+/// Scatters a photon carrying `flux` that arrived from direction `wo`: the BSDF samples a lobe
+/// and a direction (importance transport, weighted by that lobe: `Bsdf::sample_lobe`), and
+/// Russian roulette on the throughput decides whether it goes on (Jensen 2001 sec. 2.3 in
+/// pbrt-v4's form: survive with the ratio of the scattered to the incident flux's largest
+/// channel, then divide by it, so the photon's power stays the same). Returns the new
+/// direction, flux and the lobe's kind, or `None` when the photon is absorbed.
+pub fn scatter_photon(
+    bsdf: &Bsdf,
+    wo: Vec3,
+    flux: Color,
+    rng: &mut Rng32,
+) -> Option<(Vec3, Color, crate::material::bxdf::LobeFlags)> {
+    let s = bsdf.sample_lobe(wo, rng.uniform(), rng.uniform2(), Transport::Importance)?;
+    let scattered = flux * s.weight;
+    let q = (scattered.max_element() / flux.max_element()).min(1.0);
+    if !(q > 0.0) || rng.uniform() >= q {
+        return None;
+    }
+    let flux = scattered / q;
+    (flux.is_finite() && flux.max_element() > 0.0).then_some((s.wi, flux, s.flags))
 }
 
 /// Solid angle and cone of a target sphere seen from `p`: (axis, cos of the half-angle, solid
@@ -225,12 +245,12 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         return Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction });
     }
     // Position (on area lights), then a direction towards one of the targets.
-    let (p, n, pos_weight, radiance_like) = match *light {
-        Light::Point { position, intensity } => (position, Vec3::ZERO, 1.0, intensity),
-        Light::Spot { position, intensity, .. } => (position, Vec3::ZERO, 1.0, intensity),
-        Light::Area { emitter, radiance, .. } => {
-            let (q, n, area) = emitter.sample_area(u_pos);
-            (q, n, area, radiance)
+    let (p, p_error, n, pos_weight, radiance_like) = match *light {
+        Light::Point { position, intensity } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity),
+        Light::Spot { position, intensity, .. } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity),
+        Light::Area { emitter, radiance } => {
+            let s = emitter.sample_area(u_pos);
+            (s.p, s.p_error, s.n, emitter.area(), radiance)
         }
         Light::Directional { .. } => unreachable!(),
     };
@@ -256,8 +276,8 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         }
         Light::Directional { .. } => unreachable!(),
     };
-    let (o, n_out) = if n == Vec3::ZERO { (p, d) } else { (crate::light::off_surface(p, n), n) };
-    Some(EmittedPhoton { ray: Ray::new(o, d), flux: emitted / pdf_dir, n: n_out })
+    let (ray, n_out) = if n == Vec3::ZERO { (Ray::new(p, d), d) } else { (Ray::spawn(p, p_error, n, d, 0.0), n) };
+    Some(EmittedPhoton { ray, flux: emitted / pdf_dir, n: n_out })
 }
 
 /// Index chosen from `weights` in proportion to them, by the uniform number `u`.

@@ -9,7 +9,7 @@ use super::Scene;
 use super::desc::{LoadInfo, ShadingDesc};
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, NO_LIGHT};
 use crate::light::{Emitter, Light, LightPicker};
 use crate::material::Material;
 use crate::math::Vec3;
@@ -56,7 +56,7 @@ impl SceneBuilder {
     /// Adds one object made of `shapes` (a sphere, a quad, the six faces of a box).
     pub fn add_object(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
         let first = self.prims.len();
-        self.prims.extend(shapes.into_iter().map(|shape| Primitive { shape, material }));
+        self.prims.extend(shapes.into_iter().map(|shape| Primitive { shape, material, light: NO_LIGHT }));
         self.note_specular(first, material);
     }
 
@@ -67,7 +67,7 @@ impl SceneBuilder {
         let (tris, skipped) = mesh.triangles(id);
         self.triangles += tris.len();
         self.degenerate_triangles += skipped;
-        self.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material }));
+        self.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material, light: NO_LIGHT }));
         self.meshes.push(mesh);
         self.note_specular(first, material);
     }
@@ -84,18 +84,10 @@ impl SceneBuilder {
     /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
     /// reflects with (a reflecting emitter); `None` makes it black.
     pub fn add_area_light(&mut self, emitter: Emitter, radiance: crate::math::Color, surface: Option<Material>) {
-        let light_index = self.lights.len() as u32;
-        let mut material = surface.unwrap_or_else(|| Material::emitter(radiance, light_index));
-        material.emission = radiance;
-        material.light = light_index;
-        let m = self.add_material(format!("(area light {})", light_index + 1), material);
-        let prim = self.area_prims.len() as u32;
-        let shape = match emitter {
-            Emitter::Quad(q) => Shape::Quad(q),
-            Emitter::Sphere(s) => Shape::Sphere(s),
-        };
-        self.area_prims.push(Primitive { shape, material: m });
-        self.lights.push(Light::Area { emitter, radiance, prim });
+        let light = self.lights.len() as u32;
+        let m = self.add_material(format!("(area light {})", light + 1), surface.unwrap_or_else(Material::black));
+        self.area_prims.push(Primitive { shape: emitter.shape(), material: m, light });
+        self.lights.push(Light::Area { emitter, radiance });
     }
 
     /// Records the bounding sphere of the object whose primitives start at `first`, when its

@@ -15,11 +15,11 @@ pub use error::SceneError;
 
 use crate::accel::Bvh;
 use crate::camera::Camera;
-use crate::geometry::{Aabb, Hit, Ray};
+use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
 use crate::light::{Light, LightPicker};
 use crate::material::Material;
 use crate::math::Color;
-use crate::shape::{Plane, TriangleMesh};
+use crate::shape::{Plane, SurfacePoint, TriangleMesh};
 use std::path::Path;
 
 /// Reads a scene file: Mitsuba 3 XML for `.xml`, caustic's TOML format otherwise.
@@ -88,20 +88,38 @@ impl Scene {
         if let Some((k, h)) = best_plane {
             let (plane, material) = &self.planes[k];
             let sp = plane.surface(ray, &h);
-            return Some(Hit {
-                t: h.t,
-                p: sp.p,
-                p_error: sp.p_error,
-                ng: sp.ng,
-                ns: sp.ns,
-                material: *material,
-                prim: u32::MAX - k as u32,
-            });
+            return Some(Self::hit(h.t, &sp, *material, NO_LIGHT, u32::MAX - k as u32));
         }
         let (i, h) = best?;
         let prim = &self.bvh.prims[i as usize];
         let sp = prim.shape.surface(ray, &h, &self.meshes);
-        Some(Hit { t: h.t, p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, material: prim.material, prim: i })
+        Some(Self::hit(h.t, &sp, prim.material, prim.light, i))
+    }
+
+    #[inline]
+    fn hit(t: f32, sp: &SurfacePoint, material: u32, light: u32, prim: u32) -> Hit {
+        Hit {
+            t,
+            p: sp.p,
+            p_error: sp.p_error,
+            ng: sp.ng,
+            ns: sp.ns,
+            uv: sp.uv,
+            dpdu: sp.dpdu,
+            dpdv: sp.dpdv,
+            material,
+            light,
+            prim,
+        }
+    }
+
+    /// Radiance the surface at `h` emits towards `w` (zero unless it is an area light).
+    #[inline]
+    pub fn emitted(&self, h: &Hit, w: crate::math::Vec3) -> Color {
+        match self.lights.get(h.light as usize) {
+            Some(light) => light.emitted(h.ng, w),
+            None => Color::ZERO,
+        }
     }
 
     /// True when anything blocks the ray in (0, t_max).

@@ -14,7 +14,7 @@ pub use sphere::Sphere;
 pub use triangle::{RayShear, Triangle, intersect_triangle};
 
 use crate::geometry::{Aabb, Ray};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// What the BVH needs to know about a candidate hit; the full `Hit` is built only for the winner.
 #[derive(Clone, Copy, Debug)]
@@ -25,13 +25,17 @@ pub struct PrimHit {
     pub v: f32,
 }
 
-/// Surface geometry at a hit: point, its error bound, geometric and shading normals.
+/// Surface geometry at a hit: point, its error bound, geometric and shading normals, and the
+/// surface's parameterisation there.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfacePoint {
     pub p: Vec3,
     pub p_error: Vec3,
     pub ng: Vec3,
     pub ns: Vec3,
+    pub uv: Vec2,
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -62,11 +66,14 @@ impl CompactShape {
     }
 }
 
-/// A shape with its material: one element of the BVH.
+/// A shape with its material and, when it emits, its light: one element of the BVH. The light
+/// index stays valid however the BVH reorders primitives.
 #[derive(Clone, Copy, Debug)]
 pub struct Primitive {
     pub shape: Shape,
     pub material: u32,
+    /// Index of the light this primitive emits (`geometry::NO_LIGHT` for none).
+    pub light: u32,
 }
 
 impl Shape {
@@ -96,7 +103,7 @@ impl Shape {
         }
     }
 
-    /// Surface data at a hit found by `intersect`. `meshes` supplies smooth vertex normals.
+    /// Surface data at a hit found by `intersect`. `meshes` supplies vertex normals and uv.
     #[inline]
     pub fn surface(&self, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
         match self {

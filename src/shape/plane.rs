@@ -2,8 +2,8 @@
 
 use super::{PrimHit, SurfacePoint};
 use crate::geometry::Ray;
-use crate::math::Vec3;
 use crate::math::float::gamma;
+use crate::math::{Frame, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
@@ -30,7 +30,11 @@ impl Plane {
         // Project onto the plane: the remaining error is that of one dot product and subtraction.
         let p = p - self.normal * self.normal.dot(p - self.point);
         let p_error = gamma(6) * (p.abs() + self.point.abs());
-        SurfacePoint { p, p_error, ng: self.normal, ns: self.normal }
+        // Coordinates in the plane, in scene units, along a fixed tangent frame.
+        let frame = Frame::from_z(self.normal);
+        let d = p - self.point;
+        let uv = Vec2::new(d.dot(frame.x), d.dot(frame.y));
+        SurfacePoint { p, p_error, ng: self.normal, ns: self.normal, uv, dpdu: frame.x, dpdv: frame.y }
     }
 }
 

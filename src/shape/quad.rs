@@ -3,8 +3,8 @@
 
 use super::{PrimHit, SurfacePoint};
 use crate::geometry::{Aabb, Ray, Transform};
-use crate::math::Vec3;
 use crate::math::float::gamma;
+use crate::math::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
@@ -44,7 +44,7 @@ impl Quad {
         let b = self.e2 * h.v;
         let p = self.p0 + a + b;
         let p_error = gamma(6) * (self.p0.abs() + a.abs() + b.abs());
-        SurfacePoint { p, p_error, ng: self.n, ns: self.n }
+        SurfacePoint { p, p_error, ng: self.n, ns: self.n, uv: Vec2::new(h.u, h.v), dpdu: self.e1, dpdv: self.e2 }
     }
 }
 

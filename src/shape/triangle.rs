@@ -6,8 +6,8 @@
 
 use super::{PrimHit, SurfacePoint, TriangleMesh};
 use crate::geometry::{Aabb, Ray};
-use crate::math::Vec3;
 use crate::math::float::gamma;
+use crate::math::{Vec2, Vec3};
 
 /// Per-ray constants of the watertight test: the axis permutation and shear. Computed once per
 /// traversal, not once per triangle.
@@ -77,16 +77,34 @@ impl Triangle {
             ng = Vec3::Z;
         }
         let mut ns = ng;
-        if let Some(mesh) = meshes.get(self.mesh as usize)
-            && let Some(n) = mesh.shading_normal(self.index as usize, b0, b1, b2)
-        {
+        let mesh = meshes.get(self.mesh as usize);
+        if let Some(n) = mesh.and_then(|m| m.shading_normal(self.index as usize, b0, b1, b2)) {
             ns = n;
             // Vertex normals define the outward side of a smooth mesh.
             if ng.dot(ns) < 0.0 {
                 ng = -ng;
             }
         }
-        SurfacePoint { p, p_error, ng, ns }
+        // Without texture coordinates the triangle's own are (0, 0), (1, 0), (0, 1), as in
+        // Mitsuba: uv = (b1, b2), dp/du = p1 - p0, dp/dv = p2 - p0.
+        let mut uv = Vec2::new(b1, b2);
+        let (mut dpdu, mut dpdv) = (p1 - p0, p2 - p0);
+        if let Some(t) = mesh.and_then(|m| m.vertex_uvs(self.index as usize)) {
+            uv = t[0] * b0 + t[1] * b1 + t[2] * b2;
+            // Solve p_i - p_2 = dp/du (u_i - u_2) + dp/dv (v_i - v_2) for i = 0, 1 (pbrt-v4 6.5.3);
+            // degenerate texture coordinates keep the barycentric derivatives.
+            let (d02, d12) = (t[0] - t[2], t[1] - t[2]);
+            let det = d02.x * d12.y - d02.y * d12.x;
+            if det.abs() > 1e-12 {
+                let inv = 1.0 / det;
+                let (dp02, dp12) = (p0 - p2, p1 - p2);
+                let (u, v) = ((d12.y * dp02 - d02.y * dp12) * inv, (d02.x * dp12 - d12.x * dp02) * inv);
+                if u.is_finite() && v.is_finite() {
+                    (dpdu, dpdv) = (u, v);
+                }
+            }
+        }
+        SurfacePoint { p, p_error, ng, ns, uv, dpdu, dpdv }
     }
 }
 

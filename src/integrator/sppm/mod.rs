@@ -25,7 +25,8 @@ mod grid;
 
 use super::path::direct_light;
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Image, SPECULAR};
-use crate::material::bsdf::{Bsdf, Transport};
+use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
 use crate::photon::trace::{self, PhotonHit};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
@@ -248,7 +249,7 @@ impl Sppm {
                         if (ph.p - v.p).length_squared() > r2 || ph.dir.dot(v.bsdf.normal()) >= 0.0 {
                             return;
                         }
-                        let f = v.bsdf.f(v.wo, -ph.dir);
+                        let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
                         if f != Color::ZERO {
                             m += 1;
                             phi += f * ph.flux;
@@ -306,9 +307,9 @@ impl Sppm {
             dist += hit.t;
             let m = scene.material(&hit);
             let wo = -ray.d;
-            if m.is_emitter() {
+            if hit.is_emitter() {
                 if hit.is_front(ray.d) {
-                    ld += beta * m.emission;
+                    ld += beta * scene.emitted(&hit, wo);
                 }
                 break;
             }
@@ -316,7 +317,7 @@ impl Sppm {
             if depth >= config.max_depth {
                 break;
             }
-            let bsdf = Bsdf::new(m, hit.ns, hit.ng, wo);
+            let bsdf = m.bsdf(&hit, wo);
             if bsdf.is_specular_only() {
                 if depth + 1 >= config.max_depth {
                     break;

@@ -8,7 +8,7 @@ use crate::geometry::Transform;
 use crate::light::Emitter;
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
-use crate::shape::{Quad, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
+use crate::shape::{Quad, Sphere, TriangleMesh, box_faces, transformed_quad};
 
 /// Triangles in the fan that stands in for a `disk`.
 const DISK_SEGMENTS: u32 = 128;
@@ -112,7 +112,16 @@ impl<'a> Cx<'a> {
                     if self.boolean(&p, "face_normals")? == Some(true) {
                         mesh.normals = None;
                     }
-                    let _ = self.boolean(&p, "flip_tex_coords")?;
+                    // Our OBJ reader flips v as Mitsuba does by default; PLY is read as it is.
+                    let flipped_on_read = kind == "obj";
+                    if let Some(flip) = self.boolean(&p, "flip_tex_coords")?
+                        && flip != flipped_on_read
+                        && let Some(uvs) = &mut mesh.uvs
+                    {
+                        for t in uvs {
+                            t.y = 1.0 - t.y;
+                        }
+                    }
                     mesh
                 };
                 let mut mesh = mesh.transformed(&to_world);
@@ -176,11 +185,7 @@ impl<'a> Cx<'a> {
             b.geometry.add_mesh(mesh, material);
         }
         if !emitters_out.is_empty() {
-            let shapes = emitters_out.into_iter().map(|e| match e {
-                Emitter::Quad(q) => Shape::Quad(q),
-                Emitter::Sphere(s) => Shape::Sphere(s),
-            });
-            b.geometry.add_object(shapes, material);
+            b.geometry.add_object(emitters_out.iter().map(Emitter::shape), material);
         }
         self.finish(&p)
     }
@@ -198,7 +203,7 @@ fn disk_mesh(n: u32) -> TriangleMesh {
     }));
     let indices = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
     let normals = Some(vec![Vec3::Z; positions.len()]);
-    TriangleMesh { positions, normals, indices }
+    TriangleMesh { positions, normals, uvs: None, indices }
 }
 
 /// A mesh of two triangles that form a planar parallelogram, as a quad facing the triangles'

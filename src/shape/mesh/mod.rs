@@ -6,7 +6,7 @@ pub use ply::load_ply;
 
 use super::Triangle;
 use crate::geometry::Transform;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::path::Path;
 
 #[derive(Clone, Debug, Default)]
@@ -14,6 +14,9 @@ pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex shading normals, when the file gave them (or a generator computed them).
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, stored as Mitsuba stores them (v = 0 is the top row of an
+    /// image texture; OBJ files are flipped on reading, PLY files are not).
+    pub uvs: Option<Vec<Vec2>>,
     pub indices: Vec<[u32; 3]>,
 }
 
@@ -36,6 +39,7 @@ impl TriangleMesh {
             tobj::load_obj(path, &opts).map_err(|e| MeshError::Load { path: shown.clone(), message: e.to_string() })?;
         let mut mesh = TriangleMesh::default();
         let mut all_normals = true;
+        let mut all_uvs = true;
         for m in &models {
             let base = mesh.positions.len() as u32;
             let m = &m.mesh;
@@ -53,6 +57,13 @@ impl TriangleMesh {
             } else {
                 all_normals = false;
             }
+            if m.texcoords.len() == 2 * n_verts {
+                // OBJ's v runs up an image; Mitsuba's OBJ reader flips it (`flip_tex_coords`).
+                let uvs = mesh.uvs.get_or_insert_with(Vec::new);
+                uvs.extend(m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])));
+            } else {
+                all_uvs = false;
+            }
             for c in m.indices.chunks_exact(3) {
                 if c.iter().any(|&i| i as usize >= n_verts) {
                     return Err(MeshError::Invalid {
@@ -65,6 +76,9 @@ impl TriangleMesh {
         }
         if !all_normals {
             mesh.normals = None;
+        }
+        if !all_uvs {
+            mesh.uvs = None;
         }
         if mesh.indices.is_empty() {
             return Err(MeshError::Invalid { path: shown, message: "no triangles".into() });
@@ -112,7 +126,7 @@ impl TriangleMesh {
                 indices.push([v(i, j), v(i1, j1), v(i, j1)]);
             }
         }
-        TriangleMesh { positions, normals: Some(normals), indices }
+        TriangleMesh { positions, normals: Some(normals), uvs: None, indices }
     }
 
     /// The mesh with positions and normals moved by `t`.
@@ -136,6 +150,14 @@ impl TriangleMesh {
         let n = ns[i0 as usize] * b0 + ns[i1 as usize] * b1 + ns[i2 as usize] * b2;
         let n = n.normalize_or_zero();
         (n != Vec3::ZERO).then_some(n)
+    }
+
+    /// Texture coordinates of the three vertices of triangle `tri`, when the mesh has them.
+    #[inline]
+    pub fn vertex_uvs(&self, tri: usize) -> Option<[Vec2; 3]> {
+        let uvs = self.uvs.as_ref()?;
+        let [i0, i1, i2] = *self.indices.get(tri)?;
+        Some([uvs[i0 as usize], uvs[i1 as usize], uvs[i2 as usize]])
     }
 
     /// The mesh's triangles for the BVH, tagged with `mesh_id`; zero-area triangles are skipped

@@ -1,7 +1,7 @@
 //! PLY meshes (ASCII and binary, little- and big-endian) read with `ply-rs-bw`.
 
 use super::TriangleMesh;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use std::path::Path;
 
 /// Loads a PLY mesh (ASCII or binary): vertex x, y, z (and nx, ny, nz when present) and faces
@@ -45,6 +45,11 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
     let mut normals = Vec::new();
     let has_normals =
         vertices.first().is_some_and(|v| v.contains_key("nx") && v.contains_key("ny") && v.contains_key("nz"));
+    // Texture coordinates go by several names; Mitsuba reads u/v, texture_u/texture_v and s/t.
+    let uv_names = [("u", "v"), ("texture_u", "texture_v"), ("s", "t")]
+        .into_iter()
+        .find(|(u, v)| vertices.first().is_some_and(|e| e.contains_key(*u) && e.contains_key(*v)));
+    let mut uvs = Vec::new();
     for (i, v) in vertices.iter().enumerate() {
         let get = |k: &str| v.get(k).and_then(num);
         let (Some(x), Some(y), Some(z)) = (get("x"), get("y"), get("z")) else {
@@ -62,6 +67,9 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
                 get("ny").unwrap_or(0.0) as f32,
                 get("nz").unwrap_or(0.0) as f32,
             ));
+        }
+        if let Some((u, v)) = uv_names {
+            uvs.push(Vec2::new(get(u).unwrap_or(0.0) as f32, get(v).unwrap_or(0.0) as f32));
         }
     }
     let faces = ply.payload.get("face").ok_or_else(|| invalid("no `face` element".into()))?;
@@ -82,5 +90,5 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
     if indices.is_empty() {
         return Err(invalid("no triangles".into()));
     }
-    Ok(TriangleMesh { positions, normals: has_normals.then_some(normals), indices })
+    Ok(TriangleMesh { positions, normals: has_normals.then_some(normals), uvs: uv_names.map(|_| uvs), indices })
 }
