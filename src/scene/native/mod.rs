@@ -298,6 +298,5 @@ fn material(desc: &MaterialDesc, kind: &str) -> Material {
         ),
         kt: desc.kt.map_or(if kind == MaterialKind::Transparent { 0.9 } else { 0.0 }, |v| v.0),
         ior: desc.ior.map_or(d.ior, |v| v.0),
-        ..d
     }
 }
