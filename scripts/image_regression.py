@@ -13,7 +13,9 @@ two builds of caustic, compared bit for bit, by mean luminance and by RMSE again
 
 `compare` prints one row per (scene, integrator): whether the two images are bit-identical, the
 ratio of their mean luminances (new / old), and, with --ref, the RMSE of each against the
-reference and their ratio. It exits with status 1 when a pair that is not bit-identical has a
+reference and their ratio. With `render --seeds K` every image is rendered with K seeds and the
+comparison averages over them (means of the K images, RMSE averaged over the K renders), which
+takes the noise of a single render out of the figures. It exits with status 1 when a pair that is not bit-identical has a
 mean luminance more than 0.5% apart or an RMSE more than 5% worse than the old one (the
 acceptance rule of the architecture issue); `--allow SCENE:INTEGRATOR` exempts a pair whose
 image changed on purpose (a fixed bug), which the table still shows.
@@ -27,6 +29,7 @@ import argparse
 import glob
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -74,19 +77,21 @@ def render(args):
     times = {}
     for scene in scenes():
         for integrator, settings in SETTINGS.items():
-            out = os.path.join(args.out, f"{key(scene)}.{integrator}.exr")
             extra = scaled(settings, REFERENCE_FACTOR) if args.reference else settings
-            seed = "7" if args.reference else "1"
-            cmd = [args.bin, "render", scene, "-o", out, "-q", "--seed", seed, "--integrator", integrator]
-            cmd += SIZE + extra
-            t0 = time.time()
-            r = subprocess.run(cmd, capture_output=True, text=True)
-            took = time.time() - t0
-            if r.returncode != 0:
-                print(f"FAILED {key(scene)} {integrator}: {r.stderr.strip()}", file=sys.stderr)
-                continue
-            times[f"{key(scene)}.{integrator}"] = took
-            print(f"{key(scene):32} {integrator:8} {took:6.2f} s", flush=True)
+            seeds = ["7"] if args.reference else [str(s) for s in range(1, args.seeds + 1)]
+            for seed in seeds:
+                suffix = "" if len(seeds) == 1 else f".s{seed}"
+                out = os.path.join(args.out, f"{key(scene)}.{integrator}{suffix}.exr")
+                cmd = [args.bin, "render", scene, "-o", out, "-q", "--seed", seed, "--integrator", integrator]
+                cmd += SIZE + extra
+                t0 = time.time()
+                r = subprocess.run(cmd, capture_output=True, text=True)
+                took = time.time() - t0
+                if r.returncode != 0:
+                    print(f"FAILED {key(scene)} {integrator}: {r.stderr.strip()}", file=sys.stderr)
+                    continue
+                times[f"{key(scene)}.{integrator}{suffix}"] = took
+                print(f"{key(scene):32} {integrator:8} {seed:>3} {took:6.2f} s", flush=True)
     with open(os.path.join(args.out, "times.json"), "w") as f:
         json.dump(times, f, indent=1)
 
@@ -117,24 +122,31 @@ def compare(args):
         header += " RMSE old | RMSE new | new/old |"
     print(header)
     print("|" + "---|" * (header.count("|") - 1))
+    # Group the files of one (scene, integrator) over their seeds.
+    groups = {}
     for old_path in sorted(glob.glob(os.path.join(args.old, "*.exr"))):
-        name = os.path.basename(old_path)
-        new_path = os.path.join(args.new, name)
-        scene, integrator = name[: -len(".exr")].rsplit(".", 1)
-        if not os.path.exists(new_path):
+        name = os.path.basename(old_path)[: -len(".exr")]
+        base = re.sub(r"\.s\d+$", "", name)
+        groups.setdefault(base, []).append(os.path.basename(old_path))
+    for base, names in groups.items():
+        scene, integrator = base.rsplit(".", 1)
+        missing = [n for n in names if not os.path.exists(os.path.join(args.new, n))]
+        if missing:
             print(f"| {scene} | {integrator} | missing | |")
             failures += 1
             continue
-        old, new = read_rgb(old_path), read_rgb(new_path)
-        identical = old.shape == new.shape and np.array_equal(old, new)
-        lo, ln = luminance(old), luminance(new)
+        olds = [read_rgb(os.path.join(args.old, n)) for n in names]
+        news = [read_rgb(os.path.join(args.new, n)) for n in names]
+        identical = all(a.shape == b.shape and np.array_equal(a, b) for a, b in zip(olds, news))
+        lo, ln = luminance(np.mean(olds, axis=0)), luminance(np.mean(news, axis=0))
         ratio = ln / lo if lo > 0 else (1.0 if ln == 0 else float("inf"))
         row = f"| {scene} | {integrator} | {'yes' if identical else 'no'} | {ratio:.4f} |"
         bad = not identical and abs(ratio - 1) > 0.005
-        ref_path = os.path.join(args.ref, name) if args.ref else None
+        ref_path = os.path.join(args.ref, base + ".exr") if args.ref else None
         if ref_path and os.path.exists(ref_path):
             ref = read_rgb(ref_path)
-            eo, en = rmse(old, ref), rmse(new, ref)
+            eo = float(np.mean([rmse(a, ref) for a in olds]))
+            en = float(np.mean([rmse(b, ref) for b in news]))
             r = en / eo if eo > 0 else 1.0
             row += f" {eo:.5f} | {en:.5f} | {r:.3f} |"
             bad = bad or (not identical and r > 1.05)
@@ -155,6 +167,7 @@ def main():
     r.add_argument("--bin", required=True)
     r.add_argument("--out", required=True)
     r.add_argument("--reference", action="store_true", help="8x the samples, another seed")
+    r.add_argument("--seeds", type=int, default=1, help="render each image with seeds 1..K")
     c = sub.add_parser("compare")
     c.add_argument("old")
     c.add_argument("new")

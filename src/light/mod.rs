@@ -282,6 +282,23 @@ mod tests {
         let (a, b, d) = (1.0f64, 1.0f64, 3.0f64);
         let exact = 4.0 * (a * b / ((a * a + d * d) * (b * b + d * d)).sqrt()).asin();
         assert!((omega - exact).abs() < 0.01 * exact, "{omega} vs {exact}");
+        // A triangle (facing +y, seen from above) against Van Oosterom and Strackee's formula
+        // tan(omega / 2) = |a . (b x c)| / (abc + (a . b) c + (a . c) b + (b . c) a).
+        let tri = [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(0.5, 2.0, 1.0), Vec3::new(1.5, 2.0, -0.5)];
+        let t = Emitter::Triangle(tri);
+        let mut omega = 0.0f64;
+        for _ in 0..n {
+            let (s, pdf) = t.sample_towards(above, rng.uniform2()).unwrap();
+            let wi = (s.p - above).normalize();
+            assert!((t.pdf_towards(above, s.p, s.n, wi) - pdf).abs() <= 1e-3 * pdf);
+            omega += 1.0 / pdf as f64;
+        }
+        omega /= n as f64;
+        let [a, b, c] = tri.map(|v| (v - above).as_dvec3());
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let exact =
+            2.0 * (a.dot(b.cross(c)).abs() / (la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la)).atan();
+        assert!((omega - exact).abs() < 0.01 * exact, "triangle: {omega} vs {exact}");
     }
 }
 
