@@ -97,10 +97,10 @@ fn hits_carry_uv_and_tangents_from_obj_ply_and_quads() {
     let s = caustic::app::load_toml_str(text, "t.toml", &dir, &Default::default()).unwrap().scene;
     // At (-0.5, -0.5): barycentrics b1 = 0.25, b2 = 0.25.
     let h = s.intersect(&Ray::new(Vec3::new(-0.5, -0.5, 5.0), -Vec3::Z), f32::INFINITY).unwrap();
-    assert!((h.uv.x - 0.25).abs() < 1e-5 && (h.uv.y - 0.75).abs() < 1e-5, "OBJ v is flipped: {}", h.uv);
+    assert!((h.uv().x - 0.25).abs() < 1e-5 && (h.uv().y - 0.75).abs() < 1e-5, "OBJ v is flipped: {}", h.uv());
     // u grows along +x: dp/du = (2, 0, 0); v (flipped) grows along -y.
-    assert!(h.dpdu.abs_diff_eq(Vec3::new(2.0, 0.0, 0.0), 1e-5), "{}", h.dpdu);
-    assert!(h.dpdv.abs_diff_eq(Vec3::new(0.0, -2.0, 0.0), 1e-5), "{}", h.dpdv);
+    assert!(h.dpdu().abs_diff_eq(Vec3::new(2.0, 0.0, 0.0), 1e-5), "{}", h.dpdu());
+    assert!(h.dpdv().abs_diff_eq(Vec3::new(0.0, -2.0, 0.0), 1e-5), "{}", h.dpdv());
     // The shading frame follows dp/du.
     assert!(h.shading_frame().x.abs_diff_eq(Vec3::X, 1e-5));
     // PLY (through a Mitsuba scene): u, v as in the file.
@@ -110,14 +110,16 @@ fn hits_carry_uv_and_tangents_from_obj_ply_and_quads() {
     let desc = caustic::scene::mitsuba::load_mitsuba_str(xml, "t.xml", &dir, &Default::default()).unwrap();
     let s = caustic::app::prepare(desc, &Default::default()).unwrap().scene;
     let h = s.intersect(&Ray::new(Vec3::new(-0.5, -0.5, 5.0), -Vec3::Z), f32::INFINITY).unwrap();
-    assert!(h.uv.abs_diff_eq(caustic::math::Vec2::new(0.25, 0.25), 1e-5), "PLY uv {}", h.uv);
+    assert!(h.uv().abs_diff_eq(caustic::math::Vec2::new(0.25, 0.25), 1e-5), "PLY uv {}", h.uv());
     // A quad: uv along its edges.
     let text = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"quad\"\n\
                 corner = [-1, -1, 0]\nedge1 = [2, 0, 0]\nedge2 = [0, 4, 0]\n";
     let s = caustic::app::load_toml_str(text, "q.toml", &dir, &Default::default()).unwrap().scene;
     let h = s.intersect(&Ray::new(Vec3::new(0.5, 0.0, 5.0), -Vec3::Z), f32::INFINITY).unwrap();
-    assert!(h.uv.abs_diff_eq(caustic::math::Vec2::new(0.75, 0.25), 1e-5), "quad uv {}", h.uv);
-    assert!(h.dpdu.abs_diff_eq(Vec3::new(2.0, 0.0, 0.0), 1e-6) && h.dpdv.abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-6));
+    assert!(h.uv().abs_diff_eq(caustic::math::Vec2::new(0.75, 0.25), 1e-5), "quad uv {}", h.uv());
+    assert!(
+        h.dpdu().abs_diff_eq(Vec3::new(2.0, 0.0, 0.0), 1e-6) && h.dpdv().abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-6)
+    );
 }
 
 /// Issue 10: an emitting primitive knows its light, whatever order the BVH puts primitives in,

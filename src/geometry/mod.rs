@@ -6,6 +6,6 @@ mod ray;
 mod transform;
 
 pub use aabb::Aabb;
-pub use hit::{Hit, NO_LIGHT};
+pub use hit::{Hit, NO_LIGHT, SurfaceParam};
 pub use ray::Ray;
 pub use transform::Transform;

@@ -59,7 +59,6 @@ impl RayIntegrator for PathTracer {
                 layers[k] += beta * scene.background;
                 break;
             };
-            let m = scene.material(&hit);
             let wo = -ray.d;
             if hit.is_emitter() && hit.is_front(ray.d) {
                 let le = scene.emitted(&hit, wo);
@@ -76,7 +75,7 @@ impl RayIntegrator for PathTracer {
             if depth >= self.max_depth {
                 break;
             }
-            let bsdf = m.bsdf(&hit, wo);
+            let bsdf = scene.bsdf(&hit, wo);
             let specular_vertex = bsdf.is_specular_only();
             if reached_x {
                 vertices_after_x += 1;

@@ -267,12 +267,11 @@ impl PhotonIntegrator {
             for _ in 0..4 {
                 stats.rays += 1;
                 let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
-                let m = scene.material(&y);
                 if y.is_emitter() {
                     break;
                 }
                 let wo_y = -ray.d;
-                let by = m.bsdf(&y, wo_y);
+                let by = scene.bsdf(&y, wo_y);
                 if by.is_specular_only() {
                     let Some(s) =
                         by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
@@ -345,7 +344,6 @@ impl RayIntegrator for PhotonIntegrator {
                 layers[first] += beta * scene.background;
                 break;
             };
-            let m = scene.material(&hit);
             let wo = -ray.d;
             if hit.is_emitter() {
                 if hit.is_front(ray.d) {
@@ -357,7 +355,7 @@ impl RayIntegrator for PhotonIntegrator {
             if depth >= self.config.max_depth {
                 break;
             }
-            let bsdf = m.bsdf(&hit, wo);
+            let bsdf = scene.bsdf(&hit, wo);
             if bsdf.is_specular_only() {
                 if depth + 1 >= self.config.max_depth {
                     break;

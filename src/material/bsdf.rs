@@ -26,41 +26,43 @@ pub struct BsdfSample {
     pub flags: LobeFlags,
 }
 
-/// A material's scattering at one hit.
+/// The lobes of a material at a hit, with their sampling weights: what a material evaluates to
+/// before it is placed in a shading frame. Materials without textures give the same lobes at
+/// every hit, so the scene makes them once per material and side.
 #[derive(Clone, Copy, Debug)]
-pub struct Bsdf {
-    /// Shading frame; z is the shading normal on the side of `wo`.
-    frame: Frame,
-    /// Geometric normal on the same side.
-    ng: Vec3,
+pub struct Lobes {
     lobes: [Bxdf; MAX_LOBES],
     /// Sampling weight of each lobe for camera paths (luminance of its albedo).
     weights: [f32; MAX_LOBES],
-    /// Sampling weight of each lobe for photons (largest channel of its albedo).
+    /// Sampling weight of each lobe for photons (its albedo averaged over the channels).
     photon_weights: [f32; MAX_LOBES],
+    total: f32,
+    photon_total: f32,
     count: u8,
     flags: LobeFlags,
+    /// Every lobe is isotropic (see `Bxdf::is_isotropic`).
+    isotropic: bool,
 }
 
-impl Bsdf {
-    /// An empty BSDF in `frame` (shading frame of the hit, z = shading normal) with geometric
-    /// normal `ng`, both outward; they are turned to the side of `wo` (two-sided surfaces).
-    pub fn new(frame: Frame, ng: Vec3, wo: Vec3) -> Self {
-        let front = wo.dot(ng) >= 0.0;
-        let (frame, ng) = if front { (frame, ng) } else { (frame.flipped(), -ng) };
+impl Default for Lobes {
+    fn default() -> Self {
         let none = Bxdf::Lambert(super::bxdf::Lambert { r: Color::ZERO });
-        Bsdf {
-            frame,
-            ng,
+        Lobes {
             lobes: [none; MAX_LOBES],
             weights: [0.0; MAX_LOBES],
             photon_weights: [0.0; MAX_LOBES],
+            total: 0.0,
+            photon_total: 0.0,
             count: 0,
             flags: LobeFlags::NONE,
+            isotropic: true,
         }
     }
+}
 
+impl Lobes {
     /// Adds a lobe; lobes that never scatter (zero sampling weight) are left out.
+    #[inline]
     pub fn add(&mut self, lobe: Bxdf) {
         let w = lobe.sampling_weight();
         if !(w > 0.0) || self.count as usize >= MAX_LOBES {
@@ -69,14 +71,57 @@ impl Bsdf {
         let i = self.count as usize;
         self.lobes[i] = lobe;
         self.weights[i] = w;
-        self.photon_weights[i] = lobe.max_albedo().max(w * 1e-3);
+        self.photon_weights[i] = lobe.mean_albedo().max(w * 1e-3);
+        self.total += w;
+        self.photon_total += self.photon_weights[i];
         self.count += 1;
         self.flags |= lobe.flags();
+        self.isotropic &= lobe.is_isotropic();
+    }
+
+    /// True when every lobe is isotropic: the BSDF's frame then needs only the normal.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.isotropic
+    }
+
+    #[inline]
+    fn as_slice(&self) -> &[Bxdf] {
+        &self.lobes[..self.count as usize]
+    }
+}
+
+/// A material's scattering at one hit: its lobes in the hit's shading frame, oriented to the
+/// side the viewer is on.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    /// Shading frame; z is the shading normal on the side of `wo`.
+    frame: Frame,
+    /// Geometric normal on the same side.
+    ng: Vec3,
+    lobes: Lobes,
+}
+
+/// True when `wo` is on the outward side of a surface with geometric normal `ng` (a BSDF is
+/// made for the side the viewer is on: `Bsdf::new` and the material's lobes must agree).
+#[inline]
+pub fn front_side(wo: Vec3, ng: Vec3) -> bool {
+    wo.dot(ng) >= 0.0
+}
+
+impl Bsdf {
+    /// The BSDF with `lobes` in `frame` (shading frame of the hit, z = shading normal) with
+    /// geometric normal `ng`, both outward; they are turned to the viewer's side when `front`
+    /// (see `front_side`) is false (two-sided surfaces).
+    #[inline]
+    pub fn new(frame: Frame, ng: Vec3, front: bool, lobes: Lobes) -> Self {
+        let (frame, ng) = if front { (frame, ng) } else { (frame.flipped(), -ng) };
+        Bsdf { frame, ng, lobes }
     }
 
     #[inline]
     fn lobes(&self) -> &[Bxdf] {
-        &self.lobes[..self.count as usize]
+        self.lobes.as_slice()
     }
 
     /// The shading normal on the viewer's side.
@@ -88,20 +133,20 @@ impl Bsdf {
     /// Every kind of scattering the BSDF has.
     #[inline]
     pub fn flags(&self) -> LobeFlags {
-        self.flags
+        self.lobes.flags
     }
 
     /// True when the surface has a diffuse lobe.
     #[inline]
     pub fn has_diffuse(&self) -> bool {
-        self.flags.is_diffuse()
+        self.lobes.flags.is_diffuse()
     }
 
     /// True when every lobe is a delta (mirror, glass) or there is none: nothing to shade with
     /// light samples.
     #[inline]
     pub fn is_specular_only(&self) -> bool {
-        !self.flags.intersects(LobeFlags::DIFFUSE | LobeFlags::GLOSSY)
+        !self.lobes.flags.intersects(LobeFlags::DIFFUSE | LobeFlags::GLOSSY)
     }
 
     /// Albedo of the diffuse lobes.
@@ -133,14 +178,14 @@ impl Bsdf {
     /// Density with which `sample` picks `wi` through its non-delta lobes.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
-        let total: f32 = self.weights[..self.count as usize].iter().sum();
+        let total = self.lobes.total;
         if !(total > 0.0) {
             return 0.0;
         }
         let kind = if wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION };
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let mut pdf = 0.0;
-        for (lobe, w) in self.lobes().iter().zip(&self.weights) {
+        for (lobe, w) in self.lobes().iter().zip(&self.lobes.weights) {
             if lobe.flags().intersects(kind) && !lobe.flags().is_specular() {
                 pdf += w / total * lobe.pdf(wo_l, wi_l, mode);
             }
@@ -151,37 +196,45 @@ impl Bsdf {
     /// Picks a lobe in proportion to its sampling weight and samples it: (the lobe's sample in
     /// world space, the probability of the lobe). `uc` chooses the lobe and, rescaled, reflection
     /// or transmission within it; `u` the direction.
-    #[inline]
+    #[inline(always)]
     fn sample_any_lobe(
         &self,
         weights: &[f32; MAX_LOBES],
+        total: f32,
         wo: Vec3,
         uc: f32,
         u: Vec2,
         mode: Transport,
     ) -> Option<(BxdfSample, f32)> {
-        let n = self.count as usize;
-        let total: f32 = weights[..n].iter().sum();
+        let n = self.lobes.count as usize;
         if !(total > 0.0) {
             return None;
         }
-        let mut x = uc * total;
-        let mut k = n - 1;
-        for (i, &w) in weights[..n].iter().enumerate() {
-            if x < w {
-                k = i;
-                break;
+        let (k, p_lobe, uc_lobe) = if n == 1 {
+            (0, 1.0, uc)
+        } else {
+            let mut x = uc * total;
+            let mut k = n - 1;
+            for (i, &w) in weights[..n].iter().enumerate() {
+                if x < w {
+                    k = i;
+                    break;
+                }
+                x -= w;
             }
-            x -= w;
-        }
-        let p_lobe = weights[k] / total;
-        let uc_lobe = (x / weights[k]).clamp(0.0, 1.0 - f32::EPSILON / 2.0);
-        let wo_l = self.frame.to_local(wo);
-        if wo_l.z <= 0.0 && !self.flags.is_transmission() {
+            (k, weights[k] / total, (x / weights[k]).clamp(0.0, 1.0 - f32::EPSILON / 2.0))
+        };
+        let lobe = &self.lobes.lobes[k];
+        // A Lambertian lobe samples without looking at wo: only its side is needed.
+        let wo_l = match lobe {
+            Bxdf::Lambert(_) => Vec3::new(0.0, 0.0, wo.dot(self.frame.z)),
+            _ => self.frame.to_local(wo),
+        };
+        if wo_l.z <= 0.0 && !self.lobes.flags.is_transmission() {
             // Seen from below the shading normal, a surface that only reflects has nothing to give.
             return None;
         }
-        let mut s = self.lobes[k].sample(wo_l, uc_lobe, u, mode)?;
+        let mut s = lobe.sample(wo_l, uc_lobe, u, mode)?;
         s.wi = self.frame.to_world(s.wi);
         // The side the direction leaves to must agree with the geometry, not only the shading
         // normal, or light would leak through the surface.
@@ -195,8 +248,9 @@ impl Bsdf {
     /// Samples a direction for a camera path. A non-delta sample is weighted by the whole BSDF
     /// (all non-delta lobes' values over their combined density, as one mixture), a delta sample
     /// by its lobe over the probability of having picked it.
+    #[inline]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
-        let (s, p_lobe) = self.sample_any_lobe(&self.weights, wo, uc, u, mode)?;
+        let (s, p_lobe) = self.sample_any_lobe(&self.lobes.weights, self.lobes.total, wo, uc, u, mode)?;
         let wi = s.wi;
         if s.flags.is_specular() {
             return Some(BsdfSample { wi, weight: s.weight / p_lobe, pdf: 0.0, flags: s.flags });
@@ -209,15 +263,16 @@ impl Bsdf {
         Some(BsdfSample { wi, weight, pdf, flags: s.flags })
     }
 
-    /// Samples a direction for a photon: a lobe picked in proportion to its largest albedo
-    /// channel, weighted by that lobe alone (its f |cos| / pdf over the probability of picking
-    /// it), which is unbiased too. The weight's largest channel is then close to the BSDF's
-    /// total albedo, so after Russian roulette on it a photon keeps its power, as Jensen's
-    /// lobe-by-albedo roulette keeps it: equal-power photons make the density estimate quiet,
-    /// where the mixture weight of `sample` would brighten the red photons a red surface
-    /// reflects, or those a sharp glossy lobe overlapping a diffuse one sends.
+    /// Samples a direction for a photon: a lobe picked in proportion to its mean albedo,
+    /// weighted by that lobe alone (its f |cos| / pdf over the probability of picking it),
+    /// which is unbiased too. The weight's mean over the channels is then the BSDF's total mean
+    /// albedo, so after Russian roulette on it a photon keeps its power, as Jensen's
+    /// lobe-by-albedo roulette keeps it: photons of nearly equal power make the density
+    /// estimate quiet, where the mixture weight of `sample` would brighten the photons a sharp
+    /// glossy lobe overlapping a diffuse one sends.
+    #[inline]
     pub fn sample_lobe(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
-        let (s, p_lobe) = self.sample_any_lobe(&self.photon_weights, wo, uc, u, mode)?;
+        let (s, p_lobe) = self.sample_any_lobe(&self.lobes.photon_weights, self.lobes.photon_total, wo, uc, u, mode)?;
         let pdf = if s.flags.is_specular() { 0.0 } else { s.pdf * p_lobe };
         Some(BsdfSample { wi: s.wi, weight: s.weight / p_lobe, pdf, flags: s.flags })
     }

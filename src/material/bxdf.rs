@@ -170,6 +170,7 @@ fn colour_weight(c: Color) -> f32 {
 }
 
 impl Bxdf {
+    #[inline]
     pub fn flags(&self) -> LobeFlags {
         match self {
             Bxdf::Lambert(_) => LobeFlags::DIFFUSE_REFLECTION,
@@ -180,8 +181,16 @@ impl Bxdf {
         }
     }
 
+    /// True when the lobe looks the same however the surface is turned about its normal (all
+    /// but anisotropic lobes), so its frame's tangent may be any perpendicular direction.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        true
+    }
+
     /// How often this lobe is sampled relative to the others of a mixture: an estimate of its
     /// albedo (1 for a dielectric, which always reflects or transmits everything).
+    #[inline]
     pub fn sampling_weight(&self) -> f32 {
         match self {
             Bxdf::Lambert(b) => colour_weight(b.r),
@@ -192,13 +201,15 @@ impl Bxdf {
         }
     }
 
-    /// The lobe's largest albedo over the colour channels (1 for a dielectric): photons pick
-    /// lobes in proportion to it, so a photon's brightest channel keeps its power.
-    pub fn max_albedo(&self) -> f32 {
+    /// The lobe's albedo averaged over the colour channels (1 for a dielectric): photons pick
+    /// lobes in proportion to it, as Jensen's Russian roulette does.
+    #[inline]
+    pub fn mean_albedo(&self) -> f32 {
+        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match self {
-            Bxdf::Lambert(b) => b.r.max_element(),
+            Bxdf::Lambert(b) => mean(b.r),
             Bxdf::Phong(b) => b.ks,
-            Bxdf::Mirror(b) => b.r.max_element(),
+            Bxdf::Mirror(b) => mean(b.r),
             Bxdf::Transmission(b) => b.t,
             Bxdf::Dielectric(_) => 1.0,
         }
@@ -236,6 +247,7 @@ impl Bxdf {
 
     /// Samples `wi`: `uc` chooses between reflection and transmission where a lobe has both, `u`
     /// picks the direction.
+    #[inline]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BxdfSample> {
         match *self {
             Bxdf::Lambert(b) => {

@@ -8,7 +8,7 @@ pub mod fresnel;
 
 use crate::geometry::Hit;
 use crate::math::{Color, Vec3};
-use bsdf::Bsdf;
+use bsdf::{Bsdf, Lobes, front_side};
 use bxdf::{Bxdf, Dielectric, Lambert, Mirror, Phong, Transmission};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -75,21 +75,28 @@ impl Material {
     }
 
     /// The physical reading of the material at `hit`, seen from direction `wo` (towards the
-    /// viewer): a Lambertian lobe with albedo k_d x colour, a normalised Phong lobe with k_s,
-    /// a mirror with k_r, a fixed-transmittance refraction with k_t (`Transparent`), or the two
-    /// Fresnel-weighted lobes of a smooth dielectric. If the lobes' albedos add up to more than
-    /// one they are scaled down together, so no surface reflects more than it receives.
+    /// viewer); see `lobes`.
+    #[inline]
     pub fn bsdf(&self, hit: &Hit, wo: Vec3) -> Bsdf {
-        let front = wo.dot(hit.ng) >= 0.0;
-        let mut bsdf = Bsdf::new(hit.shading_frame(), hit.ng, wo);
+        let front = front_side(wo, hit.ng);
+        Bsdf::new(hit.shading_frame(), hit.ng, front, self.lobes(front))
+    }
+
+    /// The material's lobes seen from the outward side (`front`) or the inside: a Lambertian
+    /// lobe with albedo k_d x colour, a normalised Phong lobe with k_s, a mirror with k_r, a
+    /// fixed-transmittance refraction with k_t (`Transparent`), or the two Fresnel-weighted
+    /// lobes of a smooth dielectric. If the lobes' albedos add up to more than one they are
+    /// scaled down together, so no surface reflects more than it receives.
+    pub fn lobes(&self, front: bool) -> Lobes {
+        let mut lobes = Lobes::default();
         // The index of the side light enters over the side it comes from.
         let eta = if front { self.ior } else { 1.0 / self.ior };
         if self.kind == MaterialKind::Dielectric {
             // A smooth dielectric is only its two Fresnel lobes: the classic model's diffuse and
             // highlight terms on glass have no physical counterpart (highlights of area lights
             // show up in the mirror lobe by themselves).
-            bsdf.add(Bxdf::Dielectric(Dielectric { eta }));
-            return bsdf;
+            lobes.add(Bxdf::Dielectric(Dielectric { eta }));
+            return lobes;
         }
         let mut diffuse = self.color * self.kd;
         let mut glossy = self.ks;
@@ -107,11 +114,11 @@ impl Material {
             mirror *= s;
             transmit *= s;
         }
-        bsdf.add(Bxdf::Lambert(Lambert { r: diffuse }));
-        bsdf.add(Bxdf::Phong(Phong { ks: glossy, exponent: self.exponent }));
-        bsdf.add(Bxdf::Mirror(Mirror { r: mirror }));
-        bsdf.add(Bxdf::Transmission(Transmission { t: transmit, eta }));
-        bsdf
+        lobes.add(Bxdf::Lambert(Lambert { r: diffuse }));
+        lobes.add(Bxdf::Phong(Phong { ks: glossy, exponent: self.exponent }));
+        lobes.add(Bxdf::Mirror(Mirror { r: mirror }));
+        lobes.add(Bxdf::Transmission(Transmission { t: transmit, eta }));
+        lobes
     }
 
     /// True when light passes through the surface (refraction happens).

@@ -15,7 +15,7 @@ pub fn luminance(c: Color) -> f32 {
 
 /// An orthonormal basis whose `z` axis is a given unit normal; used to map local sample
 /// directions (z up) into world space.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
     pub x: Vec3,
     pub y: Vec3,
@@ -36,7 +36,7 @@ impl Frame {
 
     /// A frame around unit `n` whose x axis is `t` made perpendicular to `n` (Gram-Schmidt);
     /// falls back to `from_z` when `t` is zero, not finite or parallel to `n`.
-    #[inline]
+    #[inline(always)]
     pub fn from_z_x(n: Vec3, t: Vec3) -> Self {
         let x = t - n * n.dot(t);
         let len2 = x.length_squared();

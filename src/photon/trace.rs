@@ -148,9 +148,8 @@ pub fn trace_photon(
         if hit.is_emitter() {
             return;
         }
-        let m = scene.material(&hit);
         let wo = -ray.d;
-        let bsdf = m.bsdf(&hit, wo);
+        let bsdf = scene.bsdf(&hit, wo);
         if bsdf.has_diffuse() {
             let caustic = depth > 0 && only_specular;
             let n = bsdf.normal();
@@ -183,10 +182,11 @@ pub fn trace_photon(
 
 /// Scatters a photon carrying `flux` that arrived from direction `wo`: the BSDF samples a lobe
 /// and a direction (importance transport, weighted by that lobe: `Bsdf::sample_lobe`), and
-/// Russian roulette on the throughput decides whether it goes on (Jensen 2001 sec. 2.3 in
-/// pbrt-v4's form: survive with the ratio of the scattered to the incident flux's largest
-/// channel, then divide by it, so the photon's power stays the same). Returns the new
-/// direction, flux and the lobe's kind, or `None` when the photon is absorbed.
+/// Russian roulette on the throughput decides whether it goes on (Jensen 2001 sec. 2.3: survive
+/// with the ratio of the scattered to the incident flux, averaged over the channels, then
+/// divide by it, so the photon's mean power stays the same). Returns the new direction, flux
+/// and the lobe's kind, or `None` when the photon is absorbed.
+#[inline(always)]
 pub fn scatter_photon(
     bsdf: &Bsdf,
     wo: Vec3,
@@ -195,7 +195,8 @@ pub fn scatter_photon(
 ) -> Option<(Vec3, Color, crate::material::bxdf::LobeFlags)> {
     let s = bsdf.sample_lobe(wo, rng.uniform(), rng.uniform2(), Transport::Importance)?;
     let scattered = flux * s.weight;
-    let q = (scattered.max_element() / flux.max_element()).min(1.0);
+    let sum = |c: Color| c.x + c.y + c.z;
+    let q = (sum(scattered) / sum(flux)).min(1.0);
     if !(q > 0.0) || rng.uniform() >= q {
         return None;
     }

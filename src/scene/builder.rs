@@ -131,6 +131,7 @@ impl SceneBuilder {
             bvh,
             planes: self.planes,
             meshes: self.meshes,
+            material_lobes: self.materials.iter().map(|m| [m.lobes(true), m.lobes(false)]).collect(),
             materials: self.materials,
             material_names: self.material_names,
             light_picker: LightPicker::new(&self.lights),

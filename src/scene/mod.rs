@@ -18,7 +18,8 @@ use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
 use crate::light::{Light, LightPicker};
 use crate::material::Material;
-use crate::math::Color;
+use crate::material::bsdf::{Bsdf, Lobes, front_side};
+use crate::math::{Color, Frame};
 use crate::shape::{Plane, SurfacePoint, TriangleMesh};
 use std::path::Path;
 
@@ -44,6 +45,8 @@ pub struct Scene {
     pub planes: Vec<(Plane, u32)>,
     pub meshes: Vec<TriangleMesh>,
     pub materials: Vec<Material>,
+    /// Each material's lobes seen from outside and from inside, made once.
+    pub material_lobes: Vec<[Lobes; 2]>,
     pub material_names: Vec<String>,
     pub lights: Vec<Light>,
     /// Chooses a light in proportion to power (next-event estimation, photon emission).
@@ -98,19 +101,7 @@ impl Scene {
 
     #[inline]
     fn hit(t: f32, sp: &SurfacePoint, material: u32, light: u32, prim: u32) -> Hit {
-        Hit {
-            t,
-            p: sp.p,
-            p_error: sp.p_error,
-            ng: sp.ng,
-            ns: sp.ns,
-            uv: sp.uv,
-            dpdu: sp.dpdu,
-            dpdv: sp.dpdv,
-            material,
-            light,
-            prim,
-        }
+        Hit { t, p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, param: sp.param, material, light, prim }
     }
 
     /// Radiance the surface at `h` emits towards `w` (zero unless it is an area light).
@@ -184,5 +175,16 @@ impl Scene {
     #[inline]
     pub fn material(&self, h: &Hit) -> &Material {
         &self.materials[h.material as usize]
+    }
+
+    /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
+    #[inline(always)]
+    pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf {
+        let front = front_side(wo, h.ng);
+        let lobes = self.material_lobes[h.material as usize][usize::from(!front)];
+        // Isotropic lobes do not care which way the tangent points: a frame from the normal
+        // alone saves the Gram-Schmidt step (and a sphere's dp/du) on every hit.
+        let frame = if lobes.is_isotropic() { Frame::from_z(h.ns) } else { h.shading_frame() };
+        Bsdf::new(frame, h.ng, front, lobes)
     }
 }

@@ -13,8 +13,8 @@ pub use quad::{Quad, box_faces, intersect_quad, transformed_quad};
 pub use sphere::Sphere;
 pub use triangle::{RayShear, Triangle, intersect_triangle};
 
-use crate::geometry::{Aabb, Ray};
-use crate::math::{Vec2, Vec3};
+use crate::geometry::{Aabb, Ray, SurfaceParam};
+use crate::math::Vec3;
 
 /// What the BVH needs to know about a candidate hit; the full `Hit` is built only for the winner.
 #[derive(Clone, Copy, Debug)]
@@ -33,9 +33,7 @@ pub struct SurfacePoint {
     pub p_error: Vec3,
     pub ng: Vec3,
     pub ns: Vec3,
-    pub uv: Vec2,
-    pub dpdu: Vec3,
-    pub dpdv: Vec3,
+    pub param: SurfaceParam,
 }
 
 #[derive(Clone, Copy, Debug)]

@@ -1,7 +1,7 @@
 //! Infinite plane through a point with a normal. Unbounded, so it lives outside the BVH.
 
 use super::{PrimHit, SurfacePoint};
-use crate::geometry::Ray;
+use crate::geometry::{Ray, SurfaceParam};
 use crate::math::float::gamma;
 use crate::math::{Frame, Vec2, Vec3};
 
@@ -10,9 +10,16 @@ pub struct Plane {
     pub point: Vec3,
     /// Unit normal.
     pub normal: Vec3,
+    /// A fixed tangent frame: uv are coordinates along `frame.x` and `frame.y`, in scene units.
+    frame: Frame,
 }
 
 impl Plane {
+    /// The plane through `point` with unit `normal`.
+    pub fn new(point: Vec3, normal: Vec3) -> Self {
+        Plane { point, normal, frame: Frame::from_z(normal) }
+    }
+
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         let denom = self.normal.dot(ray.d);
@@ -30,11 +37,11 @@ impl Plane {
         // Project onto the plane: the remaining error is that of one dot product and subtraction.
         let p = p - self.normal * self.normal.dot(p - self.point);
         let p_error = gamma(6) * (p.abs() + self.point.abs());
-        // Coordinates in the plane, in scene units, along a fixed tangent frame.
-        let frame = Frame::from_z(self.normal);
+        // Coordinates in the plane, in scene units, along its tangent frame.
         let d = p - self.point;
-        let uv = Vec2::new(d.dot(frame.x), d.dot(frame.y));
-        SurfacePoint { p, p_error, ng: self.normal, ns: self.normal, uv, dpdu: frame.x, dpdv: frame.y }
+        let (dpdu, dpdv) = (self.frame.x, self.frame.y);
+        let param = SurfaceParam::Known { uv: Vec2::new(d.dot(dpdu), d.dot(dpdv)), dpdu, dpdv };
+        SurfacePoint { p, p_error, ng: self.normal, ns: self.normal, param }
     }
 }
 
@@ -44,7 +51,7 @@ mod tests {
 
     #[test]
     fn plane_hit_parallel_behind() {
-        let pl = Plane { point: Vec3::new(0.0, -1.0, 0.0), normal: Vec3::Y };
+        let pl = Plane::new(Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
         let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, -1.0, 0.0));
         assert!((pl.intersect(&r, f32::INFINITY).unwrap().t - 1.0).abs() < 1e-6);
         assert!(pl.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());

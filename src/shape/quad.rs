@@ -2,7 +2,7 @@
 //! so rectangles and the faces of boxes are quads.
 
 use super::{PrimHit, SurfacePoint};
-use crate::geometry::{Aabb, Ray, Transform};
+use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::float::gamma;
 use crate::math::{Vec2, Vec3};
 
@@ -44,7 +44,8 @@ impl Quad {
         let b = self.e2 * h.v;
         let p = self.p0 + a + b;
         let p_error = gamma(6) * (self.p0.abs() + a.abs() + b.abs());
-        SurfacePoint { p, p_error, ng: self.n, ns: self.n, uv: Vec2::new(h.u, h.v), dpdu: self.e1, dpdv: self.e2 }
+        let param = SurfaceParam::Known { uv: Vec2::new(h.u, h.v), dpdu: self.e1, dpdv: self.e2 };
+        SurfacePoint { p, p_error, ng: self.n, ns: self.n, param }
     }
 }
 

@@ -1,10 +1,9 @@
 //! Sphere given by centre and radius.
 
 use super::{PrimHit, SurfacePoint};
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::{Aabb, Ray, SurfaceParam};
+use crate::math::Vec3;
 use crate::math::float::gamma;
-use crate::math::{Vec2, Vec3};
-use std::f32::consts::{PI, TAU};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
@@ -62,31 +61,16 @@ impl Sphere {
         let p = self.center + local;
         let p_error = gamma(5) * local.abs() + gamma(1) * p.abs();
         let n = local / self.radius;
-        let (uv, dpdu, dpdv) = self.parameterisation(n);
-        SurfacePoint { p, p_error, ng: n, ns: n, uv, dpdu, dpdv }
-    }
-
-    /// Mitsuba's parameterisation at the point with outward normal `n`: u = phi / 2 pi with phi
-    /// measured from +x towards +y, v = theta / pi from the +z pole; and dp/du, dp/dv.
-    pub fn parameterisation(&self, n: Vec3) -> (Vec2, Vec3, Vec3) {
-        let mut phi = n.y.atan2(n.x);
-        if phi < 0.0 {
-            phi += TAU;
-        }
-        let theta = n.z.clamp(-1.0, 1.0).acos();
-        let (sin_t, cos_t) = theta.sin_cos();
-        let (sin_p, cos_p) = phi.sin_cos();
-        let r = self.radius;
-        let dpdu = Vec3::new(-n.y, n.x, 0.0) * (TAU * r);
-        let dpdv = Vec3::new(cos_p * cos_t, sin_p * cos_t, -sin_t) * (PI * r);
-        (Vec2::new(phi / TAU, theta / PI), dpdu, dpdv)
+        SurfacePoint { p, p_error, ng: n, ns: n, param: SurfaceParam::Sphere { n, radius: self.radius } }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Vec2;
     use crate::shape::{RayShear, Shape};
+    use std::f32::consts::PI;
 
     fn hit(s: &Sphere, o: Vec3, d: Vec3) -> Option<f32> {
         let r = Ray::new(o, d.normalize());
@@ -116,13 +100,14 @@ mod tests {
         // issue 10): uv = (0, 1/3), dp/du = (0, 2 pi, 0) (sin theta), dp/dv points towards -z.
         let s = Sphere::new(Vec3::ZERO, 1.0);
         let n = Vec3::new(0.866_025_4, 0.0, 0.5);
-        let (uv, dpdu, dpdv) = s.parameterisation(n);
+        let param = SurfaceParam::Sphere { n, radius: s.radius };
+        let (uv, dpdu, dpdv) = (param.uv(), param.dpdu(), param.dpdv());
         assert!(uv.abs_diff_eq(Vec2::new(0.0, 1.0 / 3.0), 1e-5), "{uv}");
         assert!(dpdu.abs_diff_eq(Vec3::new(0.0, 5.441_398, 0.0), 1e-4), "{dpdu}");
         assert!(dpdv.abs_diff_eq(Vec3::new(PI * 0.5, 0.0, -PI * 0.866_025_4), 1e-4), "{dpdv}");
         // u grows from +x towards +y and wraps to [0, 1).
-        assert!((s.parameterisation(Vec3::Y).0.x - 0.25).abs() < 1e-6);
-        assert!((s.parameterisation(-Vec3::Y).0.x - 0.75).abs() < 1e-6);
+        assert!((SurfaceParam::Sphere { n: Vec3::Y, radius: 1.0 }.uv().x - 0.25).abs() < 1e-6);
+        assert!((SurfaceParam::Sphere { n: -Vec3::Y, radius: 1.0 }.uv().x - 0.75).abs() < 1e-6);
         // The tangents are perpendicular to the normal.
         assert!(dpdu.dot(n).abs() < 1e-5 && dpdv.dot(n).abs() < 1e-5);
     }

@@ -5,7 +5,7 @@
 //! vertex shared by two triangles hit exactly one of them, so meshes show no cracks.
 
 use super::{PrimHit, SurfacePoint, TriangleMesh};
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::{Aabb, Ray, SurfaceParam};
 use crate::math::float::gamma;
 use crate::math::{Vec2, Vec3};
 
@@ -104,7 +104,7 @@ impl Triangle {
                 }
             }
         }
-        SurfacePoint { p, p_error, ng, ns, uv, dpdu, dpdv }
+        SurfacePoint { p, p_error, ng, ns, param: SurfaceParam::Known { uv, dpdu, dpdv } }
     }
 }
 

@@ -305,7 +305,6 @@ impl Sppm {
                 break;
             };
             dist += hit.t;
-            let m = scene.material(&hit);
             let wo = -ray.d;
             if hit.is_emitter() {
                 if hit.is_front(ray.d) {
@@ -317,7 +316,7 @@ impl Sppm {
             if depth >= config.max_depth {
                 break;
             }
-            let bsdf = m.bsdf(&hit, wo);
+            let bsdf = scene.bsdf(&hit, wo);
             if bsdf.is_specular_only() {
                 if depth + 1 >= config.max_depth {
                     break;

@@ -159,7 +159,7 @@ impl<'a> Cx<'a> {
                 if normal == Vec3::ZERO || !point.is_finite() {
                     return Err(self.at(span, "plane is degenerate after its transform"));
                 }
-                geometry.add_plane(Plane { point, normal }, material);
+                geometry.add_plane(Plane::new(point, normal), material);
             }
             "quad" => {
                 let corner = d.corner.map_or(Vec3::new(-1.0, 0.0, 1.0), |p| p.0);
