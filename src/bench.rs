@@ -16,7 +16,8 @@ pub const MESH_SCENE: &str = include_str!("../benches/scenes/mesh.toml");
 pub const KNOT_EXAMPLE: &str = include_str!("../scenes/07-torus-knot.toml");
 /// The Cornell box with a point light (photon-tracing throughput).
 pub const CORNELL_POINT: &str = include_str!("../scenes/12-cornell-point.toml");
-/// 512 x 512, 4 x 4 spp, depth 5, mirror and Fresnel-glass spheres, two point lights.
+/// 512 x 512, 4 x 4 spp, max_depth 6 (five reflections or refractions), mirror and Fresnel-glass
+/// spheres, two point lights.
 pub const WHITTED_SCENE: &str = include_str!("../benches/scenes/whitted.toml");
 
 pub fn load(text: &str, name: &str) -> LoadedScene {
@@ -115,7 +116,7 @@ pub fn run_all(repeats: u32) {
     let whitted = load(WHITTED_SCENE, "bench:whitted");
     let best = (0..repeats).map(|_| whitted_render(&whitted)).min_by_key(|r| r.wall).unwrap_or_default();
     say!(
-        "whitted render (512x512, 16 spp, depth 5): {:.3} s wall, {} rays ({} shadow), {:.2} Mrays/s",
+        "whitted render (512x512, 16 spp, 5 reflections): {:.3} s wall, {} rays ({} shadow), {:.2} Mrays/s",
         best.wall.as_secs_f64(),
         best.rays.total(),
         best.rays.shadow_rays,

@@ -56,7 +56,8 @@ struct RenderArgs {
     /// Total samples per pixel, any count (overrides --spp-axis and the scene).
     #[arg(long, value_name = "N")]
     spp: Option<u32>,
-    /// Recursion depth limit for reflection and refraction (overrides the scene).
+    /// The most bounces a path may have: 1 is direct light only, each more adds a reflection or
+    /// refraction (overrides the scene).
     #[arg(long, value_name = "D")]
     max_depth: Option<u32>,
     /// Worker threads [default: all cores].
