@@ -18,10 +18,23 @@ pub struct PathTracer {
     pub max_depth: u32,
 }
 
+/// Veach's power heuristic (exponent 2) weight of a sample of density `a` against one of `b`.
+/// Written as a ratio so that densities whose squares overflow (an area light seen edge-on from
+/// a point far along a floor plane has a solid-angle density near 1e23) give 1 or 0, not
+/// inf / inf = NaN (issue 16).
 #[inline]
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    if !(a > 0.0) {
+        return 0.0;
+    }
+    if a >= b {
+        let r = b / a;
+        1.0 / (1.0 + r * r)
+    } else {
+        let r = a / b;
+        let r2 = r * r;
+        r2 / (1.0 + r2)
+    }
 }
 
 impl RayIntegrator for PathTracer {

@@ -96,6 +96,7 @@ impl<'a> Cx<'a> {
                 emitters_out.push(Emitter::Sphere(Sphere::new(c, r)));
             }
             "obj" | "ply" | "disk" => {
+                let mut face_normals = false;
                 let mesh = if kind == "disk" {
                     disk_mesh(DISK_SEGMENTS)
                 } else {
@@ -103,13 +104,11 @@ impl<'a> Cx<'a> {
                         self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
                     })?;
                     let path = self.src(fel).base.join(&file);
-                    let loaded = if kind == "obj" {
-                        TriangleMesh::load_obj(&path).map_err(|e| e.to_string())
-                    } else {
-                        crate::shape::mesh::load_ply(&path)
-                    };
-                    let mut mesh = loaded.map_err(|e| self.err(fel, e))?;
-                    if self.boolean(&p, "face_normals")? == Some(true) {
+                    let loaded =
+                        if kind == "obj" { TriangleMesh::load_obj(&path) } else { crate::shape::mesh::load_ply(&path) };
+                    let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
+                    face_normals = self.boolean(&p, "face_normals")? == Some(true);
+                    if face_normals {
                         mesh.normals = None;
                     }
                     // Our OBJ reader flips v as Mitsuba does by default; PLY is read as it is.
@@ -137,6 +136,10 @@ impl<'a> Cx<'a> {
                 }
                 if mesh.positions.iter().any(|v| !v.is_finite()) {
                     return Err(self.err(el, "mesh has non-finite vertices after its to_world transform"));
+                }
+                // Mitsuba computes smooth vertex normals unless `face_normals` is set.
+                if !face_normals {
+                    mesh.ensure_vertex_normals();
                 }
                 // An emitting mesh can be a light here only when it is one parallelogram.
                 if radiance.is_some() {

@@ -185,10 +185,12 @@ impl<'a> Cx<'a> {
             }
             "mesh" | "torus_knot" => {
                 let mesh = if kind == "mesh" {
-                    let file =
-                        d.file.as_ref().ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ file)"))?;
+                    let file = d
+                        .file
+                        .as_ref()
+                        .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ or PLY file)"))?;
                     let path = self.base.join(file.get_ref());
-                    TriangleMesh::load_obj(&path).map_err(|e| self.at(file.span(), e.to_string()))?
+                    TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?
                 } else {
                     let (segments, sides) = (d.segments.unwrap_or(256), d.sides.unwrap_or(32));
                     if segments < 3 || sides < 3 || 2 * segments as u64 * sides as u64 > MAX_GENERATED_TRIANGLES {
@@ -210,6 +212,12 @@ impl<'a> Cx<'a> {
                 }
                 if mesh.positions.iter().any(|p| !p.is_finite()) {
                     return Err(self.at(span, "mesh has non-finite vertices after its transform"));
+                }
+                // Flat faces only when asked; otherwise smooth normals where the file has none.
+                if d.face_normals == Some(true) {
+                    mesh.normals = None;
+                } else {
+                    mesh.ensure_vertex_normals();
                 }
                 geometry.add_mesh(mesh, material);
             }

@@ -27,7 +27,7 @@ pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("plane", &["material", "transform", "point", "normal"]),
     ("quad", &["material", "transform", "corner", "edge1", "edge2"]),
     ("box", &["material", "transform", "min", "max"]),
-    ("mesh", &["material", "transform", "file"]),
+    ("mesh", &["material", "transform", "file", "face_normals"]),
     ("torus_knot", &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"]),
 ];
 
@@ -129,6 +129,7 @@ pub struct ObjectDesc {
     pub min: Option<Point>,
     pub max: Option<Point>,
     pub file: Option<Spanned<PathBuf>>,
+    pub face_normals: Option<bool>,
     pub p: Option<u32>,
     pub q: Option<u32>,
     pub tube: Option<Positive>,

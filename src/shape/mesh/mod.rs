@@ -1,4 +1,5 @@
-//! Triangle meshes: indexed vertex arrays, loaded from OBJ files or generated procedurally.
+//! Triangle meshes: indexed vertex arrays, read from OBJ or PLY files (`TriangleMesh::load`, the
+//! one reader both scene formats use) or generated procedurally.
 
 mod ply;
 
@@ -20,23 +21,83 @@ pub struct TriangleMesh {
     pub indices: Vec<[u32; 3]>,
 }
 
-/// Why a mesh could not be loaded; the scene loader adds the scene file and line.
+/// Why a mesh could not be loaded, naming the file, its format and the cause; the scene loader
+/// adds the scene file and line.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("cannot read mesh file `{path}`: {message}")]
-    Load { path: String, message: String },
-    #[error("mesh file `{path}`: {message}")]
-    Invalid { path: String, message: String },
+    #[error("cannot read {format} mesh `{path}`: {message}")]
+    Read { path: String, format: &'static str, message: String },
+    #[error("{format} mesh `{path}`: {message}")]
+    Invalid { path: String, format: &'static str, message: String },
+    #[error("mesh `{path}`: unknown format (expected a .obj or .ply file)")]
+    Format { path: String },
+}
+
+/// The mesh formats caustic reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    Obj,
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format a file name's extension names.
+    pub fn of(path: &Path) -> Option<Self> {
+        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::Ply => "PLY",
+        }
+    }
+}
+
+/// What tobj's error codes mean, in words.
+fn obj_error(e: &tobj::LoadError) -> &'static str {
+    use tobj::LoadError as E;
+    match e {
+        E::OpenFileFailed | E::ReadError => "the file cannot be read",
+        E::UnrecognizedCharacter => "a line starts with something OBJ does not know",
+        E::PositionParseError => "a vertex position (v) is not three numbers",
+        E::NormalParseError => "a vertex normal (vn) is not three numbers",
+        E::TexcoordParseError => "a texture coordinate (vt) is not two numbers",
+        E::FaceParseError => "a face (f) is malformed",
+        E::FaceVertexOutOfBounds => "a face refers to a vertex that does not exist",
+        E::FaceTexCoordOutOfBounds => "a face refers to a texture coordinate that does not exist",
+        E::FaceNormalOutOfBounds => "a face refers to a normal that does not exist",
+        E::InvalidPolygon => "a face has fewer than three vertices",
+        _ => "the file is not a valid OBJ file",
+    }
 }
 
 impl TriangleMesh {
+    /// Reads an OBJ or PLY file, chosen by its extension.
+    pub fn load(path: &Path) -> Result<Self, MeshError> {
+        match MeshFormat::of(path) {
+            Some(MeshFormat::Obj) => Self::load_obj(path),
+            Some(MeshFormat::Ply) => load_ply(path),
+            None => Err(MeshError::Format { path: path.display().to_string() }),
+        }
+    }
+
     /// Loads every object of an OBJ file into one triangulated mesh. Faces with more than three
-    /// vertices are fanned; smooth normals are used when the file has them for every vertex.
+    /// vertices are fanned; vertex normals and texture coordinates are kept when the file has
+    /// them for every vertex. Material libraries are not read.
     pub fn load_obj(path: &Path) -> Result<Self, MeshError> {
         let shown = path.display().to_string();
+        let read = |message: String| MeshError::Read { path: shown.clone(), format: "OBJ", message };
+        let bytes = std::fs::read(path).map_err(|e| read(e.to_string()))?;
         let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
         let (models, _materials) =
-            tobj::load_obj(path, &opts).map_err(|e| MeshError::Load { path: shown.clone(), message: e.to_string() })?;
+            tobj::load_obj_buf(&mut std::io::BufReader::new(&bytes[..]), &opts, |_| Ok(Default::default()))
+                .map_err(|e| read(obj_error(&e).to_string()))?;
+        let invalid = |message: String| MeshError::Invalid { path: shown.clone(), format: "OBJ", message };
         let mut mesh = TriangleMesh::default();
         let mut all_normals = true;
         let mut all_uvs = true;
@@ -44,10 +105,7 @@ impl TriangleMesh {
             let base = mesh.positions.len() as u32;
             let m = &m.mesh;
             if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
-                return Err(MeshError::Invalid {
-                    path: shown,
-                    message: "positions or indices are not in triples".into(),
-                });
+                return Err(invalid("positions or indices are not in triples".into()));
             }
             let n_verts = m.positions.len() / 3;
             mesh.positions.extend(m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
@@ -66,10 +124,8 @@ impl TriangleMesh {
             }
             for c in m.indices.chunks_exact(3) {
                 if c.iter().any(|&i| i as usize >= n_verts) {
-                    return Err(MeshError::Invalid {
-                        path: shown,
-                        message: format!("face refers to vertex {} of {n_verts}", c.iter().max().unwrap_or(&0) + 1),
-                    });
+                    let bad = c.iter().max().unwrap_or(&0) + 1;
+                    return Err(invalid(format!("a face refers to vertex {bad} of {n_verts}")));
                 }
                 mesh.indices.push([base + c[0], base + c[1], base + c[2]]);
             }
@@ -81,12 +137,42 @@ impl TriangleMesh {
             mesh.uvs = None;
         }
         if mesh.indices.is_empty() {
-            return Err(MeshError::Invalid { path: shown, message: "no triangles".into() });
+            return Err(invalid("it has no faces (f lines)".into()));
         }
         if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(MeshError::Invalid { path: shown, message: format!("vertex {} is not finite", bad + 1) });
+            return Err(invalid(format!("vertex {} is not finite", bad + 1)));
         }
         Ok(mesh)
+    }
+
+    /// Gives a mesh without vertex normals smooth ones, as Mitsuba does: each vertex gets the
+    /// average of the unit normals of the triangles around it, weighted by their angles at the
+    /// vertex (Thuermer and Wuethrich 1998), which does not depend on how a face was split into
+    /// triangles. Degenerate triangles add nothing; a vertex with none gets no normal (its
+    /// triangles, all degenerate, are never hit). Winding decides the side, as for face normals.
+    pub fn ensure_vertex_normals(&mut self) {
+        if self.normals.is_some() {
+            return;
+        }
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for tri in &self.indices {
+            let p = tri.map(|i| self.positions[i as usize]);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            if n == Vec3::ZERO {
+                continue;
+            }
+            for k in 0..3 {
+                let (a, b) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+                let angle = a.angle_between(b);
+                if angle.is_finite() {
+                    normals[tri[k] as usize] += n * angle;
+                }
+            }
+        }
+        for n in &mut normals {
+            *n = n.normalize_or_zero();
+        }
+        self.normals = Some(normals);
     }
 
     /// A (p, q) torus knot: a tube of radius `tube` swept along a knot that winds p times around

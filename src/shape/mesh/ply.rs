@@ -1,20 +1,19 @@
 //! PLY meshes (ASCII and binary, little- and big-endian) read with `ply-rs-bw`.
 
-use super::TriangleMesh;
+use super::{MeshError, TriangleMesh};
 use crate::math::{Vec2, Vec3};
 use std::path::Path;
 
 /// Loads a PLY mesh (ASCII or binary): vertex x, y, z (and nx, ny, nz when present) and faces
 /// of any size, fanned into triangles.
-pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
+pub fn load_ply(path: &Path) -> Result<TriangleMesh, MeshError> {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let shown = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read mesh file `{shown}`: {e}"))?;
+    let read = |message: String| MeshError::Read { path: shown.clone(), format: "PLY", message };
+    let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
     let mut reader = std::io::BufReader::new(file);
-    let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut reader)
-        .map_err(|e| format!("cannot read PLY file `{shown}`: {e}"))?;
+    let ply = Parser::<DefaultElement>::new().read_ply(&mut reader).map_err(|e| read(e.to_string()))?;
     let num = |p: &Property| -> Option<f64> {
         Some(match p {
             Property::Char(v) => *v as f64,
@@ -39,7 +38,7 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
             _ => return None,
         })
     };
-    let invalid = |m: String| format!("PLY file `{shown}`: {m}");
+    let invalid = |message: String| MeshError::Invalid { path: shown.clone(), format: "PLY", message };
     let vertices = ply.payload.get("vertex").ok_or_else(|| invalid("no `vertex` element".into()))?;
     let mut positions = Vec::with_capacity(vertices.len());
     let mut normals = Vec::new();
@@ -88,7 +87,7 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
         }
     }
     if indices.is_empty() {
-        return Err(invalid("no triangles".into()));
+        return Err(invalid("it has no faces".into()));
     }
     Ok(TriangleMesh { positions, normals: has_normals.then_some(normals), uvs: uv_names.map(|_| uvs), indices })
 }
