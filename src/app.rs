@@ -48,6 +48,12 @@ pub enum AppError {
     Memory { need_mib: u64, limit_mib: u64 },
     #[error("interrupted: wrote `{path}` with {samples} samples per pixel")]
     Interrupted { path: String, samples: u32 },
+    /// Stopped before a complete pass: nothing is written, so a previous image stays as it was.
+    #[error(
+        "interrupted before the first complete pass: `{path}` was not written{}",
+        if *existed { " and is left as it was" } else { "" }
+    )]
+    InterruptedEarly { path: String, existed: bool },
 }
 
 /// What a finished render reports.
@@ -102,8 +108,11 @@ impl LoadedScene {
     /// Renders with the scene's own integrator and settings (no time limit, progress or
     /// cancellation).
     pub fn render(&self) -> crate::render::RenderOutput {
-        let integrator = Integrator::new(&self.integrator, &self.scene, &self.settings);
-        integrator.render(&self.scene, &self.settings, &RenderControl::uncancelled())
+        let control = RenderControl::uncancelled();
+        match Integrator::new(&self.integrator, &self.scene, &self.settings, control.cancel) {
+            Ok(integrator) => integrator.render(&self.scene, &self.settings, &control),
+            Err(_) => unreachable!("the flag of an uncancelled render is never set"),
+        }
     }
 }
 
@@ -164,6 +173,17 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             eprintln!("warning: {w}");
         }
         let info = &loaded.info;
+        for m in &info.meshes {
+            let (lo, hi) = (m.bounds.min, m.bounds.max);
+            let size = hi - lo;
+            log(
+                opts.quiet,
+                format_args!(
+                    "mesh {}: {} triangles, bounds ({:.4}, {:.4}, {:.4}) to ({:.4}, {:.4}, {:.4}), size {:.4} x {:.4} x {:.4}",
+                    m.name, m.triangles, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z
+                ),
+            );
+        }
         log(
             opts.quiet,
             format_args!(
@@ -213,17 +233,20 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             log(
                 opts.quiet,
                 format_args!(
-                    "photon maps: up to {} global photons (bounces included) and {} caustic photons",
-                    c.photons.saturating_mul(4),
-                    c.caustic_photons
+                    "photon maps: {} photons emitted for the global map (stored at each diffuse bounce); caustic \
+                     photons emitted until {} are stored (at most {} emitted)",
+                    c.photons, c.caustic_photons, c.caustic_cap
                 ),
             );
         }
-        let integrator = Integrator::new(&loaded.integrator, &loaded.scene, &settings);
+        let early = || AppError::InterruptedEarly { path: output.display().to_string(), existed: output.exists() };
+        let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, cancel) else {
+            return Err(early());
+        };
         if let Integrator::Photon(pm) = &integrator {
             let s = &pm.stats;
             log(opts.quiet, format_args!(
-                "photons: global {} emitted, {} stored ({:.1} MiB); caustic {} emitted, {} stored ({:.1} MiB){}; traced in {:.2} s, maps built in {:.2} s",
+                "photon maps ready: global {1} stored from {0} emitted ({2:.1} MiB); caustic {4} stored from {3} emitted ({5:.1} MiB){6}; traced in {7:.2} s, maps built in {8:.2} s",
                 s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
                 s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
                 if s.caustic_capped { " (emission cap reached)" } else { "" },
@@ -235,13 +258,18 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             log(
                 opts.quiet,
                 format_args!(
-                    "sppm: {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
+                    "sppm took {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
                     stats.samples_per_pixel,
                     sppm.config.photons_per_iter,
                     stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
                     stats.memory_bytes as f64 / 1048576.0
                 ),
             );
+        }
+        // An image with fewer than one sample in some pixel is not worth keeping, and must never
+        // replace an earlier image: stop without writing.
+        if stats.interrupted && stats.samples_per_pixel == 0 {
+            return Err(early());
         }
         for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
             write_image(img, &layer_path(&output, name))?;

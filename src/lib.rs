@@ -17,6 +17,7 @@ pub mod light;
 pub mod material;
 pub mod math;
 pub mod photon;
+pub mod progress;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -54,7 +54,7 @@ struct RenderArgs {
     #[arg(long, value_name = "N")]
     spp_axis: Option<u32>,
     /// Total samples per pixel, any count (overrides --spp-axis and the scene).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", visible_alias = "samples")]
     spp: Option<u32>,
     /// The most bounces a path may have: 1 is direct light only, each more adds a reflection or
     /// refraction (overrides the scene).
@@ -66,9 +66,9 @@ struct RenderArgs {
     /// Seed of all random sampling; the same seed gives the same image on any thread count.
     #[arg(long, value_name = "S")]
     seed: Option<u64>,
-    /// Integrator.
-    #[arg(long, value_name = "NAME")]
-    integrator: Option<IntegratorKind>,
+    /// The rendering algorithm (overrides the scene).
+    #[arg(long, value_name = "NAME", value_enum)]
+    integrator: Option<IntegratorArg>,
     /// Sample pattern: jittered or sobol.
     #[arg(long, value_name = "NAME")]
     sampler: Option<SamplerKind>,
@@ -123,6 +123,30 @@ struct RenderArgs {
     strict: bool,
 }
 
+/// The integrators, as the command line offers them (each with its one-line description).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum IntegratorArg {
+    /// Classic Whitted ray tracing with the seed report's Phong model: fast, no indirect light
+    Whitted,
+    /// Path tracing with next-event estimation and MIS: unbiased reference, noisy caustics
+    Path,
+    /// Photon mapping (Jensen): caustic and global maps, final gathering; caustics from point lights
+    Photon,
+    /// Stochastic progressive photon mapping: converges to the exact image, caustics included
+    Sppm,
+}
+
+impl From<IntegratorArg> for IntegratorKind {
+    fn from(a: IntegratorArg) -> Self {
+        match a {
+            IntegratorArg::Whitted => IntegratorKind::Whitted,
+            IntegratorArg::Path => IntegratorKind::Path,
+            IntegratorArg::Photon => IntegratorKind::Photon,
+            IntegratorArg::Sppm => IntegratorKind::Sppm,
+        }
+    }
+}
+
 fn parse_define(s: &str) -> Result<(String, String), String> {
     match s.split_once('=') {
         Some((k, v)) if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => {
@@ -151,7 +175,7 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
             spp: args.spp.or(args.iterations),
             max_depth: args.max_depth,
             seed: args.seed,
-            integrator: args.integrator,
+            integrator: args.integrator.map(IntegratorKind::from),
             sampler: args.sampler,
             antialias: args.no_antialias.then_some(false),
             photon: PhotonOptions {
@@ -195,7 +219,10 @@ fn main() -> ExitCode {
         if CANCEL.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\nstopping: finishing the tiles in flight, then writing the image (Ctrl-C again to quit at once)");
+        eprintln!(
+            "\nstopping: finishing the work in flight, then writing the image if a complete pass is done \
+             (Ctrl-C again to quit at once)"
+        );
     });
     let result = match cli.command {
         Command::Render(args) => run(*args, &CANCEL),
@@ -205,7 +232,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if matches!(e.downcast_ref::<AppError>(), Some(AppError::Interrupted { .. })) {
+            if matches!(
+                e.downcast_ref::<AppError>(),
+                Some(AppError::Interrupted { .. } | AppError::InterruptedEarly { .. })
+            ) {
                 ExitCode::from(130)
             } else {
                 ExitCode::FAILURE

@@ -41,7 +41,7 @@ material = "floor"
 #[test]
 fn photon_irradiance_under_a_point_light_matches_i_cos_over_d2() {
     let s = common::scene(FLOOR_UNDER_POINT_LIGHT);
-    let pass = trace::trace_global(&s.scene, 1_000_000, 1);
+    let pass = trace::trace_global(&s.scene, 1_000_000, 1, trace::Watch::none());
     let map = PhotonMap::build(pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, h.flags)).collect());
     let light = Vec3::new(0.0, 2.0, 0.0);
     let mut g = Gathered::new(4000);
@@ -60,7 +60,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
     let text = FLOOR_UNDER_POINT_LIGHT
         .replace("type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "type = \"plane\"");
     let s = common::scene(&text);
-    let pass = trace::trace_global(&s.scene, 400_000, 3);
+    let pass = trace::trace_global(&s.scene, 400_000, 3, trace::Watch::none());
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
     let expected = 4.0 * PI * 10.0 * 0.5;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
@@ -70,7 +70,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
         "corner = [-1, 0, 1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, -2]",
     );
     let s = common::scene(&square);
-    let pass = trace::trace_global(&s.scene, 400_000, 4);
+    let pass = trace::trace_global(&s.scene, 400_000, 4, trace::Watch::none());
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
     let fraction = 4.0 * (1.0f32 / 5.0).asin() / (4.0 * PI);
     let expected = 4.0 * PI * 10.0 * fraction;
@@ -106,7 +106,7 @@ material = "clear"
 #[test]
 fn caustic_map_holds_only_specular_paths() {
     let s = common::scene(GLASS_OVER_FLOOR);
-    let pass = trace::trace_caustic(&s.scene, 50_000, 5_000_000, 5);
+    let pass = trace::trace_caustic(&s.scene, 50_000, 5_000_000, 5, trace::Watch::none());
     assert!(pass.hits.len() >= 50_000, "{} stored", pass.hits.len());
     assert!(pass.hits.iter().all(|h| h.flags == CAUSTIC));
     // The only specular object is the sphere, so the last bounce of every caustic photon was on
@@ -120,9 +120,9 @@ fn caustic_map_holds_only_specular_paths() {
     assert_eq!(stray, 0, "{stray} caustic photons did not come from the glass");
     // Without mirrors or glass there is no caustic map.
     let diffuse = common::scene(&GLASS_OVER_FLOOR.replace("material = \"clear\"", "material = \"floor\""));
-    assert!(trace::trace_caustic(&diffuse.scene, 1000, 100_000, 5).hits.is_empty());
+    assert!(trace::trace_caustic(&diffuse.scene, 1000, 100_000, 5, trace::Watch::none()).hits.is_empty());
     // The global map flags as caustic exactly the photons that arrived through glass alone.
-    let global = trace::trace_global(&s.scene, 200_000, 6);
+    let global = trace::trace_global(&s.scene, 200_000, 6, trace::Watch::none());
     let flagged = global.hits.iter().filter(|h| h.flags & CAUSTIC != 0);
     assert!(flagged.clone().count() > 100 && flagged.clone().all(came_through_glass));
     // ... and only those: photons landing outside the glass's shadow came straight.

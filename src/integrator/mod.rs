@@ -16,6 +16,7 @@ pub use whitted::Whitted;
 use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays};
 use crate::scene::Scene;
 use crate::scene::desc::{IntegratorDesc, IntegratorKind};
+use std::sync::atomic::AtomicBool;
 
 /// One of caustic's integrators, ready to render.
 pub enum Integrator {
@@ -25,21 +26,32 @@ pub enum Integrator {
     Sppm(Sppm),
 }
 
+/// The render was stopped (Ctrl-C) while an integrator was being made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cancelled;
+
 impl Integrator {
-    /// Makes the integrator `desc` asks for (photon maps are traced and built here).
-    pub fn new(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Self {
+    /// Makes the integrator `desc` asks for (photon maps are traced and built here, with their
+    /// progress shown when `settings.progress`); `Err(Cancelled)` soon after `cancel` is set.
+    pub fn new(
+        desc: &IntegratorDesc,
+        scene: &Scene,
+        settings: &RenderSettings,
+        cancel: &AtomicBool,
+    ) -> Result<Self, Cancelled> {
         let depth = desc.depth_limit(desc.kind);
-        match desc.kind {
+        Ok(match desc.kind {
             IntegratorKind::Whitted => {
                 Integrator::Whitted(Whitted { max_depth: depth, area_samples: desc.light_samples })
             }
             IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth }),
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
-                Integrator::Photon(Box::new(PhotonIntegrator::build(scene, config)))
+                let pm = PhotonIntegrator::build_watched(scene, config, cancel, settings.progress).ok_or(Cancelled)?;
+                Integrator::Photon(Box::new(pm))
             }
             IntegratorKind::Sppm => Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, settings.pixels()) }),
-        }
+        })
     }
 
     pub fn kind(&self) -> IntegratorKind {

@@ -16,14 +16,16 @@ use crate::geometry::{Hit, Ray};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
-use crate::photon::trace::{self, PhotonPass};
+use crate::photon::trace::{self, PhotonPass, Watch};
 use crate::photon::{Gathered, Photon, PhotonMap};
+use crate::progress::Progress;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::sampling::warp::cosine_hemisphere;
 use crate::scene::Scene;
 use crate::scene::desc::{IntegratorDesc, PhotonOptions};
 use std::f32::consts::PI;
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// Settings of the photon-mapping integrator.
@@ -118,16 +120,54 @@ fn to_photons(pass: &PhotonPass) -> Vec<Photon> {
 }
 
 impl PhotonIntegrator {
-    /// Traces both photon passes and builds the maps.
+    /// Traces both photon passes and builds the maps (no progress shown, never cancelled).
     pub fn build(scene: &Scene, config: PhotonConfig) -> Self {
+        let never = AtomicBool::new(false);
+        Self::build_watched(scene, config, &never, false).unwrap_or_else(|| unreachable!("not cancelled"))
+    }
+
+    /// Traces both photon passes and builds the maps, showing each phase's progress when
+    /// `progress` and stopping soon after `cancel` is set (then `None`): photon tracing between
+    /// chunks of 4096 photons, the maps between levels of the tree, the irradiance records
+    /// between chunks.
+    pub fn build_watched(scene: &Scene, config: PhotonConfig, cancel: &AtomicBool, progress: bool) -> Option<Self> {
         let t0 = Instant::now();
-        let global = trace::trace_global(scene, config.photons, config.seed);
-        let caustic = trace::trace_caustic(scene, config.caustic_photons, config.caustic_cap, config.seed);
+        let bar = Progress::new(progress, "photons", config.photons, None);
+        let global = trace::trace_global(scene, config.photons, config.seed, Watch { cancel, progress: Some(&bar) });
+        bar.finish(&format!("{} global photons traced, {} stored", global.emitted, global.hits.len()));
+        if global.cancelled {
+            return None;
+        }
+        let bar = Progress::new(progress, "caustics", config.caustic_cap, None);
+        let caustic = trace::trace_caustic(
+            scene,
+            config.caustic_photons,
+            config.caustic_cap,
+            config.seed,
+            Watch { cancel, progress: Some(&bar) },
+        );
+        bar.finish(&format!("{} caustic photons traced, {} stored", caustic.emitted, caustic.hits.len()));
+        if caustic.cancelled {
+            return None;
+        }
         let trace_time = t0.elapsed();
         let t1 = Instant::now();
+        let bar = Progress::new(progress, "maps", 0, None);
         let (gp, cp) = rayon::join(|| to_photons(&global), || to_photons(&caustic));
-        let (global_map, caustic_map) = rayon::join(|| PhotonMap::build(gp), || PhotonMap::build(cp));
-        let irradiance = precompute_irradiance(&global.hits, &global_map, config.gather_k, config.max_radius);
+        let (global_map, caustic_map) =
+            rayon::join(|| PhotonMap::build_cancellable(gp, cancel), || PhotonMap::build_cancellable(cp, cancel));
+        let (global_map, caustic_map) = (global_map?, caustic_map?);
+        bar.finish("photon maps built");
+        let records = global.hits.len().div_ceil(IRRADIANCE_STRIDE) as u64;
+        let bar = Progress::new(progress, "gather", records, None);
+        let irradiance = precompute_irradiance(
+            &global.hits,
+            &global_map,
+            config.gather_k,
+            config.max_radius,
+            Watch { cancel, progress: Some(&bar) },
+        )?;
+        bar.finish(&format!("{records} irradiance records precomputed"));
         let stats = PhotonStats {
             global_emitted: global.emitted,
             global_stored: global_map.len(),
@@ -139,7 +179,7 @@ impl PhotonIntegrator {
             global_bytes: global_map.memory_bytes(),
             caustic_bytes: caustic_map.memory_bytes(),
         };
-        PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats }
+        Some(PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats })
     }
 
     /// Outgoing diffuse radiance at a final-gather hit from the nearest precomputed irradiance
@@ -291,13 +331,24 @@ impl PhotonIntegrator {
 }
 
 /// Irradiance at every `IRRADIANCE_STRIDE`-th global photon from its `k` nearest neighbours
-/// (facing the same way and near its tangent plane), stored as a map of its own.
-fn precompute_irradiance(hits: &[trace::PhotonHit], map: &PhotonMap, k: usize, max_r: f32) -> PhotonMap {
+/// (facing the same way and near its tangent plane), stored as a map of its own; `None` when
+/// cancelled.
+fn precompute_irradiance(
+    hits: &[trace::PhotonHit],
+    map: &PhotonMap,
+    k: usize,
+    max_r: f32,
+    watch: Watch,
+) -> Option<PhotonMap> {
     use rayon::prelude::*;
     let records: Vec<Photon> = hits
         .par_chunks(4096 * IRRADIANCE_STRIDE)
         .flat_map_iter(|chunk| {
             let mut g = Gathered::new(k);
+            if watch.cancelled() {
+                return Vec::new();
+            }
+            watch.advance(chunk.len().div_ceil(IRRADIANCE_STRIDE) as u64);
             chunk
                 .iter()
                 .step_by(IRRADIANCE_STRIDE)
@@ -319,7 +370,10 @@ fn precompute_irradiance(hits: &[trace::PhotonHit], map: &PhotonMap, k: usize, m
                 .collect::<Vec<_>>()
         })
         .collect();
-    PhotonMap::build(records)
+    if watch.cancelled() {
+        return None;
+    }
+    PhotonMap::build_cancellable(records, watch.cancel)
 }
 
 impl RayIntegrator for PhotonIntegrator {

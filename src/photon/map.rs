@@ -341,12 +341,22 @@ impl PhotonMap {
     /// photons at the median of the axis along which their bounding box is largest. Positions
     /// must be finite.
     pub fn build(photons: Vec<Photon>) -> Self {
-        Self::build_with_leaf_size(photons, LEAF_SIZE)
+        Self::build_with_leaf_size(photons, LEAF_SIZE, &std::sync::atomic::AtomicBool::new(false))
+            .unwrap_or_else(|| unreachable!("not cancelled"))
+    }
+
+    /// `build`, stopping between levels of the tree once `cancel` is set (then `None`).
+    pub fn build_cancellable(photons: Vec<Photon>, cancel: &std::sync::atomic::AtomicBool) -> Option<Self> {
+        Self::build_with_leaf_size(photons, LEAF_SIZE, cancel)
     }
 
     /// [`PhotonMap::build`] with leaves of at most `leaf_size >= 2` photons (tests use small
     /// leaves to get deep trees from few photons).
-    fn build_with_leaf_size(mut photons: Vec<Photon>, leaf_size: usize) -> Self {
+    fn build_with_leaf_size(
+        mut photons: Vec<Photon>,
+        leaf_size: usize,
+        cancel: &std::sync::atomic::AtomicBool,
+    ) -> Option<Self> {
         let n = photons.len();
         assert!(n <= u32::MAX as usize, "photon indices are u32");
         assert!(leaf_size >= 2, "with one photon a leaf, leaves could be empty");
@@ -356,6 +366,9 @@ impl PhotonMap {
         }
         let mut splits = vec![Split::default(); 1 << depth];
         for level in 0..depth {
+            if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+                return None;
+            }
             let nodes = 1usize << level;
             // Split the photon array into this level's node ranges.
             let mut ranges: Vec<&mut [Photon]> = Vec::with_capacity(nodes);
@@ -387,7 +400,7 @@ impl PhotonMap {
             }
         }
         let points = photons.iter().map(|p| p.position).collect();
-        PhotonMap { photons, points, splits, depth }
+        Some(PhotonMap { photons, points, splits, depth })
     }
 
     #[inline]

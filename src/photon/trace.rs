@@ -18,11 +18,13 @@ use crate::light::{EmittedPhoton, Light};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Frame, Vec3};
+use crate::progress::Progress;
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::f32::consts::PI;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Flag: the photon's first bounce (L D): light a direct-lighting computation already counts.
 pub const DIRECT: u8 = 1;
@@ -49,6 +51,36 @@ pub struct PhotonPass {
     pub emitted: u64,
     /// The caustic pass stopped at its emission cap before storing the requested number.
     pub capped: bool,
+    /// The pass was stopped by the cancel flag: its photons are incomplete.
+    pub cancelled: bool,
+}
+
+/// What a long computation watches while it runs: a cancel flag (Ctrl-C) it checks between
+/// chunks of work, and optionally a progress display it advances.
+#[derive(Clone, Copy)]
+pub struct Watch<'a> {
+    pub cancel: &'a AtomicBool,
+    pub progress: Option<&'a Progress>,
+}
+
+impl<'a> Watch<'a> {
+    /// Nothing to watch: never cancelled, no progress.
+    pub fn none() -> Watch<'static> {
+        static NEVER: AtomicBool = AtomicBool::new(false);
+        Watch { cancel: &NEVER, progress: None }
+    }
+
+    #[inline]
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
+    #[inline]
+    pub fn advance(&self, n: u64) {
+        if let Some(p) = self.progress {
+            p.inc(n);
+        }
+    }
 }
 
 const CHUNK: u64 = 4096;
@@ -56,7 +88,7 @@ const CHUNK: u64 = 4096;
 pub const MAX_BOUNCES: u32 = 64;
 
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power).
-pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64) -> PhotonPass {
+pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> PhotonPass {
     let mut hits = run_chunks(
         0,
         n_emit,
@@ -68,21 +100,22 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64) -> PhotonPass {
         },
         scene,
         false,
+        watch,
     );
     let scale = 1.0 / n_emit.max(1) as f32;
     hits.iter_mut().for_each(|h| h.flux *= scale);
-    PhotonPass { hits, emitted: n_emit, capped: false }
+    PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
 /// Traces caustic photons until `n_store` are stored or `cap` have been emitted.
-pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64) -> PhotonPass {
+pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Watch) -> PhotonPass {
     if scene.specular_targets.is_empty() || n_store == 0 {
         return PhotonPass::default();
     }
     let batch = n_store.max(CHUNK * 4);
     let mut hits = Vec::new();
     let mut emitted = 0u64;
-    while (hits.len() as u64) < n_store && emitted < cap {
+    while (hits.len() as u64) < n_store && emitted < cap && !watch.cancelled() {
         let n = batch.min(cap - emitted);
         hits.extend(run_chunks(
             emitted,
@@ -95,28 +128,35 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64) -> Photon
             },
             scene,
             true,
+            Watch { progress: None, ..watch },
         ));
         emitted += n;
+        watch.advance(n);
     }
     let scale = 1.0 / emitted.max(1) as f32;
     hits.iter_mut().for_each(|h| h.flux *= scale);
     let capped = (hits.len() as u64) < n_store;
-    PhotonPass { hits, emitted, capped }
+    PhotonPass { hits, emitted, capped, cancelled: watch.cancelled() }
 }
 
-/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order.
+/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order. Once
+/// the watch's cancel flag is set, chunks not yet started are skipped.
 fn run_chunks(
     first: u64,
     n: u64,
     emit: impl Fn(u64) -> Option<(EmittedPhoton, f32, Rng32)> + Sync,
     scene: &Scene,
     caustic_only: bool,
+    watch: Watch,
 ) -> Vec<PhotonHit> {
     let chunks = n.div_ceil(CHUNK);
     let parts: Vec<Vec<PhotonHit>> = (0..chunks)
         .into_par_iter()
         .map(|c| {
             let mut out = Vec::new();
+            if watch.cancelled() {
+                return out;
+            }
             let start = first + c * CHUNK;
             let end = (start + CHUNK).min(first + n);
             for i in start..end {
@@ -127,6 +167,7 @@ fn run_chunks(
                     }
                 }
             }
+            watch.advance(end - start);
             out
         })
         .collect();

@@ -3,9 +3,9 @@
 //! progress in between. A pass is whatever the integrator does for a range of sample indices
 //! over the whole image (camera samples over tiles, or SPPM iterations).
 
-use super::progress::Progress;
 use super::{RayStats, RenderControl, RenderSettings, RenderStats};
 use crate::film::Image;
+use crate::progress::Progress;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -28,15 +28,18 @@ pub struct Driver<'a> {
     rays: AtomicU64,
     shadow_rays: AtomicU64,
     nonfinite: AtomicU64,
+    samples: &'static str,
 }
 
 impl<'a> Driver<'a> {
     /// A driver whose passes together do `units_per_sample` units of work per sample index
-    /// (pixels, for progress).
+    /// (pixels, for progress); `phase` names it in the progress display and `samples` says what
+    /// one sample index is ("samples per pixel", "iterations").
     pub fn new(
         settings: &'a RenderSettings,
         control: &'a RenderControl<'a>,
         phase: &str,
+        samples: &'static str,
         units_per_sample: u64,
     ) -> Self {
         let total = if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul(settings.spp as u64) };
@@ -49,6 +52,7 @@ impl<'a> Driver<'a> {
             rays: AtomicU64::new(0),
             shadow_rays: AtomicU64::new(0),
             nonfinite: AtomicU64::new(0),
+            samples,
         }
     }
 
@@ -56,6 +60,11 @@ impl<'a> Driver<'a> {
     #[inline]
     pub fn cancelled(&self) -> bool {
         self.control.cancel.load(Ordering::Relaxed)
+    }
+
+    /// The flag that asks the render to stop, for work that checks it itself.
+    pub fn cancel_flag(&self) -> &'a std::sync::atomic::AtomicBool {
+        self.control.cancel
     }
 
     /// Adds a worker's counts: rays traced, samples dropped as NaN or infinite, work units done.
@@ -123,7 +132,7 @@ impl<'a> Driver<'a> {
                 last_checkpoint = Instant::now();
             }
         }
-        self.progress.finish();
+        self.progress.finish(&format!("{done} {} in {passes} passes", self.samples));
         RenderStats {
             wall: self.start.elapsed(),
             rays: RayStats {

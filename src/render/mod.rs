@@ -5,7 +5,6 @@
 //! same [`Driver`].
 
 mod driver;
-pub mod progress;
 mod tiles;
 
 pub use driver::{Driver, PassOutcome};

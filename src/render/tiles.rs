@@ -22,7 +22,7 @@ pub fn render_rays<I: RayIntegrator>(
     // The film is shared between the passes (which write it) and checkpoints (which read it
     // between passes), one after the other on this thread.
     let film = RefCell::new(Film::new(settings.width, settings.height, settings.layers));
-    let mut driver = Driver::new(settings, control, "render", settings.pixels());
+    let mut driver = Driver::new(settings, control, "render", "samples per pixel", settings.pixels());
     let mut stats = driver.run(
         |driver, range| render_pass(scene, integrator, driver, &mut film.borrow_mut(), range),
         || {

@@ -6,7 +6,7 @@
 //! image bit for bit).
 
 use super::Scene;
-use super::desc::{LoadInfo, ShadingDesc};
+use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT};
@@ -31,6 +31,7 @@ pub struct SceneBuilder {
     specular_targets: Vec<(Vec3, f32)>,
     triangles: usize,
     degenerate_triangles: usize,
+    mesh_info: Vec<MeshInfo>,
 }
 
 impl SceneBuilder {
@@ -60,11 +61,17 @@ impl SceneBuilder {
         self.note_specular(first, material);
     }
 
-    /// Adds a triangle mesh (zero-area triangles are skipped and counted).
-    pub fn add_mesh(&mut self, mesh: TriangleMesh, material: u32) {
+    /// Adds a triangle mesh (zero-area triangles are skipped and counted); `name` says where it
+    /// came from, for the log.
+    pub fn add_mesh(&mut self, mesh: TriangleMesh, material: u32, name: &str) {
         let first = self.prims.len();
         let id = self.meshes.len() as u32;
         let (tris, skipped) = mesh.triangles(id);
+        self.mesh_info.push(MeshInfo {
+            name: name.to_string(),
+            triangles: tris.len(),
+            bounds: Aabb::from_points(&mesh.positions),
+        });
         self.triangles += tris.len();
         self.degenerate_triangles += skipped;
         self.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material, light: NO_LIGHT }));
@@ -109,6 +116,7 @@ impl SceneBuilder {
         let t0 = Instant::now();
         let bvh = Bvh::build(self.prims);
         let info = LoadInfo {
+            meshes: self.mesh_info,
             primitives: bvh.prims.len(),
             triangles: self.triangles,
             degenerate_triangles: self.degenerate_triangles,

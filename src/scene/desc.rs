@@ -226,9 +226,20 @@ pub struct SceneDescription {
     pub warnings: Vec<String>,
 }
 
+/// What the log says about a mesh: a user scaling a scanned model needs its size.
+#[derive(Clone, Debug)]
+pub struct MeshInfo {
+    /// The file it came from (or what made it).
+    pub name: String,
+    pub triangles: usize,
+    /// Bounds after its transform, in scene units.
+    pub bounds: crate::geometry::Aabb,
+}
+
 /// Facts about the built geometry, for the log.
 #[derive(Clone, Debug, Default)]
 pub struct LoadInfo {
+    pub meshes: Vec<MeshInfo>,
     pub primitives: usize,
     pub triangles: usize,
     pub degenerate_triangles: usize,

@@ -28,7 +28,7 @@ use crate::film::{CAUSTIC, DIRECT, INDIRECT, Image, SPECULAR};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
-use crate::photon::trace::{self, PhotonHit};
+use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::hash_seed;
 use crate::scene::Scene;
@@ -162,15 +162,14 @@ impl Sppm {
             peak_bytes: 0,
         });
         let iterations = Cell::new(0u32);
-        let mut driver = Driver::new(settings, control, "sppm", settings.pixels());
+        let mut driver = Driver::new(settings, control, "sppm", "iterations", settings.pixels());
         let mut stats = driver.run(
             |driver, range| {
                 let mut state = state.borrow_mut();
                 for it in range {
-                    if driver.cancelled() {
+                    if driver.cancelled() || !self.iteration(scene, driver, &mut state, it) {
                         return PassOutcome::Interrupted;
                     }
-                    self.iteration(scene, driver, &mut state, it);
                     iterations.set(iterations.get() + 1);
                 }
                 PassOutcome::Complete
@@ -185,8 +184,9 @@ impl Sppm {
         RenderOutput { image: state.image(settings, it), layers, stats }
     }
 
-    /// One iteration: visible points, photons, statistics.
-    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) {
+    /// One iteration: visible points, photons, statistics. Returns false when the render was
+    /// cancelled during it, leaving every pixel as it was.
+    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) -> bool {
         let config = &self.config;
         let settings = driver.settings;
         let w = settings.width;
@@ -195,26 +195,42 @@ impl Sppm {
             let b = scene.bounds();
             if b.is_empty() || !b.diagonal().is_finite() { 1.0 } else { b.diagonal() }
         };
-        // Pass 1: visible points, with emitted and direct light added to each pixel.
+        // Pass 1: visible points, with the emitted and direct light each pixel's sample found.
+        let samples: Vec<CameraSample> = (0..n_pixels)
+            .into_par_iter()
+            .with_min_len(64)
+            .map(|k| {
+                let mut stats = RayStats::default();
+                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
+                driver.record(&stats, 0, 0);
+                sample
+            })
+            .collect();
+        // Pass 2: photons, without their first hits (direct light is traced above). A Ctrl-C
+        // here abandons the iteration before any pixel has changed.
+        let seed = hash_seed(&[settings.seed, it as u64]);
+        let watch = Watch { cancel: driver.cancel_flag(), progress: None };
+        let pass = trace::trace_global(scene, config.photons_per_iter, seed, watch);
+        if pass.cancelled {
+            return false;
+        }
+        let hits: Vec<PhotonHit> = pass.hits.into_iter().filter(|h| h.flags & trace::DIRECT == 0).collect();
+        // The camera samples' light goes into the pixels, and new visible points get a radius.
         let vps: Vec<Option<VisiblePoint>> = state
             .pixels
             .par_iter_mut()
             .zip(layers_of(&mut state.layers, n_pixels))
-            .enumerate()
+            .zip(samples.into_par_iter())
             .with_min_len(64)
-            .map(|(k, (px, layers))| {
-                let mut stats = RayStats::default();
-                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
-                let mut bad = 0;
+            .map(|((px, layers), sample)| {
                 if sample.ld.is_finite() {
                     px.ld += sample.ld;
                     if let Some(l) = layers {
                         l.ld[usize::from(sample.specular)] += sample.ld;
                     }
                 } else {
-                    bad = 1;
+                    driver.record(&RayStats::default(), 1, 0);
                 }
-                driver.record(&stats, bad, 0);
                 let vp = sample.point;
                 if let Some(v) = &vp
                     && px.r == 0.0
@@ -224,10 +240,6 @@ impl Sppm {
                 vp
             })
             .collect();
-        // Pass 2: photons, without their first hits (direct light is traced above).
-        let seed = hash_seed(&[settings.seed, it as u64]);
-        let pass = trace::trace_global(scene, config.photons_per_iter, seed);
-        let hits: Vec<PhotonHit> = pass.hits.into_iter().filter(|h| h.flags & trace::DIRECT == 0).collect();
         let max_r = state.pixels.iter().map(|p| p.r).fold(0.0f32, f32::max);
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
@@ -280,6 +292,7 @@ impl Sppm {
         }
         state.peak_bytes = state.peak_bytes.max(bytes);
         driver.record(&RayStats::default(), 0, settings.pixels());
+        true
     }
 
     /// Traces the camera sample of pixel `xy` in iteration `it` to its first non-specular

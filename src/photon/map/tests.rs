@@ -39,7 +39,7 @@ fn brute_force(points: &[Vec3], q: Vec3, k: usize, max_r2: f32) -> Vec<f32> {
 /// leaves, which make deep trees from few photons.
 fn check_against_brute_force(points: &[Vec3], queries: &[Vec3], k: usize, max_r2: f32) {
     for leaf_size in [LEAF_SIZE, 2, 5] {
-        let map = PhotonMap::build_with_leaf_size(photons_at(points), leaf_size);
+        let map = PhotonMap::build_with_leaf_size(photons_at(points), leaf_size, &Default::default()).unwrap();
         check_map_against_brute_force(&map, points, queries, k, max_r2);
     }
 }
@@ -255,7 +255,8 @@ fn tree_ranges_cover_every_photon_once() {
     // hold leaf_size / 2 ..= leaf_size photons.
     for leaf_size in [LEAF_SIZE, 2, 5] {
         for n in [1usize, 9, 16, 17, 100, 1023, 1025, 99_999] {
-            let map = PhotonMap::build_with_leaf_size(photons_at(&vec![Vec3::ZERO; n]), leaf_size);
+            let map = PhotonMap::build_with_leaf_size(photons_at(&vec![Vec3::ZERO; n]), leaf_size, &Default::default())
+                .unwrap();
             let d = map.depth;
             let smallest = if d == 0 { 1 } else { leaf_size / 2 };
             let mut next = 0;

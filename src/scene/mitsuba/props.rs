@@ -88,6 +88,8 @@ pub(super) struct Props<'a> {
     pub kind: String,
     pub entries: Vec<Entry<'a>>,
     pub used: Vec<Cell<bool>>,
+    /// Every property name the reader asked for, to suggest one for a misspelt name.
+    pub asked: std::cell::RefCell<Vec<String>>,
 }
 
 impl<'a> Cx<'a> {
@@ -243,7 +245,7 @@ impl<'a> Cx<'a> {
             entries.push(entry);
         }
         let used = entries.iter().map(|_| Cell::new(false)).collect();
-        Ok(Props { el, kind, entries, used })
+        Ok(Props { el, kind, entries, used, asked: Default::default() })
     }
 
     /// Warns about every entry of `p` nothing read.
@@ -254,13 +256,19 @@ impl<'a> Cx<'a> {
             }
             match e {
                 Entry::Prop { name, el } => {
-                    self.warn(
-                        el,
-                        format!(
-                            "property `{name}` of <{} type=\"{}\"> is not supported and is ignored",
+                    let asked = p.asked.borrow();
+                    let message = match closest(name, asked.iter().map(String::as_str)) {
+                        Some(known) => format!(
+                            "<{} type=\"{}\"> has no property `{name}` (did you mean `{known}`?); it is ignored",
                             p.el.tag, p.kind
                         ),
-                    )?;
+                        None => format!(
+                            "property `{name}` of <{} type=\"{}\"> is not read by caustic and is ignored",
+                            p.el.tag, p.kind
+                        ),
+                    };
+                    drop(asked);
+                    self.warn(el, message)?;
                 }
                 Entry::Object { el, at, .. } => {
                     let kind = self.attr(el, "type")?.map_or(String::new(), |t| t.0);
@@ -281,6 +289,7 @@ impl<'a> Cx<'a> {
 
     /// The property element named `name`, marked as read.
     pub(super) fn prop(&self, p: &Props<'a>, name: &str) -> Option<&'a El> {
+        p.asked.borrow_mut().push(name.to_string());
         p.entries.iter().zip(&p.used).find_map(|(e, used)| match e {
             Entry::Prop { name: n, el } if n == name => {
                 used.set(true);
@@ -292,6 +301,9 @@ impl<'a> Cx<'a> {
 
     /// A nested object named `name`, or (when `tag` matches) an unnamed one; marked as read.
     pub(super) fn object(&self, p: &Props<'a>, name: Option<&str>, tag: &str) -> Vec<(&'a El, &'a El)> {
+        if let Some(n) = name {
+            p.asked.borrow_mut().push(n.to_string());
+        }
         let mut out = Vec::new();
         for (e, used) in p.entries.iter().zip(&p.used) {
             if let Entry::Object { name: n, el, at } = e {
@@ -536,4 +548,39 @@ impl<'a> Cx<'a> {
             _ => Err(self.wrong_type(el, name, "a <float> or a <string> naming a material")),
         }
     }
+}
+
+/// The name among `known` closest to `name` by edit distance, when it is close enough to be a
+/// misspelling (at most a third of the name's letters differ, and at least one does).
+pub(super) fn closest<'k>(name: &str, known: impl Iterator<Item = &'k str>) -> Option<&'k str> {
+    let limit = (name.chars().count() / 3).max(1);
+    known
+        .filter(|k| *k != name)
+        .map(|k| (edit_distance(name, k), k))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
+}
+
+/// Levenshtein distance, counting a swap of two neighbouring letters as one edit (so `raduis`
+/// is one edit from `radius`).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            d[i][j] = (d[i - 1][j] + 1).min(d[i][j - 1] + 1).min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                d[i][j] = d[i][j].min(d[i - 2][j - 2] + 1);
+            }
+        }
+    }
+    d[a.len()][b.len()]
 }

@@ -97,6 +97,7 @@ impl<'a> Cx<'a> {
             }
             "obj" | "ply" | "disk" => {
                 let mut face_normals = false;
+                let mut name = kind.clone();
                 let mesh = if kind == "disk" {
                     disk_mesh(DISK_SEGMENTS)
                 } else {
@@ -104,6 +105,7 @@ impl<'a> Cx<'a> {
                         self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
                     })?;
                     let path = self.src(fel).base.join(&file);
+                    name = file.clone();
                     let loaded =
                         if kind == "obj" { TriangleMesh::load_obj(&path) } else { crate::shape::mesh::load_ply(&path) };
                     let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
@@ -152,7 +154,7 @@ impl<'a> Cx<'a> {
                     }
                 }
                 if emitters_out.is_empty() {
-                    mesh_out = Some(mesh);
+                    mesh_out = Some((mesh, name));
                 }
             }
             other => {
@@ -184,8 +186,8 @@ impl<'a> Cx<'a> {
             }
             return self.finish(&p);
         }
-        if let Some(mesh) = mesh_out {
-            b.geometry.add_mesh(mesh, material);
+        if let Some((mesh, mesh_name)) = mesh_out {
+            b.geometry.add_mesh(mesh, material, &mesh_name);
         }
         if !emitters_out.is_empty() {
             b.geometry.add_object(emitters_out.iter().map(Emitter::shape), material);

@@ -22,8 +22,36 @@ impl<'a> Cx<'a> {
         for value in self.array(value, "lights")? {
             let span = value.span();
             let (kind, value) = self.tagged(value, "light", schema::LIGHT_KINDS)?;
+            if kind == "area" {
+                self.check_area_keys(&value)?;
+            }
             let d: LightDesc = self.de(value)?;
             self.light(kind, &d, span, geometry)?;
+        }
+        Ok(())
+    }
+
+    /// An area light takes the keys of its shape only: a key of the other shape is an error at
+    /// its place, not silently ignored.
+    fn check_area_keys(&self, value: &Spanned<DeValue<'a>>) -> Result<(), SceneError> {
+        let DeValue::Table(table) = value.get_ref() else { return Ok(()) };
+        let shape = table.get("shape").and_then(|v| v.get_ref().as_str()).unwrap_or("quad");
+        let (own, other): (&[&str], &[&str]) = match shape {
+            "sphere" => (schema::AREA_SPHERE_KEYS, schema::AREA_QUAD_KEYS),
+            "quad" => (schema::AREA_QUAD_KEYS, schema::AREA_SPHERE_KEYS),
+            _ => return Ok(()),
+        };
+        for key in table.keys() {
+            let k: &str = key.get_ref();
+            if other.contains(&k) && !own.contains(&k) {
+                return Err(self.at(
+                    key.span(),
+                    format!(
+                        "`{k}` is not a key of a {shape} area light; it takes: shape, {}, transform, color, intensity",
+                        own.join(", ")
+                    ),
+                ));
+            }
         }
         Ok(())
     }
@@ -219,7 +247,11 @@ impl<'a> Cx<'a> {
                 } else {
                     mesh.ensure_vertex_normals();
                 }
-                geometry.add_mesh(mesh, material);
+                let name = match &d.file {
+                    Some(f) => f.get_ref().display().to_string(),
+                    None => "torus_knot".to_string(),
+                };
+                geometry.add_mesh(mesh, material, &name);
             }
             _ => unreachable!("kind checked by tagged()"),
         }

@@ -22,6 +22,10 @@ pub const LIGHT_KINDS: &[(&str, &[&str])] = &[
     ("area", &["shape", "corner", "edge1", "edge2", "center", "radius", "transform", "color", "intensity"]),
 ];
 
+/// The keys only a quad or only a sphere area light takes.
+pub const AREA_QUAD_KEYS: &[&str] = &["corner", "edge1", "edge2"];
+pub const AREA_SPHERE_KEYS: &[&str] = &["center", "radius"];
+
 pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("sphere", &["material", "transform", "center", "radius"]),
     ("plane", &["material", "transform", "point", "normal"]),
