@@ -30,23 +30,24 @@ pub struct Tile {
     pub width: u32,
     pub height: u32,
     pub sum: Vec<Color>,
-    /// Samples accumulated per pixel (finite samples only).
+    /// Samples taken per pixel (non-finite ones count as black).
     pub count: Vec<u32>,
     /// Per-pixel sums of the four layers (empty when layers are not wanted).
     pub layers: Vec<[Color; 4]>,
 }
 
 impl Tile {
-    /// Adds one sample (its layers) to pixel `k` of the tile; a sample that is not finite is
-    /// dropped and `false` returned.
+    /// Adds one sample (its layers) to pixel `k` of the tile. A sample that is not finite counts
+    /// as black (as pbrt-v4 does), so the pixel still has the number of samples it was given and
+    /// one bad value cannot spoil it; `false` tells the caller to report it.
     #[inline]
     pub fn add(&mut self, k: usize, layers: &Layers) -> bool {
+        self.count[k] += 1;
         let c = layers[0] + layers[1] + layers[2] + layers[3];
         if !c.is_finite() {
             return false;
         }
         self.sum[k] += c;
-        self.count[k] += 1;
         if let Some(l) = self.layers.get_mut(k) {
             for (acc, v) in l.iter_mut().zip(layers) {
                 *acc += *v;
