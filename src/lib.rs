@@ -10,6 +10,7 @@ pub mod accel;
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod farm;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

@@ -1,7 +1,8 @@
 //! The `caustic` command line: parses arguments and hands them to the library.
 
 use anyhow::Result;
-use caustic::app::{AppError, RenderOptions, render_file};
+use caustic::app::{AppError, RenderOptions, SlurmOptions, farm_slurm, merge_files, render_file};
+use caustic::farm::shard::ShardSpec;
 use caustic::sampling::SamplerKind;
 use caustic::scene::desc::{IntegratorKind, PhotonOptions};
 use caustic::scene::{LoadOptions, Overrides};
@@ -23,8 +24,61 @@ struct Cli {
 enum Command {
     /// Render a scene file to a PNG (8-bit sRGB) or EXR (32-bit float linear) image.
     Render(Box<RenderArgs>),
+    /// Merge the partial images of a render's shards (`render --shard`) into its image.
+    Merge(MergeArgs),
+    /// Split a render over a cluster's scheduler: shards as an array job, then a merge job.
+    #[command(subcommand)]
+    Farm(FarmCommand),
     /// Render the built-in benchmark scenes and print rays per second.
     Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The partial images (the `-o` files of `caustic render --shard I/N`).
+    #[arg(required = true, value_name = "PART")]
+    parts: Vec<PathBuf>,
+    /// The merged image, .png or .exr (with --layers parts, its layers are written beside it).
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    /// Write the image of the samples the parts hold even when some are missing.
+    #[arg(long)]
+    allow_partial: bool,
+    /// No summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Submit to Slurm: an array job of shards (requeued on preemption) and a merge job that
+    /// waits for it. The scene, its files, caustic and the output must be on a file system that
+    /// every node shares.
+    Slurm(Box<SlurmArgs>),
+}
+
+#[derive(clap::Args)]
+struct SlurmArgs {
+    #[command(flatten)]
+    render: RenderArgs,
+    /// Number of shards (array tasks) to split the samples into.
+    #[arg(long, value_name = "N")]
+    shards: u32,
+    /// Slurm partition for both jobs.
+    #[arg(long, value_name = "NAME")]
+    partition: Option<String>,
+    /// Slurm time limit of each job (sbatch --time), e.g. 2:00:00.
+    #[arg(long, value_name = "TIME")]
+    time_limit: Option<String>,
+    /// One more sbatch option for both jobs, e.g. --sbatch-arg=--account=lab (repeatable).
+    #[arg(long = "sbatch-arg", value_name = "ARG", allow_hyphen_values = true)]
+    sbatch_arg: Vec<String>,
+    /// Wait for the jobs, report their progress and whether the merge succeeded.
+    #[arg(long)]
+    wait: bool,
+    /// Write the scripts next to the output but do not submit them.
+    #[arg(long)]
+    dry_run: bool,
 }
 
 #[derive(clap::Args)]
@@ -37,7 +91,7 @@ struct BenchArgs {
     repeats: u32,
 }
 
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone, Debug, PartialEq)]
 struct RenderArgs {
     /// Scene file: TOML (see docs/scene-format.md) or Mitsuba 3 XML (.xml).
     scene: PathBuf,
@@ -115,6 +169,11 @@ struct RenderArgs {
     /// No progress bar or summary on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// Render shard I of N of the samples (counting from 0) to a partial image (.exr) for
+    /// `caustic merge`; `auto/N` takes I from SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX or
+    /// AWS_BATCH_JOB_ARRAY_INDEX. Run again after a stop, it resumes.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<ShardSpec>,
     /// Mitsuba scenes: give parameter `$NAME` the value VALUE (repeatable; wins over <default>).
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     define: Vec<(String, String)>,
@@ -124,7 +183,7 @@ struct RenderArgs {
 }
 
 /// The integrators, as the command line offers them (each with its one-line description).
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
 enum IntegratorArg {
     /// Classic Whitted ray tracing with the seed report's Phong model: fast, no indirect light
     Whitted,
@@ -164,8 +223,55 @@ fn seconds(v: Option<f64>, name: &str) -> Result<Option<Duration>> {
     }
 }
 
-fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
-    let opts = RenderOptions {
+impl RenderArgs {
+    /// The options that change what is rendered, as arguments that parse back to them (for the
+    /// shards of a farm); the scene, output and shard are left out.
+    fn to_args(&self) -> Vec<String> {
+        let mut a: Vec<String> = Vec::new();
+        let mut opt = |name: &str, v: Option<String>| {
+            if let Some(v) = v {
+                a.push(format!("--{name}={v}"));
+            }
+        };
+        opt("width", self.width.map(|v| v.to_string()));
+        opt("height", self.height.map(|v| v.to_string()));
+        opt("spp-axis", self.spp_axis.map(|v| v.to_string()));
+        opt("spp", self.spp.map(|v| v.to_string()));
+        opt("max-depth", self.max_depth.map(|v| v.to_string()));
+        opt("threads", self.threads.map(|v| v.to_string()));
+        opt("seed", self.seed.map(|v| v.to_string()));
+        opt("integrator", self.integrator.map(|v| format!("{v:?}").to_lowercase()));
+        opt("sampler", self.sampler.map(|v| format!("{v:?}").to_lowercase()));
+        opt("photons", self.photons.map(|v| v.to_string()));
+        opt("caustic-photons", self.caustic_photons.map(|v| v.to_string()));
+        opt("gather", self.gather.map(|v| v.to_string()));
+        opt("gather-k", self.gather_k.map(|v| v.to_string()));
+        opt("max-radius", self.max_radius.map(|v| format!("{v:?}")));
+        opt("iterations", self.iterations.map(|v| v.to_string()));
+        opt("photons-per-iter", self.photons_per_iter.map(|v| v.to_string()));
+        opt("initial-radius", self.initial_radius.map(|v| format!("{v:?}")));
+        opt("max-memory", self.max_memory.map(|v| v.to_string()));
+        opt("time", self.time.map(|v| format!("{v:?}")));
+        opt("checkpoint", self.checkpoint.map(|v| format!("{v:?}")));
+        for flag in [
+            ("no-antialias", self.no_antialias),
+            ("layers", self.layers),
+            ("quiet", self.quiet),
+            ("strict", self.strict),
+        ] {
+            if flag.1 {
+                a.push(format!("--{}", flag.0));
+            }
+        }
+        for (k, v) in &self.define {
+            a.push(format!("-D{k}={v}"));
+        }
+        a
+    }
+
+    fn options(self) -> Result<RenderOptions> {
+        let args = self;
+        Ok(RenderOptions {
         scene: args.scene,
         output: args.output,
         overrides: Overrides {
@@ -196,8 +302,42 @@ fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
         time_limit: seconds(args.time, "time")?,
         checkpoint: seconds(args.checkpoint, "checkpoint")?,
         quiet: args.quiet,
+        shard: args.shard,
+        })
+    }
+}
+
+fn run(args: RenderArgs, cancel: &'static AtomicBool) -> Result<()> {
+    render_file(&args.options()?, cancel)?;
+    Ok(())
+}
+
+fn merge(args: MergeArgs) -> Result<()> {
+    merge_files(&args.parts, &args.output, args.allow_partial, args.quiet)?;
+    Ok(())
+}
+
+fn farm(command: FarmCommand, cancel: &'static AtomicBool) -> Result<()> {
+    let FarmCommand::Slurm(args) = command;
+    let mut render = args.render;
+    anyhow::ensure!(render.shard.is_none(), "--shard is chosen by the farm: give --shards N instead");
+    // Checkpoints bound what a shard killed without warning (node failure) loses.
+    if render.checkpoint.is_none() {
+        render.checkpoint = Some(600.0);
+    }
+    let render_args = render.to_args();
+    let opts = SlurmOptions {
+        render: render.options()?,
+        render_args,
+        shards: args.shards,
+        partition: args.partition,
+        time_limit: args.time_limit,
+        sbatch_args: args.sbatch_arg,
+        wait: args.wait,
+        dry_run: args.dry_run,
+        poll: None,
     };
-    render_file(&opts, cancel)?;
+    farm_slurm(&opts, cancel)?;
     Ok(())
 }
 
@@ -214,6 +354,7 @@ fn bench(args: BenchArgs) -> Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     static CANCEL: AtomicBool = AtomicBool::new(false);
+    static TERMINATED: AtomicBool = AtomicBool::new(false);
     // First Ctrl-C: finish the tiles in flight and write the image so far. Second: quit now.
     let _ = ctrlc::set_handler(|| {
         if CANCEL.swap(true, Ordering::SeqCst) {
@@ -224,22 +365,51 @@ fn main() -> ExitCode {
              (Ctrl-C again to quit at once)"
         );
     });
+    // SIGTERM (Slurm preemption, scancel, a node drain): stop the same way, so that a shard saves
+    // its finished samples, and exit with 143 as a process ended by SIGTERM does. A second
+    // SIGTERM quits at once.
+    use signal_hook::consts::SIGTERM;
+    let _ = signal_hook::flag::register_conditional_shutdown(SIGTERM, 143, &TERMINATED);
+    let _ = signal_hook::flag::register(SIGTERM, &TERMINATED);
+    let _ = signal_hook::flag::register(SIGTERM, &CANCEL);
     let result = match cli.command {
         Command::Render(args) => run(*args, &CANCEL),
+        Command::Merge(args) => merge(args),
+        Command::Farm(command) => farm(command, &CANCEL),
         Command::Bench(args) => bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
-            if matches!(
+            let stopped = matches!(
                 e.downcast_ref::<AppError>(),
-                Some(AppError::Interrupted { .. } | AppError::InterruptedEarly { .. })
-            ) {
-                ExitCode::from(130)
-            } else {
-                ExitCode::FAILURE
+                Some(AppError::Interrupted { .. } | AppError::InterruptedEarly { .. } | AppError::ShardInterrupted { .. })
+            );
+            if stopped && TERMINATED.load(Ordering::SeqCst) {
+                eprintln!("terminated (SIGTERM): {e:#}");
+                return ExitCode::from(143);
             }
+            eprintln!("error: {e:#}");
+            if stopped { ExitCode::from(130) } else { ExitCode::FAILURE }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn render_options_survive_the_trip_through_a_farm_script() {
+        let argv = [
+            "caustic", "render", "s.toml", "--width=64", "--spp", "7", "--seed", "3", "--integrator", "photon",
+            "--sampler", "sobol", "--photons", "1000", "--max-radius", "0.1", "--gather", "0", "--layers",
+            "--no-antialias", "-D", "name=a b'c", "--checkpoint", "2.5", "--max-depth", "4",
+        ];
+        let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
+        let mut again = vec!["caustic".to_string(), "render".into(), "s.toml".into()];
+        again.extend(args.to_args());
+        let Cli { command: Command::Render(back) } = Cli::parse_from(&again) else { panic!() };
+        assert_eq!(back, args);
     }
 }

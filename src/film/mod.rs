@@ -1,12 +1,15 @@
 //! The film accumulates radiance samples per pixel; `Image` is the finished linear picture.
 //!
-//! The film is stored tile by tile, so each tile is owned by one worker while it renders and
-//! every pixel adds its samples in sample-index order: the sums, and so the image, are the same
-//! bit for bit whatever the thread count or the way samples are split into passes.
+//! Sums are exact integers (see [`fixed`]): the image is the same bit for bit whatever the
+//! thread count, the split of samples into passes, a checkpoint and resume in between, or the
+//! machines a render farm spreads the samples over. The film is stored tile by tile so that each
+//! tile is owned by one worker while it renders.
 
+pub mod fixed;
 pub mod output;
 
 use crate::math::Color;
+use fixed::{FixedRgb, add_rgb, mean, to_fixed_rgb};
 
 /// The light arriving along a camera ray, split by where it came from. The parts sum to the
 /// pixel's value:
@@ -23,17 +26,23 @@ pub const LAYER_NAMES: [&str; 4] = ["direct", "specular", "caustic", "indirect"]
 
 pub const TILE_SIZE: u32 = 16;
 
+/// Bytes the film keeps per pixel, without and with the four layers.
+pub const BYTES_PER_PIXEL: u64 = 48 + 4;
+pub const LAYER_BYTES_PER_PIXEL: u64 = 4 * 48;
+
 /// A rectangle of pixels with its accumulated sums.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Tile {
     pub x0: u32,
     pub y0: u32,
     pub width: u32,
     pub height: u32,
-    pub sum: Vec<Color>,
+    /// Exact per-pixel sums of the samples.
+    pub sum: Vec<FixedRgb>,
     /// Samples taken per pixel (non-finite ones count as black).
     pub count: Vec<u32>,
     /// Per-pixel sums of the four layers (empty when layers are not wanted).
-    pub layers: Vec<[Color; 4]>,
+    pub layers: Vec<[FixedRgb; 4]>,
 }
 
 impl Tile {
@@ -47,16 +56,18 @@ impl Tile {
         if !c.is_finite() {
             return false;
         }
-        self.sum[k] += c;
+        add_rgb(&mut self.sum[k], &to_fixed_rgb(c));
         if let Some(l) = self.layers.get_mut(k) {
             for (acc, v) in l.iter_mut().zip(layers) {
-                *acc += *v;
+                add_rgb(acc, &to_fixed_rgb(*v));
             }
         }
         true
     }
 }
 
+/// Per-pixel exact sums and sample counts of a render, tile by tile.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
@@ -71,40 +82,83 @@ impl Film {
                 let w = TILE_SIZE.min(width - x0);
                 let h = TILE_SIZE.min(height - y0);
                 let n = (w * h) as usize;
-                let layers = if layers { vec![[Color::ZERO; 4]; n] } else { Vec::new() };
-                tiles.push(Tile { x0, y0, width: w, height: h, sum: vec![Color::ZERO; n], count: vec![0; n], layers });
+                let layers = if layers { vec![[[0; 3]; 4]; n] } else { Vec::new() };
+                tiles.push(Tile { x0, y0, width: w, height: h, sum: vec![[0; 3]; n], count: vec![0; n], layers });
             }
         }
         Film { width, height, tiles }
     }
 
-    /// The average of the samples so far (black where a pixel has none yet).
-    pub fn image(&self) -> Image {
-        let mut img = Image::new(self.width, self.height);
-        for t in &self.tiles {
+    /// A film holding `n` samples per pixel whose means are `image` and `layers` (the four
+    /// layers, or none): how a progressive method whose result is not a sum of samples (SPPM)
+    /// stores its image for checkpoints and merging.
+    pub fn from_means(image: &Image, layers: &[Image], n: u32) -> Self {
+        let mut film = Film::new(image.width, image.height, layers.len() == 4);
+        let times = |c: Color| to_fixed_rgb(c).map(|v| v * n as i128);
+        for t in &mut film.tiles {
             for j in 0..t.height {
                 for i in 0..t.width {
+                    let (x, y) = (t.x0 + i, t.y0 + j);
                     let k = (j * t.width + i) as usize;
-                    let c = if t.count[k] > 0 { t.sum[k] / t.count[k] as f32 } else { Color::ZERO };
-                    img.set(t.x0 + i, t.y0 + j, c);
+                    t.sum[k] = times(image.get(x, y));
+                    t.count[k] = n;
+                    if let Some(l) = t.layers.get_mut(k) {
+                        for (acc, img) in l.iter_mut().zip(layers) {
+                            *acc = times(img.get(x, y));
+                        }
+                    }
                 }
             }
         }
-        img
+        film
     }
 
-    /// The average of layer `layer` (see `integrator::Layers`).
+    pub fn has_layers(&self) -> bool {
+        self.tiles.first().is_some_and(|t| !t.layers.is_empty())
+    }
+
+    /// The tile holding pixel (x, y) and the pixel's index in it.
+    #[inline]
+    pub fn locate(&self, x: u32, y: u32) -> (usize, usize) {
+        let tiles_x = self.width.div_ceil(TILE_SIZE);
+        let t = ((y / TILE_SIZE) * tiles_x + x / TILE_SIZE) as usize;
+        let k = ((y % TILE_SIZE) * self.tiles[t].width + x % TILE_SIZE) as usize;
+        (t, k)
+    }
+
+    /// Adds another film's samples to this one (same size and layers; checked by the caller).
+    pub fn add(&mut self, other: &Film) {
+        for (a, b) in self.tiles.iter_mut().zip(&other.tiles) {
+            for (s, o) in a.sum.iter_mut().zip(&b.sum) {
+                add_rgb(s, o);
+            }
+            for (c, o) in a.count.iter_mut().zip(&b.count) {
+                *c += *o;
+            }
+            for (l, o) in a.layers.iter_mut().zip(&b.layers) {
+                for (s, o) in l.iter_mut().zip(o) {
+                    add_rgb(s, o);
+                }
+            }
+        }
+    }
+
+    /// The average of the samples so far (black where a pixel has none yet).
+    pub fn image(&self) -> Image {
+        self.image_of(|t, k| mean(&t.sum[k], t.count[k]))
+    }
+
+    /// The average of layer `layer` (see [`Layers`]); black when the film keeps no layers.
     pub fn layer_image(&self, layer: usize) -> Image {
+        self.image_of(|t, k| t.layers.get(k).map_or(Color::ZERO, |l| mean(&l[layer], t.count[k])))
+    }
+
+    fn image_of(&self, value: impl Fn(&Tile, usize) -> Color) -> Image {
         let mut img = Image::new(self.width, self.height);
         for t in &self.tiles {
             for j in 0..t.height {
                 for i in 0..t.width {
-                    let k = (j * t.width + i) as usize;
-                    if let Some(l) = t.layers.get(k)
-                        && t.count[k] > 0
-                    {
-                        img.set(t.x0 + i, t.y0 + j, l[layer] / t.count[k] as f32);
-                    }
+                    img.set(t.x0 + i, t.y0 + j, value(t, (j * t.width + i) as usize));
                 }
             }
         }
@@ -114,6 +168,11 @@ impl Film {
     /// Fewest samples any pixel has.
     pub fn min_samples(&self) -> u32 {
         self.tiles.iter().flat_map(|t| t.count.iter().copied()).min().unwrap_or(0)
+    }
+
+    /// Most samples any pixel has.
+    pub fn max_samples(&self) -> u32 {
+        self.tiles.iter().flat_map(|t| t.count.iter().copied()).max().unwrap_or(0)
     }
 }
 

@@ -13,7 +13,8 @@ pub use photon::PhotonIntegrator;
 pub use sppm::Sppm;
 pub use whitted::Whitted;
 
-use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays};
+use crate::film::Film;
+use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays_from};
 use crate::scene::Scene;
 use crate::scene::desc::{IntegratorDesc, IntegratorKind};
 use std::sync::atomic::AtomicBool;
@@ -65,11 +66,26 @@ impl Integrator {
 
     /// Renders the image (and its layers when `settings.layers`).
     pub fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
+        let film = Film::new(settings.width, settings.height, settings.layers);
+        self.render_from(scene, settings, control, film)
+    }
+
+    /// Continues a render from `film`, which holds what an earlier run of the same render (from
+    /// `settings.first_sample`) finished: the remaining samples of each pixel for the ray
+    /// integrators, bit for bit as if never stopped; for SPPM, the remaining iterations as an
+    /// independent run combined with the earlier one by iteration count.
+    pub fn render_from(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        film: Film,
+    ) -> RenderOutput {
         match self {
-            Integrator::Whitted(i) => render_rays(scene, i, settings, control),
-            Integrator::Path(i) => render_rays(scene, i, settings, control),
-            Integrator::Photon(i) => render_rays(scene, i.as_ref(), settings, control),
-            Integrator::Sppm(i) => i.render(scene, settings, control),
+            Integrator::Whitted(i) => render_rays_from(scene, i, settings, control, film),
+            Integrator::Path(i) => render_rays_from(scene, i, settings, control, film),
+            Integrator::Photon(i) => render_rays_from(scene, i.as_ref(), settings, control, film),
+            Integrator::Sppm(i) => i.render(scene, settings, control, film),
         }
     }
 }

@@ -4,7 +4,7 @@
 //! over the whole image (camera samples over tiles, or SPPM iterations).
 
 use super::{RayStats, RenderControl, RenderSettings, RenderStats};
-use crate::film::Image;
+use crate::film::Film;
 use crate::progress::Progress;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -29,20 +29,29 @@ pub struct Driver<'a> {
     shadow_rays: AtomicU64,
     nonfinite: AtomicU64,
     samples: &'static str,
+    /// The sample index the first pass starts at.
+    first: u32,
 }
 
 impl<'a> Driver<'a> {
-    /// A driver whose passes together do `units_per_sample` units of work per sample index
-    /// (pixels, for progress); `phase` names it in the progress display and `samples` says what
-    /// one sample index is ("samples per pixel", "iterations").
+    /// A driver for sample indices `first..settings.spp`, whose passes together do
+    /// `units_per_sample` units of work per sample index (pixels, for progress); `phase` names it
+    /// in the progress display and `samples` says what one sample index is ("samples per pixel",
+    /// "iterations").
     pub fn new(
         settings: &'a RenderSettings,
         control: &'a RenderControl<'a>,
         phase: &str,
         samples: &'static str,
         units_per_sample: u64,
+        first: u32,
     ) -> Self {
-        let total = if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul(settings.spp as u64) };
+        let first = first.min(settings.spp);
+        let total = if settings.spp == u32::MAX {
+            0
+        } else {
+            units_per_sample.saturating_mul((settings.spp - first) as u64)
+        };
         let progress = Progress::new(settings.progress, phase, total, settings.time_limit);
         Driver {
             settings,
@@ -53,6 +62,7 @@ impl<'a> Driver<'a> {
             shadow_rays: AtomicU64::new(0),
             nonfinite: AtomicU64::new(0),
             samples,
+            first,
         }
     }
 
@@ -79,16 +89,17 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// Runs `pass` over growing ranges of sample indices until `settings.spp` are done, the time
-    /// limit is reached or the render is cancelled; `snapshot` gives the image so far and its
-    /// samples per pixel for checkpoints. Returns the statistics (`memory_bytes` left at 0).
+    /// Runs `pass` over growing ranges of sample indices until index `settings.spp` is reached,
+    /// the time limit is reached or the render is cancelled; `snapshot` hands the film so far to
+    /// its argument, for checkpoints. Returns the statistics (`memory_bytes` and
+    /// `samples_per_pixel` left at 0).
     pub fn run(
         &mut self,
         mut pass: impl FnMut(&Self, Range<u32>) -> PassOutcome,
-        snapshot: impl Fn() -> (Image, u32),
+        snapshot: impl Fn(&mut dyn FnMut(&Film)),
     ) -> RenderStats {
         let settings = self.settings;
-        let mut done = 0u32;
+        let mut done = self.first;
         let mut passes = 0u32;
         let mut interrupted = false;
         let mut last_checkpoint = Instant::now();
@@ -127,12 +138,11 @@ impl<'a> Driver<'a> {
                 && last_checkpoint.elapsed() >= every
                 && done < settings.spp
             {
-                let (image, spp) = snapshot();
-                cb(&image, spp);
+                snapshot(&mut |film| cb(film));
                 last_checkpoint = Instant::now();
             }
         }
-        self.progress.finish(&format!("{done} {} in {passes} passes", self.samples));
+        self.progress.finish(&format!("{} {} in {passes} passes", done - self.first, self.samples));
         RenderStats {
             wall: self.start.elapsed(),
             rays: RayStats {

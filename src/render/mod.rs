@@ -8,9 +8,9 @@ mod driver;
 mod tiles;
 
 pub use driver::{Driver, PassOutcome};
-pub use tiles::render_rays;
+pub use tiles::{render_rays, render_rays_from};
 
-use crate::film::{Image, Layers};
+use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
@@ -24,8 +24,11 @@ use std::time::Duration;
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
-    /// Samples per pixel to take (the cap when a time budget is also given).
+    /// Samples per pixel of the whole render (the cap when a time budget is also given).
     pub spp: u32,
+    /// The first sample index this run takes: it renders indices `first_sample..spp` (a shard of
+    /// a render farm takes a block of them; 0 otherwise).
+    pub first_sample: u32,
     /// Strata per axis of the jittered sampler (N of the N x N pattern).
     pub strata: u32,
     pub seed: u64,
@@ -49,6 +52,7 @@ impl RenderSettings {
             width: s.width,
             height: s.height,
             spp: s.spp,
+            first_sample: 0,
             strata: s.strata,
             seed: s.seed,
             sampler: s.sampler,
@@ -134,16 +138,28 @@ impl RenderStats {
     }
 }
 
-/// A finished render: the image, its layers (when asked for) and what it took.
+/// A finished render: the image, its layers (when asked for), the film they come from and what
+/// it took.
 pub struct RenderOutput {
     pub image: Image,
     /// The direct, specular, caustic and indirect layers, in that order (empty unless asked).
     pub layers: Vec<Image>,
+    /// The exact per-pixel sums behind the image (what a render-farm shard saves).
+    pub film: Film,
     pub stats: RenderStats,
 }
 
-/// Receives the image so far and its samples per pixel.
-pub type CheckpointFn<'a> = &'a (dyn Fn(&Image, u32) + Sync);
+impl RenderOutput {
+    /// The output of a render whose result is `film`.
+    pub fn from_film(film: Film, stats: RenderStats) -> Self {
+        let layers = (0..if film.has_layers() { 4 } else { 0 }).map(|k| film.layer_image(k)).collect();
+        RenderOutput { image: film.image(), layers, film, stats }
+    }
+}
+
+/// Receives the film so far (its `image()` and `min_samples()` are the picture and its samples
+/// per pixel).
+pub type CheckpointFn<'a> = &'a (dyn Fn(&Film) + Sync);
 
 /// Hooks into a running render.
 pub struct RenderControl<'a> {

@@ -1,7 +1,6 @@
-//! Passes of camera samples for ray integrators: each pass renders a range of sample indices
-//! for every pixel, tiles spread over all cores with rayon. Each tile is owned by one worker and
-//! every pixel adds its samples in index order, so the image is the same for any thread count
-//! and any split into passes.
+//! Passes of camera samples for ray integrators: each pass brings every pixel up to a sample
+//! index, tiles spread over all cores with rayon. The film's sums are exact, so the image is the
+//! same for any thread count, any split into passes and any resumption of a saved film.
 
 use super::driver::{Driver, PassOutcome};
 use super::{RayIntegrator, RayStats, RenderControl, RenderOutput, RenderSettings};
@@ -19,24 +18,34 @@ pub fn render_rays<I: RayIntegrator>(
     settings: &RenderSettings,
     control: &RenderControl,
 ) -> RenderOutput {
+    let film = Film::new(settings.width, settings.height, settings.layers);
+    render_rays_from(scene, integrator, settings, control, film)
+}
+
+/// Continues a render whose film holds, in each pixel, the samples from `settings.first_sample`
+/// up to its count (a checkpoint of an interrupted run): takes each pixel's remaining samples.
+pub fn render_rays_from<I: RayIntegrator>(
+    scene: &Scene,
+    integrator: &I,
+    settings: &RenderSettings,
+    control: &RenderControl,
+    film: Film,
+) -> RenderOutput {
+    let first = settings.first_sample.saturating_add(film.min_samples());
     // The film is shared between the passes (which write it) and checkpoints (which read it
     // between passes), one after the other on this thread.
-    let film = RefCell::new(Film::new(settings.width, settings.height, settings.layers));
-    let mut driver = Driver::new(settings, control, "render", "samples per pixel", settings.pixels());
+    let film = RefCell::new(film);
+    let mut driver = Driver::new(settings, control, "render", "samples per pixel", settings.pixels(), first);
     let mut stats = driver.run(
         |driver, range| render_pass(scene, integrator, driver, &mut film.borrow_mut(), range),
-        || {
-            let film = film.borrow();
-            (film.image(), film.min_samples())
-        },
+        |f| f(&film.borrow()),
     );
     let film = film.into_inner();
     stats.samples_per_pixel = film.min_samples();
-    let layers = (0..if settings.layers { 4 } else { 0 }).map(|k| film.layer_image(k)).collect();
-    RenderOutput { image: film.image(), layers, stats }
+    RenderOutput::from_film(film, stats)
 }
 
-/// Samples `range` of every pixel, tile by tile in parallel.
+/// Brings every pixel up to sample index `range.end`, tile by tile in parallel.
 fn render_pass<I: RayIntegrator>(
     scene: &Scene,
     integrator: &I,
@@ -57,8 +66,9 @@ fn render_pass<I: RayIntegrator>(
     if interrupted.into_inner() { PassOutcome::Interrupted } else { PassOutcome::Complete }
 }
 
-/// Renders samples `range` of every pixel of `tile`, adding them to its sums in index order.
-/// Returns the number of non-finite samples dropped.
+/// Renders the samples of every pixel of `tile` from the pixel's next index up to `range.end`
+/// (the pass's range, unless a resumed film left the pixel further on). Returns the number of
+/// non-finite samples dropped.
 fn render_tile<I: RayIntegrator>(
     scene: &Scene,
     integrator: &I,
@@ -73,7 +83,8 @@ fn render_tile<I: RayIntegrator>(
         for i in 0..tile.width {
             let (x, y) = (tile.x0 + i, tile.y0 + j);
             let k = (j * tile.width + i) as usize;
-            for index in range.clone() {
+            let next = settings.first_sample.saturating_add(tile.count[k]);
+            for index in next..range.end {
                 let (mut sampler, ray) = settings.camera_sample(scene, x, y, index);
                 let layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
                 if !tile.add(k, &layers) {

@@ -31,12 +31,24 @@ pub struct SceneBuilder {
     specular_targets: Vec<(Vec3, f32)>,
     triangles: usize,
     degenerate_triangles: usize,
+    /// Files read for the geometry (meshes), for the render's identity.
+    files: Vec<std::path::PathBuf>,
     mesh_info: Vec<MeshInfo>,
 }
 
 impl SceneBuilder {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Notes that the scene's content depends on the file `path` (a mesh read from it).
+    pub fn note_file(&mut self, path: &std::path::Path) {
+        self.files.push(path.to_path_buf());
+    }
+
+    /// The files noted with `note_file`, in order.
+    pub fn files(&self) -> &[std::path::PathBuf] {
+        &self.files
     }
 
     /// Adds a material; returns its index.
@@ -122,6 +134,7 @@ impl SceneBuilder {
             degenerate_triangles: self.degenerate_triangles,
             bvh_nodes: bvh.node_count(),
             bvh_build: t0.elapsed(),
+            files: self.files,
         };
         let bounds = bvh.bounds();
         let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };

@@ -224,6 +224,9 @@ pub struct SceneDescription {
     pub shading: ShadingDesc,
     /// Things the loader could not render exactly, each `file:line:col: message`.
     pub warnings: Vec<String>,
+    /// Every file the scene was read from: the scene file, files it includes and the files its
+    /// meshes come from, in the order read (what a render's identity hashes).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// What the log says about a mesh: a user scaling a scanned model needs its size.
@@ -245,6 +248,8 @@ pub struct LoadInfo {
     pub degenerate_triangles: usize,
     pub bvh_nodes: usize,
     pub bvh_build: Duration,
+    /// Every file the scene was read from (see `SceneDescription::files`).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// A built scene with its resolved sampling and the integrator it asks for.
@@ -342,7 +347,8 @@ impl SceneDescription {
             }
         }
         let camera = self.camera.build(sampling.width, sampling.height);
-        let (scene, info) = self.geometry.finish(camera, &self.shading);
+        let (scene, mut info) = self.geometry.finish(camera, &self.shading);
+        info.files = self.files;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }

@@ -31,7 +31,9 @@ pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    native::load_toml_str(&text, &path.display().to_string(), &base)
+    let mut desc = native::load_toml_str(&text, &path.display().to_string(), &base)?;
+    desc.files.insert(0, path.to_path_buf());
+    Ok(desc)
 }
 
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh

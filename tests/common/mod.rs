@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod slurm;
+
 use caustic::app::{LoadedScene, load, load_toml_str};
 use caustic::film::Image;
 use caustic::render::{RayIntegrator, RenderControl, render_rays};

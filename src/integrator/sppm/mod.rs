@@ -24,7 +24,7 @@
 mod grid;
 
 use super::path::direct_light;
-use crate::film::{CAUSTIC, DIRECT, INDIRECT, Image, SPECULAR};
+use crate::film::{CAUSTIC, DIRECT, Film, INDIRECT, Image, SPECULAR};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
@@ -152,9 +152,16 @@ struct CameraSample {
 }
 
 impl Sppm {
-    /// Renders `settings.spp` iterations (or until the time limit), one camera sample per pixel
-    /// per iteration.
-    pub fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
+    /// Renders iterations up to `settings.spp` (or until the time limit), one camera sample per
+    /// pixel per iteration, as a run of its own after the iterations `prior` holds (none for a
+    /// new render); the result is `prior` plus this run, each weighted by its iterations.
+    pub fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        prior: Film,
+    ) -> RenderOutput {
         let n_pixels = settings.pixels() as usize;
         let state = RefCell::new(State {
             pixels: vec![PixelStats::default(); n_pixels],
@@ -162,7 +169,15 @@ impl Sppm {
             peak_bytes: 0,
         });
         let iterations = Cell::new(0u32);
-        let mut driver = Driver::new(settings, control, "sppm", "iterations", settings.pixels());
+        // A render-farm shard runs iterations `first_sample..spp` as a progressive run of its
+        // own (fresh radii, its own photon seeds); see `farm` for how shards combine.
+        let first = settings.first_sample.saturating_add(prior.min_samples());
+        let mut driver = Driver::new(settings, control, "sppm", "iterations", settings.pixels(), first);
+        let combined = |film: Film| {
+            let mut all = prior.clone();
+            all.add(&film);
+            all
+        };
         let mut stats = driver.run(
             |driver, range| {
                 let mut state = state.borrow_mut();
@@ -174,14 +189,14 @@ impl Sppm {
                 }
                 PassOutcome::Complete
             },
-            || (state.borrow().image(settings, iterations.get()), iterations.get()),
+            |f| f(&combined(state.borrow().film(settings, iterations.get()))),
         );
         let state = state.into_inner();
         let it = iterations.get();
-        stats.samples_per_pixel = it;
         stats.memory_bytes = state.peak_bytes as u64;
-        let layers = (0..if settings.layers { 4 } else { 0 }).map(|k| state.layer_image(settings, it, k)).collect();
-        RenderOutput { image: state.image(settings, it), layers, stats }
+        let film = combined(state.film(settings, it));
+        stats.samples_per_pixel = film.min_samples();
+        RenderOutput::from_film(film, stats)
     }
 
     /// One iteration: visible points, photons, statistics. Returns false when the render was
@@ -393,6 +408,13 @@ impl State {
             img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
         }
         img
+    }
+
+    /// The image (and layers) after `iterations` as a film of that many samples per pixel.
+    fn film(&self, settings: &RenderSettings, iterations: u32) -> Film {
+        let n = if self.layers.is_empty() { 0 } else { 4 };
+        let layers: Vec<Image> = (0..n).map(|k| self.layer_image(settings, iterations, k)).collect();
+        Film::from_means(&self.image(settings, iterations), &layers, iterations)
     }
 }
 

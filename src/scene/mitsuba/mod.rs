@@ -36,7 +36,9 @@ pub fn load_mitsuba(path: &Path, options: &LoadOptions) -> Result<SceneDescripti
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    load_mitsuba_str(&text, &path.display().to_string(), &base, options)
+    let mut desc = load_mitsuba_str(&text, &path.display().to_string(), &base, options)?;
+    desc.files.insert(0, path.to_path_buf());
+    Ok(desc)
 }
 
 /// Loads a Mitsuba scene from `text`; `name` is used in messages, and files (meshes, includes)
@@ -47,7 +49,7 @@ pub fn load_mitsuba_str(
     base: &Path,
     options: &LoadOptions,
 ) -> Result<SceneDescription, SceneError> {
-    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf() }];
+    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf(), path: None }];
     let root = xml::parse_source(&mut srcs, 0, 0)?;
     let mut cx =
         Cx { srcs: &srcs, defines: HashMap::new(), ids: HashMap::new(), warnings: Vec::new(), strict: options.strict };
@@ -56,6 +58,7 @@ pub fn load_mitsuba_str(
     }
     let mut desc = cx.build(&root)?;
     desc.warnings = cx.warnings;
+    desc.files = srcs.iter().filter_map(|s| s.path.clone()).chain(desc.geometry.files().iter().cloned()).collect();
     Ok(desc)
 }
 
@@ -142,6 +145,7 @@ impl<'a> Cx<'a> {
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
             shading: ShadingDesc { background: b.background, ..ShadingDesc::default() },
             warnings: Vec::new(),
+            files: Vec::new(),
         })
     }
 

@@ -109,6 +109,7 @@ impl<'a> Cx<'a> {
                     let loaded =
                         if kind == "obj" { TriangleMesh::load_obj(&path) } else { crate::shape::mesh::load_ply(&path) };
                     let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
+                    b.geometry.note_file(&path);
                     face_normals = self.boolean(&p, "face_normals")? == Some(true);
                     if face_normals {
                         mesh.normals = None;

@@ -16,6 +16,8 @@ pub(super) struct Src {
     pub name: String,
     pub text: String,
     pub base: PathBuf,
+    /// The file it was read from (`None` for a scene given as text).
+    pub path: Option<PathBuf>,
 }
 
 /// An XML element with the places of its parts.
@@ -131,7 +133,7 @@ fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize) -> Result<(),
         let text = std::fs::read_to_string(&path)
             .map_err(|e| at(file.span.clone(), format!("cannot read included file `{}`: {e}", path.display())))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        srcs.push(Src { name: path.display().to_string(), text, base });
+        srcs.push(Src { name: path.display().to_string(), text, base, path: Some(path.clone()) });
         let id = srcs.len() - 1;
         let included = parse_source(srcs, id, depth + 1)?;
         el.children.extend(included.children);

@@ -45,6 +45,7 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
     if let Some(v) = sections.remove("objects") {
         cx.objects(v, &materials, &mut geometry)?;
     }
+    let geometry_files = geometry.files().to_vec();
     Ok(SceneDescription {
         name: name.to_string(),
         geometry,
@@ -71,6 +72,7 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             transparent_shadows: render.transparent_shadows.unwrap_or(true),
         },
         warnings: Vec::new(),
+        files: geometry_files,
     })
 }
 

@@ -218,7 +218,9 @@ impl<'a> Cx<'a> {
                         .as_ref()
                         .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ or PLY file)"))?;
                     let path = self.base.join(file.get_ref());
-                    TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?
+                    let mesh = TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?;
+                    geometry.note_file(&path);
+                    mesh
                 } else {
                     let (segments, sides) = (d.segments.unwrap_or(256), d.sides.unwrap_or(32));
                     if segments < 3 || sides < 3 || 2 * segments as u64 * sides as u64 > MAX_GENERATED_TRIANGLES {

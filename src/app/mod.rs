@@ -1,10 +1,18 @@
 //! The `render` command as a library function: load, check the output, render on a pool of the
-//! requested size, write the image. `main.rs` only parses arguments and reports errors.
+//! requested size, write the image (or, for a render-farm shard, its partial image). `main.rs`
+//! only parses arguments and reports errors.
 
-use crate::film::LAYER_NAMES;
-use crate::film::output::{OutputError, check_writable, write_image};
+mod farm;
+mod shard;
+
+pub use farm::{SlurmOptions, farm_slurm, merge_files};
+
+use crate::farm::FarmError;
+use crate::farm::shard::ShardSpec;
+use crate::film::output::{Format, OutputError, check_writable, layer_path, write_image};
+use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
-use crate::render::{RenderControl, RenderSettings, RenderStats};
+use crate::render::{CheckpointFn, RenderControl, RenderSettings, RenderStats};
 use crate::scene::desc::{IntegratorDesc, IntegratorKind, LoadInfo};
 use crate::scene::{LoadOptions, Overrides, Scene, SceneDescription, SceneError, load_scene};
 use std::path::{Path, PathBuf};
@@ -28,6 +36,8 @@ pub struct RenderOptions {
     pub layers: bool,
     /// Memory budget for photon maps in bytes (default: half the machine's memory).
     pub max_memory: Option<u64>,
+    /// Render only this shard of the samples, to a partial image (see `farm`).
+    pub shard: Option<ShardSpec>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -48,6 +58,15 @@ pub enum AppError {
     Memory { need_mib: u64, limit_mib: u64 },
     #[error("interrupted: wrote `{path}` with {samples} samples per pixel")]
     Interrupted { path: String, samples: u32 },
+    /// A shard stopped early: its finished samples are saved and a rerun continues from them.
+    #[error(
+        "interrupted: saved `{path}` holding samples {held} of shard {shard}; run the same command again to resume"
+    )]
+    ShardInterrupted { path: String, held: String, shard: String },
+    #[error("--shard: {0}")]
+    Shard(String),
+    #[error(transparent)]
+    Farm(#[from] FarmError),
     /// Stopped before a complete pass: nothing is written, so a previous image stays as it was.
     #[error(
         "interrupted before the first complete pass: `{path}` was not written{}",
@@ -120,16 +139,10 @@ impl LoadedScene {
 /// output image, and the integrator's own data (photon maps, SPPM state). Geometry is already
 /// loaded by then and is not counted.
 pub fn estimate_render_bytes(loaded: &LoadedScene, settings: &RenderSettings) -> u64 {
-    let per_pixel = 16 + 12 + if settings.layers { 48 + 4 * 12 } else { 0 };
+    let image = 12;
+    let per_pixel = BYTES_PER_PIXEL + image + if settings.layers { LAYER_BYTES_PER_PIXEL + 4 * image } else { 0 };
     let film = settings.pixels() * per_pixel;
     film.saturating_add(crate::integrator::estimated_bytes(&loaded.integrator, &loaded.scene, settings))
-}
-
-/// `out.png` -> `out.direct.png` for layer `direct`.
-pub fn layer_path(output: &Path, layer: &str) -> PathBuf {
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = output.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    output.with_file_name(format!("{stem}.{layer}.{ext}"))
 }
 
 /// Total memory of the machine in bytes (from /proc/meminfo; 8 GiB when unknown).
@@ -153,17 +166,37 @@ fn log(quiet: bool, msg: std::fmt::Arguments) {
 pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary, AppError> {
     let output = opts.output.clone().unwrap_or_else(|| default_output(&opts.scene));
     // Fail on an unusable output before spending any time.
-    check_writable(&output)?;
-    if opts.threads == Some(0) {
+    let format = check_writable(&output)?;
+    let shard = match opts.shard {
+        Some(spec) => Some(spec.resolve(|k| std::env::var(k).ok()).map_err(AppError::Shard)?),
+        None => None,
+    };
+    if shard.is_some() {
+        if format != Format::Exr {
+            return Err(AppError::Shard(format!(
+                "a shard writes a partial image, which is OpenEXR: give an output ending in .exr, not `{}`",
+                output.display()
+            )));
+        }
+        if opts.time_limit.is_some() {
+            return Err(AppError::Shard(
+                "--time cannot be combined with --shard: a shard renders a fixed block of samples (a shard that is \
+                 stopped saves what it finished and resumes when run again)"
+                    .into(),
+            ));
+        }
+    }
+    let threads = opts.threads.or_else(scheduler_cpus);
+    if threads == Some(0) {
         return Err(AppError::ZeroThreads);
     }
     let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = opts.threads {
+    if let Some(n) = threads {
         builder = builder.num_threads(n);
     }
     let pool = builder
         .build()
-        .map_err(|e| AppError::Threads { threads: opts.threads.unwrap_or(0), message: e.to_string() })?;
+        .map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
         let loaded = load(&opts.scene, &opts.load, &opts.overrides)?;
         for w in &loaded.warnings {
@@ -211,11 +244,44 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             // A time budget without a sample count renders until the time is up.
             settings.spp = u32::MAX;
         }
-        let checkpoint = |img: &crate::film::Image, spp: u32| match write_image(img, &output) {
-            Ok(()) => log(opts.quiet, format_args!("checkpoint: wrote {} ({spp} spp)", output.display())),
+        let say = |m: &str| log(opts.quiet, format_args!("{m}"));
+        let job = match shard {
+            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load.defines, &mut settings, s, &output, &say)?),
+            None => None,
+        };
+        if let Some(job) = &job
+            && job.complete()
+        {
+            if output.exists() {
+                log(opts.quiet, format_args!("shard {} is already complete in `{}`", job.header.shard, output.display()));
+            } else {
+                // A shard of a render with fewer samples than shards has none to take.
+                job.save(&job.prior)?;
+                log(opts.quiet, format_args!("shard {} has no samples to take; wrote an empty part", job.header.shard));
+            }
+            let stats = RenderStats { samples_per_pixel: job.prior.min_samples(), ..RenderStats::default() };
+            return Ok(Summary { output: output.clone(), stats });
+        }
+        let checkpoint_image = |film: &Film| match write_image(&film.image(), &output) {
+            Ok(()) => log(
+                opts.quiet,
+                format_args!("checkpoint: wrote {} ({} spp)", output.display(), film.min_samples()),
+            ),
             Err(e) => eprintln!("warning: checkpoint failed: {e}"),
         };
-        let control = RenderControl { cancel, on_checkpoint: Some(&checkpoint) };
+        let checkpoint_partial = |film: &Film| {
+            if let Some(job) = &job {
+                match job.save(film) {
+                    Ok(()) => log(
+                        opts.quiet,
+                        format_args!("checkpoint: saved samples {} in {}", job.held(film), output.display()),
+                    ),
+                    Err(e) => eprintln!("warning: checkpoint failed: {e}"),
+                }
+            }
+        };
+        let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
+        let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint) };
         // Everything big the render will allocate, estimated before any of it is.
         let need = estimate_render_bytes(&loaded, &settings);
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
@@ -252,7 +318,11 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                 if s.caustic_capped { " (emission cap reached)" } else { "" },
                 s.trace_time.as_secs_f64(), s.build_time.as_secs_f64()));
         }
-        let out = integrator.render(&loaded.scene, &settings, &control);
+        let film = match &job {
+            Some(job) => job.prior.clone(),
+            None => Film::new(settings.width, settings.height, settings.layers),
+        };
+        let out = integrator.render_from(&loaded.scene, &settings, &control, film);
         let stats = out.stats;
         if let Integrator::Sppm(sppm) = &integrator {
             log(
@@ -265,6 +335,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                     stats.memory_bytes as f64 / 1048576.0
                 ),
             );
+        }
+        if let Some(job) = &job {
+            return finish_shard(job, &out.film, &stats, opts.quiet);
         }
         // An image with fewer than one sample in some pixel is not worth keeping, and must never
         // replace an earlier image: stop without writing.
@@ -297,4 +370,39 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         Ok(Summary { output: output.clone(), stats })
     })
+}
+
+/// The worker threads a scheduler gave this job (`SLURM_CPUS_PER_TASK` inside a Slurm job), used
+/// when `--threads` is not given.
+fn scheduler_cpus() -> Option<usize> {
+    std::env::var_os("SLURM_JOB_ID")?;
+    std::env::var("SLURM_CPUS_PER_TASK").ok()?.trim().parse().ok().filter(|&n| n > 0)
+}
+
+/// Saves a shard's film (unless it holds nothing new) and says how far it got.
+fn finish_shard(job: &shard::ShardJob, film: &Film, stats: &RenderStats, quiet: bool) -> Result<Summary, AppError> {
+    let path = job.output.display().to_string();
+    let new_samples = film.tiles.iter().flat_map(|t| &t.count).sum::<u32>()
+        > job.prior.tiles.iter().flat_map(|t| &t.count).sum::<u32>();
+    if new_samples || !job.output.exists() {
+        job.save(film)?;
+    }
+    let held = job.held(film);
+    if stats.nonfinite_samples > 0 {
+        eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
+    }
+    if stats.interrupted {
+        return Err(AppError::ShardInterrupted { path, held, shard: job.header.shard.to_string() });
+    }
+    log(
+        quiet,
+        format_args!(
+            "shard {} done: samples {held} in {} ({:.2} s, {:.2} Mrays/s)",
+            job.header.shard,
+            path,
+            stats.wall.as_secs_f64(),
+            stats.mrays_per_second()
+        ),
+    );
+    Ok(Summary { output: job.output.clone(), stats: stats.clone() })
 }
