@@ -272,37 +272,37 @@ impl RenderArgs {
     fn options(self) -> Result<RenderOptions> {
         let args = self;
         Ok(RenderOptions {
-        scene: args.scene,
-        output: args.output,
-        overrides: Overrides {
-            width: args.width,
-            height: args.height,
-            spp_axis: args.spp_axis,
-            spp: args.spp.or(args.iterations),
-            max_depth: args.max_depth,
-            seed: args.seed,
-            integrator: args.integrator.map(IntegratorKind::from),
-            sampler: args.sampler,
-            antialias: args.no_antialias.then_some(false),
-            photon: PhotonOptions {
-                photons: args.photons,
-                caustic_photons: args.caustic_photons,
-                gather: args.gather,
-                gather_k: args.gather_k,
-                max_radius: args.max_radius,
-                photons_per_iter: args.photons_per_iter,
-                initial_radius: args.initial_radius,
-                ..Default::default()
+            scene: args.scene,
+            output: args.output,
+            overrides: Overrides {
+                width: args.width,
+                height: args.height,
+                spp_axis: args.spp_axis,
+                spp: args.spp.or(args.iterations),
+                max_depth: args.max_depth,
+                seed: args.seed,
+                integrator: args.integrator.map(IntegratorKind::from),
+                sampler: args.sampler,
+                antialias: args.no_antialias.then_some(false),
+                photon: PhotonOptions {
+                    photons: args.photons,
+                    caustic_photons: args.caustic_photons,
+                    gather: args.gather,
+                    gather_k: args.gather_k,
+                    max_radius: args.max_radius,
+                    photons_per_iter: args.photons_per_iter,
+                    initial_radius: args.initial_radius,
+                    ..Default::default()
+                },
             },
-        },
-        load: LoadOptions { defines: args.define, strict: args.strict },
-        layers: args.layers,
-        max_memory: args.max_memory.map(|m| m.saturating_mul(1 << 20)),
-        threads: args.threads,
-        time_limit: seconds(args.time, "time")?,
-        checkpoint: seconds(args.checkpoint, "checkpoint")?,
-        quiet: args.quiet,
-        shard: args.shard,
+            load: LoadOptions { defines: args.define, strict: args.strict },
+            layers: args.layers,
+            max_memory: args.max_memory.map(|m| m.saturating_mul(1 << 20)),
+            threads: args.threads,
+            time_limit: seconds(args.time, "time")?,
+            checkpoint: seconds(args.checkpoint, "checkpoint")?,
+            quiet: args.quiet,
+            shard: args.shard,
         })
     }
 }
@@ -383,7 +383,11 @@ fn main() -> ExitCode {
         Err(e) => {
             let stopped = matches!(
                 e.downcast_ref::<AppError>(),
-                Some(AppError::Interrupted { .. } | AppError::InterruptedEarly { .. } | AppError::ShardInterrupted { .. })
+                Some(
+                    AppError::Interrupted { .. }
+                        | AppError::InterruptedEarly { .. }
+                        | AppError::ShardInterrupted { .. }
+                )
             );
             if stopped && TERMINATED.load(Ordering::SeqCst) {
                 eprintln!("terminated (SIGTERM): {e:#}");
@@ -402,9 +406,32 @@ mod tests {
     #[test]
     fn render_options_survive_the_trip_through_a_farm_script() {
         let argv = [
-            "caustic", "render", "s.toml", "--width=64", "--spp", "7", "--seed", "3", "--integrator", "photon",
-            "--sampler", "sobol", "--photons", "1000", "--max-radius", "0.1", "--gather", "0", "--layers",
-            "--no-antialias", "-D", "name=a b'c", "--checkpoint", "2.5", "--max-depth", "4",
+            "caustic",
+            "render",
+            "s.toml",
+            "--width=64",
+            "--spp",
+            "7",
+            "--seed",
+            "3",
+            "--integrator",
+            "photon",
+            "--sampler",
+            "sobol",
+            "--photons",
+            "1000",
+            "--max-radius",
+            "0.1",
+            "--gather",
+            "0",
+            "--layers",
+            "--no-antialias",
+            "-D",
+            "name=a b'c",
+            "--checkpoint",
+            "2.5",
+            "--max-depth",
+            "4",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
         let mut again = vec!["caustic".to_string(), "render".into(), "s.toml".into()];

@@ -175,7 +175,10 @@ fn merge_refuses_parts_that_do_not_make_one_render() {
     let e = refusal(&[p0.clone(), part("depth", o)], &out);
     assert!(e.contains("`max_depth`"), "{e}");
     // Another integrator, another sample count.
-    let e = refusal(&[p0.clone(), part("w", options(&scene, IntegratorKind::Whitted, 8, dir.join("w.exr"), shard(1, 2)))], &out);
+    let e = refusal(
+        &[p0.clone(), part("w", options(&scene, IntegratorKind::Whitted, 8, dir.join("w.exr"), shard(1, 2)))],
+        &out,
+    );
     assert!(e.contains("`integrator`"), "{e}");
     let e = refusal(&[p0.clone(), part("n", options(&scene, kind, 9, dir.join("n.exr"), shard(1, 2)))], &out);
     assert!(e.contains("`samples` is 8"), "{e}");
@@ -218,9 +221,12 @@ fn merge_refuses_parts_that_do_not_make_one_render() {
 fn shard_options_are_checked_before_rendering() {
     let dir = common::scratch("farm-options");
     let scene = cornell();
-    let e = render_file(&options(&scene, IntegratorKind::Path, 4, dir.join("p.png"), Some(Shard { index: 0, count: 2 })), &NEVER)
-        .err()
-        .unwrap();
+    let e = render_file(
+        &options(&scene, IntegratorKind::Path, 4, dir.join("p.png"), Some(Shard { index: 0, count: 2 })),
+        &NEVER,
+    )
+    .err()
+    .unwrap();
     assert!(matches!(e, AppError::Shard(_)) && e.to_string().contains(".exr"), "{e}");
     let mut o = options(&scene, IntegratorKind::Path, 4, dir.join("p.exr"), Some(Shard { index: 0, count: 2 }));
     o.time_limit = Some(std::time::Duration::from_secs(5));
@@ -247,7 +253,9 @@ fn a_shard_stopped_by_sigterm_resumes_and_merges_bit_for_bit() {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        a.extend(["--height", "96", "--spp", "240", "--threads", "2", "--checkpoint", "0.2", "--quiet"].map(String::from));
+        a.extend(
+            ["--height", "96", "--spp", "240", "--threads", "2", "--checkpoint", "0.2", "--quiet"].map(String::from),
+        );
         a.extend(["--shard".to_string(), shard.to_string(), "-o".to_string(), out.display().to_string()]);
         a
     };
@@ -359,6 +367,9 @@ fn generated_scripts_quote_every_path_and_argument() {
     merge.extend(files.merge_sbatch.iter().cloned());
     assert_eq!(calls, vec![array.clone(), merge]);
     // The log file pattern keeps the folder's literal `%` (Slurm reads `%%` as one).
-    assert!(array.iter().any(|a| a.starts_with("--output=") && a.contains("%%a/") && a.ends_with("shard-%a.log")), "{array:?}");
+    assert!(
+        array.iter().any(|a| a.starts_with("--output=") && a.contains("%%a/") && a.ends_with("shard-%a.log")),
+        "{array:?}"
+    );
     assert!(array.contains(&"--requeue".to_string()) && array.contains(&"--array=0-2".to_string()));
 }

@@ -75,7 +75,8 @@ fn a_requeued_shard_resumes_and_the_merge_stays_exact() {
     std::fs::create_dir_all(&dir).unwrap();
     let args = ["--integrator", "path", "--width", "128", "--height", "128", "--spp", "400", "--checkpoint", "0.3"];
     let out = dir.join("out.exr");
-    let o = c.command(EXE).args(["farm", "slurm", &scene(), "--shards", "4", "-o"]).arg(&out).args(args).output().unwrap();
+    let o =
+        c.command(EXE).args(["farm", "slurm", &scene(), "--shards", "4", "-o"]).arg(&out).args(args).output().unwrap();
     let text = output(o, "caustic farm slurm", &c);
     // "submitted array job A (4 shards) and merge job M"
     let words: Vec<&str> = text.split_whitespace().collect();

@@ -21,7 +21,12 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
     };
-    let out = Sppm { config }.render(&s.scene, &settings, &RenderControl::uncancelled(), caustic::film::Film::new(settings.width, settings.height, settings.layers));
+    let out = Sppm { config }.render(
+        &s.scene,
+        &settings,
+        &RenderControl::uncancelled(),
+        caustic::film::Film::new(settings.width, settings.height, settings.layers),
+    );
     (out.image, out.stats)
 }
 

@@ -13,7 +13,12 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 /// Merges the partial images `parts` into `output` (and its layers, when the parts have them).
-pub fn merge_files(parts: &[PathBuf], output: &Path, allow_partial: bool, quiet: bool) -> Result<MergeReport, AppError> {
+pub fn merge_files(
+    parts: &[PathBuf],
+    output: &Path,
+    allow_partial: bool,
+    quiet: bool,
+) -> Result<MergeReport, AppError> {
     check_writable(output)?;
     let (film, report) = merge(parts, allow_partial)?;
     if film.has_layers() {
@@ -27,10 +32,7 @@ pub fn merge_files(parts: &[PathBuf], output: &Path, allow_partial: bool, quiet:
         SumKind::Runs => "iterations (independent progressive runs, weighted by iterations)",
     };
     if report.missing.is_empty() {
-        log(
-            quiet,
-            format_args!("merged {} parts: {} {what} -> {}", report.parts, report.total, output.display()),
-        );
+        log(quiet, format_args!("merged {} parts: {} {what} -> {}", report.parts, report.total, output.display()));
     } else {
         eprintln!(
             "warning: merged what the parts hold: {} to {} of {} {what} -> {} (missing {})",
@@ -148,7 +150,11 @@ pub fn farm_slurm(opts: &SlurmOptions, cancel: &AtomicBool) -> Result<PathBuf, A
         .iter()
         .map(|(id, state)| {
             let task = id.rsplit('_').next().unwrap_or(id);
-            format!("shard {task} {} (log {})", state.to_lowercase(), files.logs.join(format!("shard-{task}.log")).display())
+            format!(
+                "shard {task} {} (log {})",
+                state.to_lowercase(),
+                files.logs.join(format!("shard-{task}.log")).display()
+            )
         })
         .collect::<Vec<_>>();
     Err(AppError::Farm(FarmError::Scheduler(format!(

@@ -194,9 +194,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     if let Some(n) = threads {
         builder = builder.num_threads(n);
     }
-    let pool = builder
-        .build()
-        .map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
+    let pool =
+        builder.build().map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
         let loaded = load(&opts.scene, &opts.load, &opts.overrides)?;
         for w in &loaded.warnings {
@@ -283,7 +282,12 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
         let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint) };
         // Everything big the render will allocate, estimated before any of it is.
-        let need = estimate_render_bytes(&loaded, &settings);
+        let mut need = estimate_render_bytes(&loaded, &settings);
+        if job.is_some() {
+            // A shard keeps its earlier run's film and writes its partial image from columns.
+            let partial = 64 + if settings.layers { 240 } else { 0 };
+            need += settings.pixels() * (crate::film::BYTES_PER_PIXEL + partial);
+        }
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
         log(opts.quiet, format_args!("memory: about {} MiB needed (limit {} MiB)", need.div_ceil(1 << 20), limit >> 20));
         if need > limit {

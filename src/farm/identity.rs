@@ -184,8 +184,8 @@ mod tests {
         std::fs::write(&a, "x").unwrap();
         std::fs::write(&b, "x").unwrap();
         std::fs::write(&c, "y").unwrap();
-        assert_eq!(hash_files(&[a.clone()]).unwrap(), hash_files(&[b.clone()]).unwrap());
-        assert_ne!(hash_files(&[a.clone()]).unwrap(), hash_files(&[c.clone()]).unwrap());
+        assert_eq!(hash_files(std::slice::from_ref(&a)).unwrap(), hash_files(std::slice::from_ref(&b)).unwrap());
+        assert_ne!(hash_files(std::slice::from_ref(&a)).unwrap(), hash_files(std::slice::from_ref(&c)).unwrap());
         // Moving bytes between files changes the hash.
         std::fs::write(&b, "").unwrap();
         std::fs::write(&c, "xx").unwrap();

@@ -72,7 +72,9 @@ fn check_headers(parts: &[(PathBuf, PartialHeader)]) -> Result<Vec<usize>, FarmE
             let (lp, lh) = &parts[l];
             if h.range.start < lh.range.end {
                 let both = h.range.start..h.range.end.min(lh.range.end);
-                let what = if lp == path { format!("{} is given twice", show(path)) } else {
+                let what = if lp == path {
+                    format!("{} is given twice", show(path))
+                } else {
                     format!(
                         "{} (shard {}, samples {}) and {} (shard {}, samples {}) overlap",
                         show(lp),

@@ -17,9 +17,9 @@ use super::identity::RenderId;
 use super::shard::Shard;
 use crate::film::{Film, LAYER_NAMES};
 use exr::prelude::*;
-use std::result::Result;
 use std::ops::Range;
 use std::path::Path;
+use std::result::Result;
 use xxhash_rust::xxh3::Xxh3;
 
 const FORMAT: &str = "caustic partial image 1";
@@ -207,7 +207,9 @@ fn parse_header(path: &Path, attrs: &LayerAttributes, width: usize, height: usiz
     };
     match attribute(attrs, "caustic.format") {
         Some(f) if f == FORMAT => {}
-        Some(f) => return Err(part_err(path, format!("is a partial image of another format (`{f}`, expected `{FORMAT}`)"))),
+        Some(f) => {
+            return Err(part_err(path, format!("is a partial image of another format (`{f}`, expected `{FORMAT}`)")));
+        }
         None => {
             return Err(part_err(
                 path,
@@ -242,7 +244,9 @@ fn parse_header(path: &Path, attrs: &LayerAttributes, width: usize, height: usiz
 
 /// Reads only the header of the partial image `path` (fast: no pixels are decoded).
 pub fn read_header(path: &Path) -> Result<PartialHeader, FarmError> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| part_err(path, read_message(e)))?;
+    let file = std::fs::File::open(path).map_err(|e| part_err(path, read_message(exr::error::Error::Io(e))))?;
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), false)
+        .map_err(|e| part_err(path, read_message(e)))?;
     let header = meta.headers.first().ok_or_else(|| part_err(path, "has no image in it"))?;
     let size = header.layer_size;
     parse_header(path, &header.own_attributes, size.width(), size.height())
@@ -260,20 +264,36 @@ fn read_message(e: exr::error::Error) -> String {
 
 /// Reads the partial image `path`: header and film, checked against the checksum.
 pub fn read_partial(path: &Path) -> Result<Partial, FarmError> {
+    let bytes = std::fs::read(path).map_err(|e| part_err(path, read_message(exr::error::Error::Io(e))))?;
+    read_partial_bytes(&bytes, path)
+}
+
+/// Reads a partial image from the bytes of the file `path` (named in errors).
+pub fn read_partial_bytes(bytes: &[u8], path: &Path) -> Result<Partial, FarmError> {
+    // The header first: a file that is not a part, or claims an absurd size, is refused before
+    // any pixel memory is allocated.
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| part_err(path, read_message(e)))?;
+    let first = meta.headers.first().ok_or_else(|| part_err(path, "has no image in it"))?;
+    let size = first.layer_size;
+    if size.area() as u64 > crate::scene::desc::MAX_PIXELS {
+        return Err(part_err(path, format!("is damaged: it claims {} x {} pixels", size.width(), size.height())));
+    }
+    parse_header(path, &first.own_attributes, size.width(), size.height())?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| part_err(path, read_message(e)))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
     let header = parse_header(path, &layer.attributes, width, height)?;
     let n = width * height;
     let channel = |name: &str| -> Result<&Vec<u32>, FarmError> {
-        let c = layer.channel_data.list.iter().find(|c| c.name == Text::from(name));
+        let c = layer.channel_data.list.iter().find(|c| c.name == *name);
         match c.map(|c| &c.sample_data) {
             Some(FlatSamples::U32(v)) if v.len() == n => Ok(v),
             Some(_) => Err(part_err(path, format!("is damaged: channel `{name}` has the wrong type or size"))),
@@ -286,7 +306,8 @@ pub fn read_partial(path: &Path) -> Result<Partial, FarmError> {
     let mut layers = Vec::new();
     if header.layers {
         for name in LAYER_NAMES {
-            let cols = sum_names(&format!("caustic.{name}.")).iter().map(|s| channel(s).cloned()).collect::<Result<_, _>>()?;
+            let cols =
+                sum_names(&format!("caustic.{name}.")).iter().map(|s| channel(s).cloned()).collect::<Result<_, _>>()?;
             layers.push(cols);
         }
     }
@@ -387,6 +408,43 @@ mod tests {
             assert_eq!(img, f.image());
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        /// Whatever bytes of a part are changed or cut, reading it never panics, and a read
+        /// that succeeds returns exactly the sums and counts that were written (the checksum
+        /// guards them; a change elsewhere may only touch the means or the header).
+        #[test]
+        fn damaged_bytes_are_refused_or_harmless(
+            flips in proptest::collection::vec((0.0f64..1.0, 0u8..=255), 0..4),
+            keep in 0.0f64..1.2,
+        ) {
+            let (h, f) = (header(true), film(true));
+            let bytes = written(&h, &f);
+            let mut bad = bytes.clone();
+            for (at, v) in &flips {
+                let i = (*at * bad.len() as f64) as usize % bad.len();
+                bad[i] ^= v.max(&1);
+            }
+            bad.truncate(((keep * bytes.len() as f64) as usize).min(bytes.len()));
+            if let Ok(p) = read_partial_bytes(&bad, Path::new("fuzzed.exr")) {
+                proptest::prop_assert!(p.film == f);
+            }
+        }
+    }
+
+    /// The bytes of a partial image of `film`.
+    fn written(h: &PartialHeader, film: &Film) -> Vec<u8> {
+        let path = std::env::temp_dir().join(format!(
+            "caustic-partial-bytes-{}-{:?}.exr",
+            std::process::id(),
+            std::thread::current().id()
+        ));
+        write_partial(&path, h, film).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        bytes
     }
 
     #[test]

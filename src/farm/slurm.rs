@@ -58,11 +58,7 @@ pub struct FarmFiles {
 /// alone, otherwise in single quotes (a single quote inside becomes `'\''`).
 pub fn shell_quote(s: &str) -> String {
     let plain = |c: char| c.is_ascii_alphanumeric() || "-_./=:,+@%".contains(c);
-    if !s.is_empty() && s.chars().all(plain) {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', "'\\''"))
-    }
+    if !s.is_empty() && s.chars().all(plain) { s.to_string() } else { format!("'{}'", s.replace('\'', "'\\''")) }
 }
 
 fn line(args: &[String]) -> String {
@@ -121,7 +117,10 @@ pub fn write_scripts(plan: &FarmPlan) -> Result<FarmFiles, FarmError> {
     array_sbatch.push(array_script.display().to_string());
     let mut merge_sbatch = head;
     merge_sbatch[0] = format!("--job-name={name}-merge");
-    merge_sbatch.extend(["--kill-on-invalid-dep=yes".into(), format!("--output={}", slurm_pattern_literal(&logs.join("merge.log")))]);
+    merge_sbatch.extend([
+        "--kill-on-invalid-dep=yes".into(),
+        format!("--output={}", slurm_pattern_literal(&logs.join("merge.log"))),
+    ]);
     merge_sbatch.extend(plan.sbatch_args.iter().cloned());
     merge_sbatch.push(merge_script.display().to_string());
 
@@ -237,8 +236,17 @@ fn list(ids: &str) -> Result<Vec<Listed>, FarmError> {
         .collect())
 }
 
-const ENDED: [&str; 9] =
-    ["COMPLETED", "FAILED", "CANCELLED", "TIMEOUT", "NODE_FAIL", "OUT_OF_MEMORY", "BOOT_FAIL", "DEADLINE", "SPECIAL_EXIT"];
+const ENDED: [&str; 9] = [
+    "COMPLETED",
+    "FAILED",
+    "CANCELLED",
+    "TIMEOUT",
+    "NODE_FAIL",
+    "OUT_OF_MEMORY",
+    "BOOT_FAIL",
+    "DEADLINE",
+    "SPECIAL_EXIT",
+];
 
 /// How the merge job ended, as `wait` reports it.
 #[derive(Clone, Debug, PartialEq, Eq)]

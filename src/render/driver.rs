@@ -47,11 +47,8 @@ impl<'a> Driver<'a> {
         first: u32,
     ) -> Self {
         let first = first.min(settings.spp);
-        let total = if settings.spp == u32::MAX {
-            0
-        } else {
-            units_per_sample.saturating_mul((settings.spp - first) as u64)
-        };
+        let total =
+            if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul((settings.spp - first) as u64) };
         let progress = Progress::new(settings.progress, phase, total, settings.time_limit);
         Driver {
             settings,
