@@ -331,28 +331,45 @@ fn materials_map_to_our_model() {
     ));
     assert!(warnings.is_empty(), "{warnings:?}");
     let m = |name: &str| {
-        let i = s.scene.material_names.iter().position(|n| n == name).unwrap_or_else(|| panic!("{name}"));
-        s.scene.materials[i]
+        let ms = &s.scene.materials;
+        let i = ms.names.iter().position(|n| n == name).unwrap_or_else(|| panic!("{name}"));
+        ms.list[i]
     };
-    use caustic::material::MaterialKind;
-    assert_eq!(m("glass").kind, MaterialKind::Dielectric);
-    assert!((m("glass").ior - 1.333 / 1.000277).abs() < 1e-5);
-    assert!((m("bk7").ior - 1.5046 / 1.000277).abs() < 1e-5);
-    assert_eq!((m("mirror").kind, m("mirror").kr, m("mirror").kd), (MaterialKind::Reflective, 1.0, 0.0));
+    use caustic::material::{Model, Param};
+    let eta = |name: &str| match m(name).model {
+        Model::Dielectric { eta, reflectance, transmittance } => {
+            assert_eq!((reflectance, transmittance), (Param::Const(Color::ONE), Param::Const(Color::ONE)));
+            eta
+        }
+        other => panic!("{name} is {other:?}"),
+    };
+    assert!((eta("glass") - 1.333 / 1.000277).abs() < 1e-5);
+    assert!((eta("bk7") - 1.5046 / 1.000277).abs() < 1e-5);
+    // A conductor without a material is Mitsuba's perfect mirror: eta 0, k 1, one-sided.
+    let mirror = m("mirror");
+    assert_eq!(
+        (mirror.model, mirror.two_sided),
+        (Model::Conductor { eta: Color::ZERO, k: Color::ONE, specular: Param::Const(Color::ONE) }, false)
+    );
+    // `twosided` of one diffuse: the diffuse on both sides; a bare diffuse is one-sided.
     let two = m("two");
     assert_eq!(
-        (two.kind, two.kd, two.ka, two.ks, two.color),
-        (MaterialKind::Diffuse, 1.0, 0.0, 0.0, Color::new(0.2, 0.3, 0.4))
+        (two.model, two.two_sided),
+        (Model::Diffuse { reflectance: Param::Const(Color::new(0.2, 0.3, 0.4)) }, true)
     );
-    assert_eq!(m("(default diffuse)").color, Color::splat(0.5));
+    let default = m("(default diffuse)");
+    assert_eq!(
+        (default.model, default.two_sided),
+        (Model::Diffuse { reflectance: Param::Const(Color::splat(0.5)) }, false)
+    );
 }
 
 #[test]
 fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     let text = wrap(
         r#"<shape type="cylinder"/>
-    <shape type="sphere"><bsdf type="roughplastic"/></shape>
-    <shape type="sphere"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="hair"/></shape>
+    <shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf></shape>
     <shape type="sphere"><bsdf type="measured"/></shape>
     <emitter type="envmap"/>
     <shape type="sphere"><float name="wobble" value="1"/></shape>"#,
@@ -360,8 +377,8 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     let (s, warnings) = xml(&text);
     let expect = [
         (7, "shape `cylinder` is not supported"),
-        (8, "roughplastic"),
-        (9, "checkerboard"),
+        (8, "BSDF `hair` is not supported"),
+        (9, "texture `mesh_attribute` is not supported"),
         (10, "BSDF `measured` is not supported"),
         (11, "emitter `envmap` is not supported"),
         (12, "property `wobble`"),
@@ -372,8 +389,14 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
             "no warning `{what}` at line {line}: {warnings:?}"
         );
     }
-    // The checkerboard's mean (0.4 + 0.2) / 2 is used.
-    assert!(s.scene.materials.iter().any(|m| m.color == Color::splat(0.3)));
+    // The unknown texture is grey 0.5.
+    assert!(
+        s.scene
+            .materials
+            .textures
+            .iter()
+            .any(|t| matches!(t, caustic::texture::Texture::Constant(c) if *c == Color::splat(0.5)))
+    );
     let strict = LoadOptions { strict: true, ..Default::default() };
     let e = xml_opts(&text, &root(), &strict, &Overrides::default()).err().expect("strict must fail");
     assert!(e.to_string().starts_with("case.xml:7:") && e.message().contains("--strict"), "{e}");
@@ -459,7 +482,7 @@ fn the_command_line_renders_xml_with_defines_and_strict() {
     assert!(status.success());
     assert_eq!(read_exr(&out).unwrap().width, 16);
     let bad = dir.join("bad.xml");
-    std::fs::write(&bad, wrap(r#"<shape type="sphere"><bsdf type="roughplastic"/></shape>"#)).unwrap();
+    std::fs::write(&bad, wrap(r#"<shape type="sphere"><bsdf type="principled"/></shape>"#)).unwrap();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
         .args(["render", "-q", "--strict", "-o"])
         .arg(dir.join("bad.png"))
@@ -467,7 +490,7 @@ fn the_command_line_renders_xml_with_defines_and_strict() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && stderr.contains("bad.xml:7:") && stderr.contains("roughplastic"), "{stderr}");
+    assert!(!o.status.success() && stderr.contains("bad.xml:7:") && stderr.contains("principled"), "{stderr}");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
         .args(["render", "-q", "--spp", "1", "-o"])
         .arg(dir.join("bad.png"))

@@ -152,10 +152,11 @@ pub fn direct_light(
     }
     let cos = ls.wi.dot(bsdf.normal()).abs();
     stats.shadow_rays += 1;
-    if !scene.unoccluded(hit, ls.wi, ls.dist) {
+    let visible = scene.visibility(hit, ls.wi, ls.dist);
+    if !(visible > 0.0) {
         return Color::ZERO;
     }
     let w =
         if ls.delta || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi, Transport::Radiance)) };
-    f * ls.weight() * (cos * w / p_pick)
+    f * ls.weight() * (cos * w * visible / p_pick)
 }

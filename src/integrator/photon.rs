@@ -1,10 +1,16 @@
 //! Photon mapping (Jensen 1996; Jensen 2001, "A practical guide to global illumination using
 //! photon mapping", sec. 4): two photon maps built before rendering, then for each camera ray
-//! - mirrors and glass are followed by ray tracing (the `SPECULAR` layer);
-//! - at the first non-specular surface, direct light comes from shadow rays (several per area
-//!   light), caustics from the caustic map with a cone filter, and indirect diffuse light from
-//!   final gathering: cosine-distributed rays whose hits read the global map. With zero gather
-//!   rays the global map is read at the surface itself (a fast preview, as the seed report did).
+//! - mirrors and glass are followed by ray tracing (the `SPECULAR` layer), and so are glossy
+//!   surfaces without a diffuse part (rough metal and glass): their direct light comes from
+//!   shadow rays, the rest by following one sampled direction (Jensen's Monte Carlo ray tracing
+//!   of specular and glossy reflection);
+//! - at a surface with a diffuse part (or a glossy one where the depth limit is reached), direct
+//!   light comes from shadow rays (several per area light), caustics from the caustic map with a
+//!   cone filter, and indirect light from final gathering: rays sampled from the BSDF's
+//!   non-delta part whose hits read the global map. With zero gather rays the global map is read
+//!   at the surface itself (a fast preview, as the seed report did). All of these use the whole
+//!   BSDF, glossy coatings included. A mirror or glass part of the same material (or a mask's
+//!   transparent part) is then followed further, so mixed materials keep their reflections.
 //!
 //! Radiance estimate (Jensen 2001 eq. 4.6): L = sum over the k nearest photons within a maximum
 //! radius of f(wo, wi_p) Phi_p / (pi r^2), counting only photons arriving on the surface's side
@@ -269,19 +275,30 @@ impl PhotonIntegrator {
                     continue;
                 }
                 stats.shadow_rays += 1;
-                if !scene.unoccluded(hit, ls.wi, ls.dist) {
+                let visible = scene.visibility(hit, ls.wi, ls.dist);
+                if !(visible > 0.0) {
                     continue;
                 }
-                acc += f * ls.weight() * ls.wi.dot(bsdf.normal()).abs();
+                acc += f * ls.weight() * (ls.wi.dot(bsdf.normal()).abs() * visible);
             }
             sum += acc / n_samples as f32;
         }
         sum
     }
 
-    /// Indirect diffuse light at a hit by final gathering: cosine-distributed rays, each reading
-    /// the global map where it lands (after following mirrors and glass). Rays that reach a light
-    /// are skipped: direct light and caustics account for those paths.
+    /// Radiance leaving a final-gather hit `y` towards `wo_y`: from the precomputed irradiance for
+    /// a Lambertian surface, from a full estimate of the global map otherwise.
+    fn radiance_at_gather_hit(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
+        if by.lambert_albedo().is_some() {
+            return self.gathered_radiance(y, by, scratch);
+        }
+        let c = &self.config;
+        Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
+    }
+
+    /// Indirect light at a hit by final gathering: rays sampled from the BSDF's non-delta part,
+    /// each reading the global map where it lands (after following mirrors and glass). Rays that
+    /// reach a light are skipped: direct light and caustics account for those paths.
     #[allow(clippy::too_many_arguments)]
     fn final_gather(
         &self,
@@ -295,15 +312,25 @@ impl PhotonIntegrator {
     ) -> Color {
         let n = self.config.gather_rays;
         let frame = crate::math::Frame::from_z(bsdf.normal());
+        let lambertian = bsdf.lambert_albedo().is_some();
         let mut sum = Color::ZERO;
         for _ in 0..n {
-            let wi = frame.to_world(cosine_hemisphere(sampler.next_2d()));
-            let f = bsdf.f(wo, wi, Transport::Radiance);
-            if f == Color::ZERO {
+            // A Lambertian surface samples the cosine directly (the same rays as always); any
+            // other the non-delta part of its BSDF.
+            let (wi, mut beta) = if lambertian {
+                let wi = frame.to_world(cosine_hemisphere(sampler.next_2d()));
+                (wi, bsdf.f(wo, wi, Transport::Radiance) * PI)
+            } else {
+                let Some(s) = bsdf.sample_smooth(wo, sampler.rng().uniform(), sampler.next_2d(), Transport::Radiance)
+                else {
+                    continue;
+                };
+                (s.wi, s.weight)
+            };
+            if beta == Color::ZERO {
                 continue;
             }
             let mut ray = scene.spawn(hit, wi);
-            let mut beta = f * PI;
             for _ in 0..4 {
                 stats.rays += 1;
                 let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
@@ -322,7 +349,7 @@ impl PhotonIntegrator {
                     ray = scene.spawn(&y, s.wi);
                     continue;
                 }
-                sum += beta * self.gathered_radiance(&y, &by, scratch);
+                sum += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
                 break;
             }
         }
@@ -391,6 +418,9 @@ impl RayIntegrator for PhotonIntegrator {
         let mut beta = Color::ONE;
         let mut ray = *ray;
         let mut prefix_specular = false;
+        // The last bounce was glossy and its direct light came from shadow rays: a light hit
+        // now would count it twice.
+        let mut lit_by_shadow_rays = false;
         for depth in 0.. {
             stats.rays += 1;
             let first = if prefix_specular { SPECULAR } else { DIRECT };
@@ -400,7 +430,7 @@ impl RayIntegrator for PhotonIntegrator {
             };
             let wo = -ray.d;
             if hit.is_emitter() {
-                if hit.is_front(ray.d) {
+                if hit.is_front(ray.d) && !lit_by_shadow_rays {
                     layers[first] += beta * scene.emitted(&hit, wo);
                 }
                 break;
@@ -410,19 +440,30 @@ impl RayIntegrator for PhotonIntegrator {
                 break;
             }
             let bsdf = scene.bsdf(&hit, wo);
+            let last = depth + 1 >= self.config.max_depth;
             if bsdf.is_specular_only() {
-                if depth + 1 >= self.config.max_depth {
+                if last {
                     break;
                 }
                 let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
                 beta *= s.weight;
                 prefix_specular = true;
+                lit_by_shadow_rays = false;
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
             let (kd, kc, ki) =
                 if prefix_specular { (SPECULAR, SPECULAR, SPECULAR) } else { (DIRECT, CAUSTIC, INDIRECT) };
             layers[kd] += beta * self.direct(scene, &hit, &bsdf, wo, sampler, stats);
+            if bsdf.is_glossy_only() && !last {
+                // Ray-traced glossy reflection: one sampled direction carries the rest.
+                let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
+                beta *= s.weight;
+                prefix_specular = true;
+                lit_by_shadow_rays = !s.flags.is_specular();
+                ray = scene.spawn(&hit, s.wi);
+                continue;
+            }
             let c = &self.config;
             layers[kc] += beta
                 * Self::estimate(
@@ -452,7 +493,17 @@ impl RayIntegrator for PhotonIntegrator {
                 self.final_gather(scene, &hit, &bsdf, wo, sampler, scratch, stats)
             };
             layers[ki] += beta * indirect;
-            break;
+            // The mirror or glass part of a mixed material, or a mask's transparent part.
+            if !bsdf.has_delta() || last {
+                break;
+            }
+            let Some(s) = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
+                break;
+            };
+            beta *= s.weight;
+            prefix_specular = true;
+            lit_by_shadow_rays = false;
+            ray = scene.spawn(&hit, s.wi);
         }
         layers
     }

@@ -10,7 +10,7 @@
 
 use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
-use crate::material::MaterialKind;
+use crate::material::ClassicKind;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::math::{Color, Vec3};
 use crate::render::{RayIntegrator, RayStats};
@@ -60,7 +60,7 @@ impl Whitted {
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
             return (scene.background, Color::ZERO);
         };
-        let m = *scene.material(&hit);
+        let m = scene.classic(&hit);
         let front = hit.is_front(ray.d);
         // Normals on the side the ray arrives from: flipped when the ray is inside the object.
         let (n, ng) = if front { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
@@ -107,13 +107,13 @@ impl Whitted {
             self.trace_total(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats)
         };
         match m.kind {
-            MaterialKind::Diffuse => {}
-            MaterialKind::Reflective => {
+            ClassicKind::Diffuse => {}
+            ClassicKind::Reflective => {
                 if m.kr > 0.0 {
                     c += m.kr * reflected(sampler, stats);
                 }
             }
-            MaterialKind::Transparent => {
+            ClassicKind::Transparent => {
                 let eta = if front { m.ior } else { 1.0 / m.ior };
                 match refract(ray.d, n, eta) {
                     Some(t) => {
@@ -128,7 +128,7 @@ impl Whitted {
                     None => c += reflected(sampler, stats),
                 }
             }
-            MaterialKind::Dielectric => {
+            ClassicKind::Dielectric => {
                 let eta = if front { m.ior } else { 1.0 / m.ior };
                 let ks = fresnel_dielectric(n.dot(wo), eta);
                 c += ks * reflected(sampler, stats);
@@ -165,10 +165,10 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
             return atten;
         }
         let Some(h) = scene.intersect(&ray, tm) else { return atten };
-        let m = scene.material(&h);
+        let m = scene.classic(&h);
         let k = match m.kind {
-            MaterialKind::Transparent => m.kt,
-            MaterialKind::Dielectric => {
+            ClassicKind::Transparent => m.kt,
+            ClassicKind::Dielectric => {
                 let front = h.is_front(wi);
                 let eta = if front { m.ior } else { 1.0 / m.ior };
                 1.0 - fresnel_dielectric(h.ng.dot(wi), eta)

@@ -5,9 +5,16 @@
 //!
 //! Directions are in world space and point away from the surface; `wo` towards the viewer (or
 //! where a photon came from), `wi` the other direction. Densities are per unit solid angle.
-//! Sampling picks a lobe in proportion to its sampling weight; a non-delta sample is weighted
-//! by the whole BSDF's value and density (so lobes combine like one mixture), a delta sample by
-//! its own lobe over the probability of having picked it.
+//! Sampling picks a lobe in proportion to its sampling weight (times its `selection` for the
+//! viewing direction); a non-delta sample is weighted by the whole BSDF's value and density (so
+//! lobes combine like one mixture), a delta sample by its own lobe over the probability of having
+//! picked it.
+//!
+//! Two things wrap the lobes: an opacity (Mitsuba's `mask`: with probability 1 - opacity light
+//! passes straight through, and the lobes are scaled by the opacity) and a perturbed shading
+//! normal (bump and normal maps), which keeps the unperturbed normal to refuse directions that
+//! change sides and to apply the shadow-terminator term of Estevez et al. (2019) as Mitsuba 3
+//! does.
 
 use super::bxdf::{Bxdf, BxdfSample, LobeFlags, Transport};
 use crate::math::{Color, Frame, Vec2, Vec3};
@@ -42,6 +49,8 @@ pub struct Lobes {
     flags: LobeFlags,
     /// Every lobe is isotropic (see `Bxdf::is_isotropic`).
     isotropic: bool,
+    /// Some lobe's choice depends on the viewing direction (`Bxdf::selection`).
+    directional: bool,
 }
 
 impl Default for Lobes {
@@ -56,6 +65,7 @@ impl Default for Lobes {
             count: 0,
             flags: LobeFlags::NONE,
             isotropic: true,
+            directional: false,
         }
     }
 }
@@ -77,6 +87,26 @@ impl Lobes {
         self.count += 1;
         self.flags |= lobe.flags();
         self.isotropic &= lobe.is_isotropic();
+        self.directional |= lobe.directional_selection();
+    }
+
+    /// Adds every lobe of `other`, each scaled by `w` (a blend of two materials).
+    pub fn add_scaled(&mut self, other: &Lobes, w: f32) {
+        for lobe in other.as_slice() {
+            self.add(lobe.scaled(w));
+        }
+    }
+
+    /// True when there is no lobe at all (a black surface, or the back of a one-sided one).
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// Number of lobes held.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.count as usize
     }
 
     /// True when every lobe is isotropic: the BSDF's frame then needs only the normal.
@@ -100,6 +130,11 @@ pub struct Bsdf {
     /// Geometric normal on the same side.
     ng: Vec3,
     lobes: Lobes,
+    /// Probability of scattering at all; with 1 - opacity light passes straight through.
+    opacity: f32,
+    /// For a perturbed normal: the unperturbed shading normal (on the side of `wo`) and the
+    /// shadow-terminator roughness alpha^2 of the perturbation.
+    perturbed: Option<(Vec3, f32)>,
 }
 
 /// True when `wo` is on the outward side of a surface with geometric normal `ng` (a BSDF is
@@ -116,7 +151,55 @@ impl Bsdf {
     #[inline]
     pub fn new(frame: Frame, ng: Vec3, front: bool, lobes: Lobes) -> Self {
         let (frame, ng) = if front { (frame, ng) } else { (frame.flipped(), -ng) };
-        Bsdf { frame, ng, lobes }
+        Bsdf { frame, ng, lobes, opacity: 1.0, perturbed: None }
+    }
+
+    /// The same BSDF scattering with probability `opacity` and passing light straight through
+    /// otherwise.
+    #[inline]
+    pub fn with_opacity(mut self, opacity: f32) -> Self {
+        self.opacity = if opacity.is_finite() { opacity.clamp(0.0, 1.0) } else { 1.0 };
+        self
+    }
+
+    /// Probability of passing straight through (the transparency of a mask).
+    #[inline]
+    pub fn null_probability(&self) -> f32 {
+        1.0 - self.opacity
+    }
+
+    /// The shading frame (z on the side of `wo`).
+    #[inline]
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// Replaces the shading frame by `frame` (z on the side of `wo`), a perturbation of the
+    /// current one by a bump or normal map. Directions that the perturbation moves to the other
+    /// side of the unperturbed normal are refused, and light arriving at a grazing angle of the
+    /// unperturbed surface is shadowed by the terminator term.
+    pub fn perturbed(mut self, frame: Frame) -> Self {
+        let old = self.frame.z;
+        // alpha^2 = min(tan^2 of the perturbation / 8, 1) (Estevez et al. 2019).
+        let cos = frame.z.dot(old).clamp(-1.0, 1.0);
+        let tan2 = (1.0 - cos * cos).max(0.0) / (cos * cos).max(1e-12);
+        self.perturbed = Some((old, (0.125 * tan2).min(1.0)));
+        self.frame = frame;
+        self
+    }
+
+    /// The perturbation's factor for light direction `wi` (1 without a perturbation): 0 when
+    /// `wi` changes side, else the shadow-terminator term.
+    #[inline]
+    fn perturbation(&self, wi: Vec3) -> f32 {
+        let Some((old, alpha2)) = self.perturbed else { return 1.0 };
+        let (c_old, c_new) = (wi.dot(old), wi.dot(self.frame.z));
+        if c_old * c_new <= 0.0 {
+            return 0.0;
+        }
+        let c2 = c_old * c_old;
+        let tan2 = (1.0 - c2).max(0.0) / c2.max(1e-12);
+        2.0 / (1.0 + (1.0 + alpha2 * tan2).sqrt())
     }
 
     #[inline]
@@ -146,7 +229,7 @@ impl Bsdf {
     /// light samples.
     #[inline]
     pub fn is_specular_only(&self) -> bool {
-        !self.lobes.flags.intersects(LobeFlags::DIFFUSE | LobeFlags::GLOSSY)
+        !self.lobes.flags.intersects(LobeFlags::DIFFUSE | LobeFlags::GLOSSY) || self.opacity == 0.0
     }
 
     /// Albedo of the diffuse lobes.
@@ -172,25 +255,41 @@ impl Bsdf {
                 f += lobe.f(wo_l, wi_l, mode);
             }
         }
-        f
+        f * (self.opacity * self.perturbation(wi))
+    }
+
+    /// Each lobe's probability of being chosen, for lobe weights `base` (camera or photon) seen
+    /// from `wo_l`, and their sum.
+    #[inline(always)]
+    fn selection_weights(&self, base: &[f32; MAX_LOBES], total: f32, wo_l: Vec3) -> ([f32; MAX_LOBES], f32) {
+        if !self.lobes.directional {
+            return (*base, total);
+        }
+        let mut w = [0.0; MAX_LOBES];
+        let mut sum = 0.0;
+        for (i, lobe) in self.lobes().iter().enumerate() {
+            w[i] = base[i] * lobe.selection(wo_l);
+            sum += w[i];
+        }
+        (w, sum)
     }
 
     /// Density with which `sample` picks `wi` through its non-delta lobes.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
-        let total = self.lobes.total;
-        if !(total > 0.0) {
-            return 0.0;
-        }
         let kind = if wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION };
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
+        if !(total > 0.0) || self.perturbation(wi) == 0.0 {
+            return 0.0;
+        }
         let mut pdf = 0.0;
-        for (lobe, w) in self.lobes().iter().zip(&self.lobes.weights) {
+        for (lobe, w) in self.lobes().iter().zip(&weights) {
             if lobe.flags().intersects(kind) && !lobe.flags().is_specular() {
                 pdf += w / total * lobe.pdf(wo_l, wi_l, mode);
             }
         }
-        pdf
+        pdf * self.opacity
     }
 
     /// Picks a lobe in proportion to its sampling weight and samples it: (the lobe's sample in
@@ -199,14 +298,17 @@ impl Bsdf {
     #[inline(always)]
     fn sample_any_lobe(
         &self,
-        weights: &[f32; MAX_LOBES],
-        total: f32,
+        base: &[f32; MAX_LOBES],
+        base_total: f32,
         wo: Vec3,
         uc: f32,
         u: Vec2,
         mode: Transport,
     ) -> Option<(BxdfSample, f32)> {
         let n = self.lobes.count as usize;
+        let wo_full = self.frame.to_local(wo);
+        let (weights, total) = self.selection_weights(base, base_total, wo_full);
+        let weights = &weights;
         if !(total > 0.0) {
             return None;
         }
@@ -225,11 +327,7 @@ impl Bsdf {
             (k, weights[k] / total, (x / weights[k]).clamp(0.0, 1.0 - f32::EPSILON / 2.0))
         };
         let lobe = &self.lobes.lobes[k];
-        // A Lambertian lobe samples without looking at wo: only its side is needed.
-        let wo_l = match lobe {
-            Bxdf::Lambert(_) => Vec3::new(0.0, 0.0, wo.dot(self.frame.z)),
-            _ => self.frame.to_local(wo),
-        };
+        let wo_l = wo_full;
         if wo_l.z <= 0.0 && !self.lobes.flags.is_transmission() {
             // Seen from below the shading normal, a surface that only reflects has nothing to give.
             return None;
@@ -242,7 +340,132 @@ impl Bsdf {
         if reflected == s.flags.is_transmission() {
             return None;
         }
+        let p = self.perturbation(s.wi);
+        if p == 0.0 {
+            return None;
+        }
+        s.weight *= p;
         Some((s, p_lobe))
+    }
+
+    /// The straight-through sample of a mask's transparent part, when `uc` picks it; otherwise
+    /// `uc` rescaled to choose among the lobes.
+    #[inline(always)]
+    fn pass_through(&self, wo: Vec3, uc: f32) -> Result<f32, BsdfSample> {
+        if self.opacity >= 1.0 {
+            return Ok(uc);
+        }
+        if uc >= self.opacity {
+            return Err(BsdfSample { wi: -wo, weight: Color::ONE, pdf: 0.0, flags: LobeFlags::NULL });
+        }
+        Ok((uc / self.opacity).min(1.0 - f32::EPSILON / 2.0))
+    }
+
+    /// The lobe weights of the camera path (seen from `wo`) restricted to delta (`delta`) or
+    /// non-delta lobes, and their sum.
+    #[inline(always)]
+    fn part_weights(&self, wo: Vec3, delta: bool) -> ([f32; MAX_LOBES], f32) {
+        let (mut w, _) = self.selection_weights(&self.lobes.weights, self.lobes.total, self.frame.to_local(wo));
+        let mut total = 0.0;
+        for (wi, lobe) in w.iter_mut().zip(self.lobes()) {
+            if lobe.flags().is_specular() != delta {
+                *wi = 0.0;
+            }
+            total += *wi;
+        }
+        (w, total)
+    }
+
+    /// True when some lobe is diffuse or glossy (and the surface is not fully transparent).
+    #[inline]
+    pub fn has_smooth(&self) -> bool {
+        !self.is_specular_only()
+    }
+
+    /// True when some part of the light leaves in a delta direction: a mirror or glass lobe, or
+    /// straight through a mask.
+    #[inline]
+    pub fn has_delta(&self) -> bool {
+        self.opacity < 1.0 || self.lobes.flags.is_specular()
+    }
+
+    /// True when the non-delta part is glossy only (no diffuse lobe): a rough metal or glass,
+    /// which photon mapping follows by ray tracing rather than density estimation.
+    #[inline]
+    pub fn is_glossy_only(&self) -> bool {
+        self.has_smooth() && !self.lobes.flags.is_diffuse()
+    }
+
+    /// The share of the non-delta part in the light the surface scatters towards `wo`, by the
+    /// lobes' sampling weights (a mask's transparent part counts as delta): the probability with
+    /// which a one-sample estimator picks the non-delta part.
+    pub fn smooth_fraction(&self, wo: Vec3) -> f32 {
+        let (_, smooth) = self.part_weights(wo, false);
+        let (_, delta) = self.part_weights(wo, true);
+        let s = smooth * self.opacity;
+        // Straight through passes all the light: weight 1 against the lobes' albedo weights.
+        let d = delta * self.opacity + (1.0 - self.opacity);
+        if s + d > 0.0 { s / (s + d) } else { 0.0 }
+    }
+
+    /// Samples only the delta part (mirror and glass lobes, and a mask's straight-through part),
+    /// weighted so that its mean is the delta part's whole contribution: what a photon-mapping
+    /// camera path follows from a surface whose non-delta part it estimates from photons.
+    pub fn sample_delta(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        let (weights, total) = self.part_weights(wo, true);
+        let has_lobes = total > 0.0 && self.opacity > 0.0;
+        let p_null = if has_lobes { 1.0 - self.opacity } else { 1.0 };
+        if uc < p_null {
+            if self.opacity >= 1.0 {
+                return None;
+            }
+            let weight = Color::splat((1.0 - self.opacity) / p_null);
+            return Some(BsdfSample { wi: -wo, weight, pdf: 0.0, flags: LobeFlags::NULL });
+        }
+        let uc = ((uc - p_null) / (1.0 - p_null)).min(1.0 - f32::EPSILON / 2.0);
+        let (s, p_lobe) = self.sample_any_lobe(&weights, total, wo, uc, u, mode)?;
+        Some(BsdfSample {
+            wi: s.wi,
+            weight: s.weight * (self.opacity / (p_lobe * (1.0 - p_null))),
+            pdf: 0.0,
+            flags: s.flags,
+        })
+    }
+
+    /// Samples only the non-delta part, weighted by its value over its density (final-gather
+    /// directions of photon mapping).
+    pub fn sample_smooth(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        let (weights, total) = self.part_weights(wo, false);
+        let (s, _) = self.sample_any_lobe(&weights, total, wo, uc, u, mode)?;
+        let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(s.wi));
+        let kind = if s.wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION };
+        let mut pdf = 0.0;
+        for (lobe, w) in self.lobes().iter().zip(&weights) {
+            if *w > 0.0 && lobe.flags().intersects(kind) {
+                pdf += w / total * lobe.pdf(wo_l, wi_l, mode);
+            }
+        }
+        if !(pdf > 0.0) {
+            return None;
+        }
+        let weight = self.f(wo, s.wi, mode) * (s.wi.dot(self.frame.z).abs() / pdf);
+        Some(BsdfSample { wi: s.wi, weight, pdf, flags: s.flags })
+    }
+
+    /// The albedo of a BSDF made only of Lambertian lobes (its value is that over pi in every
+    /// direction), `None` for anything else.
+    pub fn lambert_albedo(&self) -> Option<Color> {
+        if self.perturbed.is_some() {
+            return None;
+        }
+        let mut sum = Color::ZERO;
+        for lobe in self.lobes() {
+            match lobe {
+                Bxdf::Lambert(b) => sum += b.r,
+                _ => return None,
+            }
+        }
+        Some(sum * self.opacity)
     }
 
     /// Samples a direction for a camera path. A non-delta sample is weighted by the whole BSDF
@@ -250,6 +473,10 @@ impl Bsdf {
     /// by its lobe over the probability of having picked it.
     #[inline]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        let uc = match self.pass_through(wo, uc) {
+            Ok(uc) => uc,
+            Err(null) => return Some(null),
+        };
         let (s, p_lobe) = self.sample_any_lobe(&self.lobes.weights, self.lobes.total, wo, uc, u, mode)?;
         let wi = s.wi;
         if s.flags.is_specular() {
@@ -259,7 +486,7 @@ impl Bsdf {
         if !(pdf > 0.0) {
             return None;
         }
-        let weight = self.f(wo, wi, mode) * (wi.dot(self.frame.z) / pdf);
+        let weight = self.f(wo, wi, mode) * (wi.dot(self.frame.z).abs() / pdf);
         Some(BsdfSample { wi, weight, pdf, flags: s.flags })
     }
 
@@ -272,11 +499,18 @@ impl Bsdf {
     /// glossy lobe overlapping a diffuse one sends.
     #[inline]
     pub fn sample_lobe(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        let uc = match self.pass_through(wo, uc) {
+            Ok(uc) => uc,
+            Err(null) => return Some(null),
+        };
         let (s, p_lobe) = self.sample_any_lobe(&self.lobes.photon_weights, self.lobes.photon_total, wo, uc, u, mode)?;
-        let pdf = if s.flags.is_specular() { 0.0 } else { s.pdf * p_lobe };
+        let pdf = if s.flags.is_specular() { 0.0 } else { s.pdf * p_lobe * self.opacity };
         Some(BsdfSample { wi: s.wi, weight: s.weight / p_lobe, pdf, flags: s.flags })
     }
 }
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod microfacet_tests;

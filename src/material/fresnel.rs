@@ -53,6 +53,52 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     }
 }
 
+/// Reflectance of a conductor with complex index of refraction eta + i k at incidence cos_i > 0
+/// (the exact formula for unpolarised light; one colour channel). eta = 0, k = 1 reflects
+/// everything, which is how Mitsuba's `conductor` without a material is a perfect mirror.
+#[inline]
+pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
+    let c = cos_i.clamp(0.0, 1.0);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let (eta2, k2) = (eta * eta, k * k);
+    let t1 = eta2 - k2 - s2;
+    let a2b2 = (t1 * t1 + 4.0 * eta2 * k2).max(0.0).sqrt();
+    let a = (0.5 * (a2b2 + t1)).max(0.0).sqrt();
+    let term1 = a2b2 + c2;
+    let term2 = 2.0 * c * a;
+    if !(term1 + term2 > 0.0) {
+        return 1.0;
+    }
+    let rs = (term1 - term2) / (term1 + term2);
+    let term3 = a2b2 * c2 + s2 * s2;
+    let term4 = term2 * s2;
+    let rp = if term3 + term4 > 0.0 { rs * (term3 - term4) / (term3 + term4) } else { rs };
+    0.5 * (rs + rp)
+}
+
+/// `fresnel_conductor` per colour channel.
+#[inline]
+pub fn fresnel_conductor_rgb(cos_i: f32, eta: crate::math::Color, k: crate::math::Color) -> crate::math::Color {
+    crate::math::Color::new(
+        fresnel_conductor(cos_i, eta.x, k.x),
+        fresnel_conductor(cos_i, eta.y, k.y),
+        fresnel_conductor(cos_i, eta.z, k.z),
+    )
+}
+
+/// The hemispherical average of the dielectric Fresnel reflectance for relative index `eta`
+/// (polynomial fits: Egan and Hilgeman for eta < 1, d'Eon and Irving otherwise), as a plastic's
+/// light bouncing inside its coating sees it.
+pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
+    if eta < 1.0 {
+        0.0636 / eta + eta * (-1.4399 * eta + 0.7099) + 0.6681
+    } else {
+        let x = 1.0 / eta;
+        0.919317 + x * (-3.4793 + x * (6.75335 + x * (-7.80989 + x * (4.98554 - 1.36881 * x))))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,5 +186,33 @@ mod tests {
             let back = fresnel_dielectric(cos_t, 1.0 / 1.5);
             assert!((back - ks).abs() < 1e-5, "cos_i {cos_i}: {ks} vs {back}");
         }
+    }
+
+    #[test]
+    fn conductor_fresnel_matches_known_values() {
+        // Gold at normal incidence (Mitsuba 3's RGB eta and k): ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+        let (eta, k) =
+            (crate::math::Color::new(0.143036, 0.375307, 1.44205), crate::math::Color::new(3.983, 2.38556, 1.60336));
+        let f = fresnel_conductor_rgb(1.0, eta, k);
+        for (v, want) in f.to_array().into_iter().zip([0.96668, 0.80201, 0.32412]) {
+            assert!((v - want).abs() < 2e-5, "{v} vs {want}");
+        }
+        // eta 0, k 1 is a perfect mirror at every angle; grazing incidence reflects everything.
+        for c in [1.0, 0.7, 0.2, 0.01] {
+            assert!((fresnel_conductor(c, 0.0, 1.0) - 1.0).abs() < 1e-6);
+        }
+        assert!(fresnel_conductor(0.0, 0.2, 3.0) > 0.999);
+        // A conductor with k = 0 is a dielectric.
+        for c in [1.0, 0.8, 0.5, 0.1] {
+            assert!((fresnel_conductor(c, 1.5, 0.0) - fresnel_dielectric(c, 1.5)).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn diffuse_fresnel_reflectance_matches_mitsubas_plastic() {
+        // Mitsuba's plastic prints fdr_int = 0.590479 and fdr_ext = 0.090239 for eta 1.48959.
+        let eta = 1.489_587;
+        assert!((fresnel_diffuse_reflectance(1.0 / eta) - 0.590479).abs() < 1e-4);
+        assert!((fresnel_diffuse_reflectance(eta) - 0.090239).abs() < 1e-4);
     }
 }

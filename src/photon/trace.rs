@@ -3,8 +3,9 @@
 //!
 //! Two passes fill the two maps:
 //! - global: photons emitted from every light by its emission distribution; every hit on a
-//!   diffuse surface is stored (also the first, flagged `DIRECT`, and the ones that came only
-//!   through mirrors and glass, flagged `CAUSTIC`, so each use of the map can pick what it needs);
+//!   surface with a diffuse or glossy lobe is stored (also the first, flagged `DIRECT`, and the
+//!   ones that came only through mirrors and glass, flagged `CAUSTIC`, so each use of the map can
+//!   pick what it needs); passing straight through a mask's transparent part is not a bounce;
 //! - caustic: photons aimed at the bounding spheres of mirror and glass objects (the projection
 //!   map of Jensen 1996, with the density of the aimed directions in the photon's weight), kept
 //!   only for L S+ D paths, emitted in batches until enough are stored or a cap is reached.
@@ -184,14 +185,16 @@ pub fn trace_photon(
     out: &mut Vec<PhotonHit>,
 ) {
     let mut only_specular = true;
-    for depth in 0..MAX_BOUNCES {
+    // Scattering events so far (passing through a mask is none).
+    let mut depth = 0;
+    for _ in 0..MAX_BOUNCES {
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
         if hit.is_emitter() {
             return;
         }
         let wo = -ray.d;
         let bsdf = scene.bsdf(&hit, wo);
-        if bsdf.has_diffuse() {
+        if bsdf.has_smooth() {
             let caustic = depth > 0 && only_specular;
             let n = bsdf.normal();
             if caustic_only {
@@ -210,6 +213,9 @@ pub fn trace_photon(
             out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
         }
         let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };
+        if !flags.is_null() {
+            depth += 1;
+        }
         if !flags.is_specular() {
             only_specular = false;
             if caustic_only {
@@ -345,19 +351,19 @@ fn pick(weights: impl Iterator<Item = f32> + Clone, u: f32) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::{Material, MaterialKind};
+    use crate::material::{Classic, ClassicKind};
 
     #[test]
     fn photon_roulette_keeps_mean_power() {
         // Russian roulette on the throughput: the expected scattered power equals the albedo times
         // the incoming power, per channel, for a coloured diffuse + mirror material.
         let wo = Vec3::new(0.2, 0.1, 1.0).normalize();
-        let m = Material {
-            kind: MaterialKind::Reflective,
+        let m = Classic {
+            kind: ClassicKind::Reflective,
             color: Color::new(0.9, 0.6, 0.3),
             kd: 0.5,
             kr: 0.3,
-            ..Material::default()
+            ..Classic::default()
         };
         let b = Bsdf::new(Frame::from_z(Vec3::Z), Vec3::Z, true, m.lobes(true));
         let mut rng = Rng32::new(77);

@@ -11,9 +11,10 @@ use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT};
 use crate::light::{Emitter, Light, LightPicker};
-use crate::material::Material;
+use crate::material::{Material, Materials};
 use crate::math::Vec3;
 use crate::shape::{Plane, Primitive, Shape, TriangleMesh};
+use crate::texture::Texture;
 use std::time::Instant;
 
 /// Geometry, materials and lights collected while a scene file is read.
@@ -21,6 +22,7 @@ use std::time::Instant;
 pub struct SceneBuilder {
     materials: Vec<Material>,
     material_names: Vec<String>,
+    textures: Vec<Texture>,
     prims: Vec<Primitive>,
     planes: Vec<(Plane, u32)>,
     meshes: Vec<TriangleMesh>,
@@ -56,6 +58,16 @@ impl SceneBuilder {
         self.materials.push(m);
         self.material_names.push(name.into());
         (self.materials.len() - 1) as u32
+    }
+
+    /// Adds a texture; returns its index.
+    pub fn add_texture(&mut self, t: Texture) -> u32 {
+        self.textures.push(t);
+        (self.textures.len() - 1) as u32
+    }
+
+    pub fn textures(&self) -> &[Texture] {
+        &self.textures
     }
 
     pub fn material(&self, index: u32) -> &Material {
@@ -109,10 +121,16 @@ impl SceneBuilder {
         self.lights.push(Light::Area { emitter, radiance });
     }
 
+    /// True when light through material `m` (or any material it wraps) can form caustics.
+    fn casts_caustics(&self, m: u32) -> bool {
+        let model = &self.materials[m as usize].model;
+        model.casts_caustics() || model.children().into_iter().any(|c| c < m && self.casts_caustics(c))
+    }
+
     /// Records the bounding sphere of the object whose primitives start at `first`, when its
-    /// material is a mirror or glass.
+    /// material is a mirror, metal or glass.
     fn note_specular(&mut self, first: usize, material: u32) {
-        if !self.materials[material as usize].is_specular() || self.prims.len() <= first {
+        if !self.casts_caustics(material) || self.prims.len() <= first {
             return;
         }
         let target = match self.prims[first].shape {
@@ -122,8 +140,10 @@ impl SceneBuilder {
         self.specular_targets.push(target);
     }
 
-    /// Builds the BVH and the scene seen through `camera`.
-    pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> (Scene, LoadInfo) {
+    /// Builds the BVH and the scene seen through `camera`; fails when materials refer to each
+    /// other or to textures wrongly.
+    pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> Result<(Scene, LoadInfo), String> {
+        let materials = Materials::new(self.materials, self.material_names, self.textures)?;
         self.prims.append(&mut self.area_prims);
         let t0 = Instant::now();
         let bvh = Bvh::build(self.prims);
@@ -147,14 +167,12 @@ impl SceneBuilder {
                 *r = scene_radius.max(1e-3);
             }
         }
-        let any_transmissive = self.materials.iter().any(Material::transmits);
+        let any_transmissive = (0..materials.len() as u32).any(|m| materials.classic_of(m).transmits());
         let scene = Scene {
             bvh,
             planes: self.planes,
             meshes: self.meshes,
-            material_lobes: self.materials.iter().map(|m| [m.lobes(true), m.lobes(false)]).collect(),
-            materials: self.materials,
-            material_names: self.material_names,
+            materials,
             light_picker: LightPicker::new(&self.lights),
             lights: self.lights,
             camera,
@@ -167,6 +185,6 @@ impl SceneBuilder {
             any_transmissive,
             specular_targets: self.specular_targets,
         };
-        (scene, info)
+        Ok((scene, info))
     }
 }

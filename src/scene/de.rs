@@ -116,6 +116,73 @@ impl<'de> Deserialize<'de> for Rgb {
     }
 }
 
+/// A colour or the name of a texture giving it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorOrTexture {
+    Color(Vec3),
+    Texture(String),
+}
+impl<'de> Deserialize<'de> for ColorOrTexture {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Name(String),
+            Grey(f64),
+            Rgb([f64; 3]),
+        }
+        let raw = Raw::deserialize(d)
+            .map_err(|_| D::Error::custom("expected a colour ([r, g, b] or a single number) or a texture's name"))?;
+        let a = match raw {
+            Raw::Name(n) => return Ok(ColorOrTexture::Texture(n)),
+            Raw::Grey(g) => [g; 3],
+            Raw::Rgb(a) => a,
+        };
+        if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
+            return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
+        }
+        Ok(ColorOrTexture::Color(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+    }
+}
+
+/// A number >= 0 or the name of a texture giving it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NumberOrTexture {
+    Number(f32),
+    Texture(String),
+}
+impl<'de> Deserialize<'de> for NumberOrTexture {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Name(String),
+            Number(f64),
+        }
+        let raw = Raw::deserialize(d).map_err(|_| D::Error::custom("expected a number or a texture's name"))?;
+        match raw {
+            Raw::Name(n) => Ok(NumberOrTexture::Texture(n)),
+            Raw::Number(v) if v.is_finite() && v >= 0.0 && v <= f32::MAX as f64 => {
+                Ok(NumberOrTexture::Number(v as f32))
+            }
+            Raw::Number(v) => Err(D::Error::custom(format!("expected a finite number >= 0, found {v}"))),
+        }
+    }
+}
+
+/// Two finite numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pair(pub crate::math::Vec2);
+impl<'de> Deserialize<'de> for Pair {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let a = <[f64; 2]>::deserialize(d).map_err(|_| D::Error::custom("expected two numbers [u, v]"))?;
+        if let Some(bad) = a.iter().find(|v| !v.is_finite() || v.abs() > f32::MAX as f64) {
+            return Err(D::Error::custom(format!("expected finite numbers, found {bad}")));
+        }
+        Ok(Pair(crate::math::Vec2::new(a[0] as f32, a[1] as f32)))
+    }
+}
+
 /// A per-axis or uniform scale: one number or three, none zero.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scale(pub Vec3);

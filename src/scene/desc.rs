@@ -347,7 +347,10 @@ impl SceneDescription {
             }
         }
         let camera = self.camera.build(sampling.width, sampling.height);
-        let (scene, mut info) = self.geometry.finish(camera, &self.shading);
+        let (scene, mut info) = self
+            .geometry
+            .finish(camera, &self.shading)
+            .map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         info.files = self.files;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })

@@ -17,9 +17,9 @@ use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
 use crate::light::{Light, LightPicker};
-use crate::material::Material;
-use crate::material::bsdf::{Bsdf, Lobes, front_side};
-use crate::math::{Color, Frame};
+use crate::material::bsdf::Bsdf;
+use crate::material::{Classic, Materials};
+use crate::math::Color;
 use crate::shape::{Plane, SurfacePoint, TriangleMesh};
 use std::path::Path;
 
@@ -41,15 +41,17 @@ pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
     native::load_toml_str(text, name, base)
 }
+
+/// Most masked surfaces a shadow ray looks through before it counts as blocked.
+const MAX_MASK_CROSSINGS: usize = 64;
+
 pub struct Scene {
     pub bvh: Bvh,
     /// Unbounded planes, tested after the BVH, with their material index.
     pub planes: Vec<(Plane, u32)>,
     pub meshes: Vec<TriangleMesh>,
-    pub materials: Vec<Material>,
-    /// Each material's lobes seen from outside and from inside, made once.
-    pub material_lobes: Vec<[Lobes; 2]>,
-    pub material_names: Vec<String>,
+    /// Materials, their names and the textures they read.
+    pub materials: Materials,
     pub lights: Vec<Light>,
     /// Chooses a light in proportion to power (next-event estimation, photon emission).
     pub light_picker: LightPicker,
@@ -126,9 +128,33 @@ impl Scene {
     /// light's own surface does not shadow it.
     #[inline]
     pub fn unoccluded(&self, h: &Hit, wi: crate::math::Vec3, dist: f32) -> bool {
-        let ray = self.spawn(h, wi);
-        let t_max = if dist.is_finite() { (h.p + wi * dist - ray.o).dot(wi) * (1.0 - 1e-4) } else { f32::INFINITY };
-        !self.occluded(&ray, t_max)
+        self.visibility(h, wi, dist) > 0.0
+    }
+
+    /// The fraction of light that travels from hit `h` a distance `dist` along `wi`: 0 when an
+    /// opaque surface is in the way, else the product of the transparencies of the masks crossed
+    /// (1 with none). Each crossing costs one more ray.
+    pub fn visibility(&self, h: &Hit, wi: crate::math::Vec3, dist: f32) -> f32 {
+        let mut ray = self.spawn(h, wi);
+        let end = h.p + wi * dist;
+        let t_max = |ray: &Ray| if dist.is_finite() { (end - ray.o).dot(wi) * (1.0 - 1e-4) } else { f32::INFINITY };
+        if !self.materials.has_masks {
+            return if self.occluded(&ray, t_max(&ray)) { 0.0 } else { 1.0 };
+        }
+        let mut through = 1.0;
+        for _ in 0..MAX_MASK_CROSSINGS {
+            let tm = t_max(&ray);
+            if !(tm > 0.0) {
+                return through;
+            }
+            let Some(x) = self.intersect(&ray, tm) else { return through };
+            through *= self.materials.transparency(&x, x.is_front(-wi));
+            if !(through > 0.0) {
+                return 0.0;
+            }
+            ray = self.spawn(&x, wi);
+        }
+        0.0
     }
 
     /// Checks what a scene built from finite, in-range values can still get wrong through
@@ -174,19 +200,15 @@ impl Scene {
         Ray::spawn(h.p, h.p_error, h.ng, d, self.ray_bias)
     }
 
+    /// The classic (seed report) material the Whitted integrator shades hit `h` with.
     #[inline]
-    pub fn material(&self, h: &Hit) -> &Material {
-        &self.materials[h.material as usize]
+    pub fn classic(&self, h: &Hit) -> Classic {
+        self.materials.classic(h)
     }
 
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
     #[inline(always)]
     pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf {
-        let front = front_side(wo, h.ng);
-        let lobes = self.material_lobes[h.material as usize][usize::from(!front)];
-        // Isotropic lobes do not care which way the tangent points: a frame from the normal
-        // alone saves the Gram-Schmidt step (and a sphere's dp/du) on every hit.
-        let frame = if lobes.is_isotropic() { Frame::from_z(h.ns) } else { h.shading_frame() };
-        Bsdf::new(frame, h.ng, front, lobes)
+        self.materials.bsdf(h, wo)
     }
 }

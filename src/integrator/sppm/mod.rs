@@ -310,8 +310,14 @@ impl Sppm {
         true
     }
 
-    /// Traces the camera sample of pixel `xy` in iteration `it` to its first non-specular
-    /// surface, with the emitted and direct light it finds on the way.
+    /// Traces the camera sample of pixel `xy` in iteration `it` to the surface where it makes its
+    /// visible point, with the emitted and direct light it finds on the way. Mirrors and glass
+    /// are followed, and so are glossy surfaces without a diffuse part (their direct light by a
+    /// light sample) except at the last bounce the depth limit allows, where they get the visible
+    /// point (pbrt-v4's rule). A surface with both a delta part (mirror, glass, a mask's
+    /// transparent part) and a non-delta part makes the visible point with the probability of
+    /// the non-delta part and follows the delta part otherwise, each weighted by the inverse of
+    /// its probability, so one visible point per sample carries both.
     fn camera_sample(
         &self,
         scene: &Scene,
@@ -326,6 +332,8 @@ impl Sppm {
         let mut dist = 0.0;
         let mut ld = Color::ZERO;
         let mut specular = false;
+        // The last bounce was glossy and its direct light came from a light sample.
+        let mut lit_by_light_sample = false;
         for depth in 0.. {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
@@ -335,7 +343,7 @@ impl Sppm {
             dist += hit.t;
             let wo = -ray.d;
             if hit.is_emitter() {
-                if hit.is_front(ray.d) {
+                if hit.is_front(ray.d) && !lit_by_light_sample {
                     ld += beta * scene.emitted(&hit, wo);
                 }
                 break;
@@ -345,20 +353,44 @@ impl Sppm {
                 break;
             }
             let bsdf = scene.bsdf(&hit, wo);
+            let last = depth + 1 >= config.max_depth;
+            let follow = |s: Option<crate::material::bsdf::BsdfSample>, beta: &mut Color| {
+                let s = s?;
+                *beta *= s.weight;
+                Some(s)
+            };
             if bsdf.is_specular_only() {
-                if depth + 1 >= config.max_depth {
+                if last {
                     break;
                 }
-                let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
-                    break;
-                };
-                beta *= s.weight;
+                let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
+                let Some(s) = follow(sample, &mut beta) else { break };
                 specular = true;
+                lit_by_light_sample = false;
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
             ld += beta * direct_light(scene, &hit, &bsdf, wo, &mut sampler, stats, false);
-            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta, dist, specular_prefix: specular });
+            if bsdf.is_glossy_only() && !last {
+                let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
+                let Some(s) = follow(sample, &mut beta) else { break };
+                specular = true;
+                lit_by_light_sample = !s.flags.is_specular();
+                ray = scene.spawn(&hit, s.wi);
+                continue;
+            }
+            let choice = sampler.next_1d();
+            let q = if bsdf.has_delta() && !last { bsdf.smooth_fraction(wo) } else { 1.0 };
+            if choice >= q {
+                let sample = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
+                let Some(s) = follow(sample, &mut beta) else { break };
+                beta /= 1.0 - q;
+                specular = true;
+                lit_by_light_sample = false;
+                ray = scene.spawn(&hit, s.wi);
+                continue;
+            }
+            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, specular_prefix: specular });
             return CameraSample { ld, specular, point };
         }
         CameraSample { ld, specular, point: None }

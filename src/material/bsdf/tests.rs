@@ -5,7 +5,7 @@
 use super::*;
 use crate::material::bxdf::{Dielectric, Lambert, Mirror, Phong, Transmission};
 use crate::material::fresnel::fresnel_dielectric;
-use crate::material::{Material, MaterialKind};
+use crate::material::{Classic, ClassicKind};
 use crate::math::{Frame, Vec3};
 use crate::sampling::Rng32;
 use crate::sampling::chi2::{Chi2Config, chi2_directions, chi2_p_value};
@@ -20,8 +20,8 @@ fn single(lobe: Bxdf, wo: Vec3) -> Bsdf {
     Bsdf::new(Frame::from_z(Vec3::Z), Vec3::Z, front_side(wo, Vec3::Z), lobes)
 }
 
-fn classic(kind: MaterialKind, kd: f32, ks: f32, kr: f32, kt: f32, wo: Vec3) -> Bsdf {
-    let m = Material { kind, color: Color::new(0.9, 0.6, 0.3), kd, ks, kr, kt, exponent: 20.0, ..Material::default() };
+fn classic(kind: ClassicKind, kd: f32, ks: f32, kr: f32, kt: f32, wo: Vec3) -> Bsdf {
+    let m = Classic { kind, color: Color::new(0.9, 0.6, 0.3), kd, ks, kr, kt, exponent: 20.0, ..Classic::default() };
     let hit = crate::geometry::Hit {
         t: 1.0,
         p: Vec3::ZERO,
@@ -33,7 +33,8 @@ fn classic(kind: MaterialKind, kd: f32, ks: f32, kr: f32, kt: f32, wo: Vec3) -> 
         light: crate::geometry::NO_LIGHT,
         prim: 0,
     };
-    m.bsdf(&hit, wo)
+    let front = front_side(wo, hit.ng);
+    Bsdf::new(hit.shading_frame(), hit.ng, front, m.lobes(front))
 }
 
 fn wos() -> [Vec3; 3] {
@@ -71,7 +72,7 @@ fn phong_sampling_matches_its_pdf() {
 fn classic_mixtures_sample_their_pdf() {
     // Diffuse + glossy + mirror: the non-delta part's samples follow the mixture density.
     for wo in wos() {
-        let b = classic(MaterialKind::Reflective, 0.5, 0.3, 0.2, 0.0, wo);
+        let b = classic(ClassicKind::Reflective, 0.5, 0.3, 0.2, 0.0, wo);
         chi2_bsdf("diffuse + phong + mirror", &b, wo, Transport::Importance);
     }
 }
@@ -106,7 +107,7 @@ fn delta_lobes_pick_their_directions_with_the_right_probabilities() {
         // Dielectric: reflection with probability F, refraction otherwise; both weights 1 in
         // importance mode.
         for eta in [1.5, 1.0 / 1.5] {
-            let b = single(Bxdf::Dielectric(Dielectric { eta }), wo);
+            let b = single(Bxdf::Dielectric(Dielectric::clear(eta)), wo);
             let f = fresnel_dielectric(wo.z, eta) as f64;
             let mut counts = [0u64; 2];
             for _ in 0..n {
@@ -117,7 +118,7 @@ fn delta_lobes_pick_their_directions_with_the_right_probabilities() {
             chi2_discrete(&format!("dielectric eta {eta}"), &counts, &[f, 1.0 - f], n);
         }
         // The seed's transparent material: mirror k_r and fixed transmission k_t, picked by weight.
-        let b = classic(MaterialKind::Transparent, 0.0, 0.0, 0.3, 0.6, wo);
+        let b = classic(ClassicKind::Transparent, 0.0, 0.0, 0.3, 0.6, wo);
         let mut counts = [0u64; 2];
         for _ in 0..n {
             let Some(s) = b.sample(wo, rng.uniform(), rng.uniform2(), Transport::Importance) else { continue };
@@ -143,7 +144,7 @@ fn reflection_lobes_are_reciprocal() {
             assert!((fab - fba).abs().max_element() <= 1e-5 * fab.max_element().max(1.0), "{lobe:?}: {fab} vs {fba}");
         }
         // The classic mixture as a whole.
-        let m = classic(MaterialKind::Reflective, 0.5, 0.3, 0.2, 0.0, a);
+        let m = classic(ClassicKind::Reflective, 0.5, 0.3, 0.2, 0.0, a);
         let (fab, fba) = (m.f(a, b, Transport::Radiance), m.f(b, a, Transport::Radiance));
         assert!((fab - fba).abs().max_element() <= 1e-5 * fab.max_element().max(1.0));
     }
@@ -174,8 +175,8 @@ fn white_furnace_albedo_is_at_most_one() {
         Bxdf::Phong(Phong { ks: 1.0, exponent: 50.0 }),
         Bxdf::Mirror(Mirror { r: Color::ONE }),
         Bxdf::Transmission(Transmission { t: 1.0, eta: 1.5 }),
-        Bxdf::Dielectric(Dielectric { eta: 1.5 }),
-        Bxdf::Dielectric(Dielectric { eta: 1.0 / 1.5 }),
+        Bxdf::Dielectric(Dielectric::clear(1.5)),
+        Bxdf::Dielectric(Dielectric::clear(1.0 / 1.5)),
     ];
     for wo in wos() {
         for lobe in lobes {
@@ -191,7 +192,7 @@ fn white_furnace_albedo_is_at_most_one() {
             }
         }
         // Over-bright classic materials are scaled so the sum of their lobes is at most one.
-        let b = classic(MaterialKind::Transparent, 0.9, 0.7, 0.5, 0.5, wo);
+        let b = classic(ClassicKind::Transparent, 0.9, 0.7, 0.5, 0.5, wo);
         let a = albedo(&b, wo, 100_000, Transport::Importance, false);
         assert!(a.max_element() <= 1.0 + 0.01, "{a}");
     }
@@ -200,14 +201,14 @@ fn white_furnace_albedo_is_at_most_one() {
 #[test]
 fn lambert_albedo_is_its_reflectance() {
     let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
-    let b = classic(MaterialKind::Diffuse, 0.7, 0.0, 0.0, 0.0, wo);
+    let b = classic(ClassicKind::Diffuse, 0.7, 0.0, 0.0, 0.0, wo);
     let a = albedo(&b, wo, 50_000, Transport::Radiance, false);
     assert!((a - Color::new(0.9, 0.6, 0.3) * 0.7).abs().max_element() < 1e-3, "{a}");
 }
 
 #[test]
 fn dielectric_reflects_and_transmits_by_fresnel() {
-    let m = Material { kind: MaterialKind::Dielectric, kd: 0.0, ks: 0.0, ior: 1.5, ..Material::default() };
+    let m = Classic { kind: ClassicKind::Dielectric, kd: 0.0, ks: 0.0, ior: 1.5, ..Classic::default() };
     let b = classic_material(&m, Vec3::Z);
     let mut rng = Rng32::new(1);
     let (mut refl, mut trans, n) = (0.0, 0.0, 100_000);
@@ -228,7 +229,7 @@ fn dielectric_reflects_and_transmits_by_fresnel() {
     assert!((s.unwrap().weight.x - 1.0 / 2.25).abs() < 1e-4);
 }
 
-fn classic_material(m: &Material, wo: Vec3) -> Bsdf {
+fn classic_material(m: &Classic, wo: Vec3) -> Bsdf {
     let hit = crate::geometry::Hit {
         t: 1.0,
         p: Vec3::ZERO,
@@ -240,5 +241,6 @@ fn classic_material(m: &Material, wo: Vec3) -> Bsdf {
         light: crate::geometry::NO_LIGHT,
         prim: 0,
     };
-    m.bsdf(&hit, wo)
+    let front = front_side(wo, hit.ng);
+    Bsdf::new(hit.shading_frame(), hit.ng, front, m.lobes(front))
 }

@@ -1,20 +1,19 @@
 //! Mitsuba BSDFs mapped onto caustic's materials (`docs/mitsuba.md` lists what maps exactly and
-//! what is approximated, with a warning).
+//! what is approximated, with a warning). Parameters, defaults and conventions follow the
+//! Mitsuba 3 plugin reference: reflecting BSDFs are one-sided unless wrapped in `twosided`,
+//! rough ones default to Beckmann with alpha 0.1, glass defaults to bk7 in air.
 
 use super::Build;
-use super::props::Cx;
+use super::props::{Cx, Props};
 use super::xml::El;
-use crate::material::{Material, MaterialKind};
+use crate::material::microfacet::{Distribution, Microfacet};
+use crate::material::{Classic, ClassicKind, Material, Model, Param, Roughness, conductors};
 use crate::math::Color;
 use crate::scene::SceneError;
 
-/// Mitsuba's diffuse BSDF in our model: physical albedo kd x colour.
-pub(super) fn diffuse(color: Color) -> Material {
-    Material { kind: MaterialKind::Diffuse, color, ka: 0.0, kd: 1.0, ks: 0.0, ..Material::default() }
-}
-
-fn mirror(kr: f32) -> Material {
-    Material { kind: MaterialKind::Reflective, color: Color::ONE, ka: 0.0, kd: 0.0, ks: 0.0, kr, ..Material::default() }
+/// Mitsuba's default BSDF: diffuse with reflectance 0.5 (one-sided).
+pub(super) fn default_diffuse() -> Material {
+    Material::one_sided(Model::Diffuse { reflectance: Param::Const(Color::splat(0.5)) })
 }
 
 /// Fresnel reflectance at normal incidence for relative index `eta`.
@@ -22,14 +21,23 @@ fn f0(eta: f32) -> f32 {
     ((eta - 1.0) / (eta + 1.0)).powi(2)
 }
 
+/// Mitsuba's default index of glass (bk7) and of the polypropylene of plastics, and of air.
+const BK7: f32 = 1.5046;
+const POLYPROPYLENE: f32 = 1.49;
+const AIR: f32 = 1.000277;
+
 impl<'a> Cx<'a> {
-    /// Builds the material of a `<bsdf>` element (cached per element).
+    /// Builds the material of a `<bsdf>` element (cached per element); returns its index.
     pub(super) fn material(&mut self, el: &'a El, b: &mut Build) -> Result<u32, SceneError> {
+        self.material_at(el, b, 0)
+    }
+
+    fn material_at(&mut self, el: &'a El, b: &mut Build, depth: usize) -> Result<u32, SceneError> {
         let key = el as *const El as usize;
         if let Some(&i) = b.bsdf_cache.get(&key) {
             return Ok(i);
         }
-        let m = self.bsdf(el, 0)?;
+        let m = self.bsdf(el, b, depth)?;
         let name = match self.attr(el, "id")? {
             Some((id, _)) => id,
             None => format!("(bsdf {})", b.geometry.material_count() + 1),
@@ -43,132 +51,188 @@ impl<'a> Cx<'a> {
         if let Some(i) = b.default_material {
             return i;
         }
-        // Mitsuba's default BSDF: diffuse with reflectance 0.5.
-        let i = b.geometry.add_material("(default diffuse)", diffuse(Color::splat(0.5)));
+        let i = b.geometry.add_material("(default diffuse)", default_diffuse());
         b.default_material = Some(i);
         i
     }
 
+    /// The nested BSDFs of a wrapper, in the order written.
+    fn nested(&mut self, p: &Props<'a>, b: &mut Build, depth: usize) -> Result<Vec<u32>, SceneError> {
+        let inner = self.object(p, None, "bsdf");
+        inner.iter().map(|(el, _)| self.material_at(el, b, depth + 1)).collect()
+    }
+
+    /// A wrapper's one nested BSDF.
+    fn one_nested(&mut self, p: &Props<'a>, b: &mut Build, depth: usize) -> Result<u32, SceneError> {
+        match self.nested(p, b, depth)?.as_slice() {
+            [m] => Ok(*m),
+            [] => Err(self.err(p.el, format!("`{}` needs a nested <bsdf>", p.kind))),
+            _ => Err(self.err(p.el, format!("`{}` takes one nested <bsdf>", p.kind))),
+        }
+    }
+
     /// Maps a Mitsuba BSDF to our material.
-    pub(super) fn bsdf(&mut self, el: &'a El, depth: usize) -> Result<Material, SceneError> {
-        if depth > 8 {
+    fn bsdf(&mut self, el: &'a El, b: &mut Build, depth: usize) -> Result<Material, SceneError> {
+        if depth > crate::material::set::MAX_NESTING {
             return Err(self.err(el, "BSDFs nested too deeply"));
         }
         let p = self.props(el)?;
+        let one = Material::one_sided;
+        let unit = Param::Const(Color::ONE);
         let m = match p.kind.as_str() {
-            "diffuse" => diffuse(self.color(&p, "reflectance")?.unwrap_or(Color::splat(0.5))),
-            "conductor" | "roughconductor" => {
-                if p.kind == "roughconductor" {
-                    for name in ["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"] {
-                        let _ = self.prop(&p, name);
-                    }
-                    self.warn(el, "roughconductor is rendered as a smooth mirror (its roughness is ignored)")?;
-                }
-                let material = self.string(&p, "material")?;
-                let (eta, k) = (self.prop(&p, "eta"), self.prop(&p, "k"));
-                if let Some((name, at)) = &material
-                    && name != "none"
-                {
-                    self.warn(at, format!("conductor material `{name}` is rendered as a perfect (untinted) mirror"))?;
-                } else if eta.is_some() || k.is_some() {
-                    self.warn(el, "conductor eta/k are not supported: rendered as a perfect (untinted) mirror")?;
-                }
-                let kr = match self.color(&p, "specular_reflectance")? {
-                    None => 1.0,
-                    Some(c) => {
-                        let mean = (c.x + c.y + c.z) / 3.0;
-                        if c.max_element() - c.min_element() > 1e-6 {
-                            self.warn(el, format!("tinted specular_reflectance {c} is taken as its mean {mean}"))?;
-                        }
-                        mean.clamp(0.0, 1.0)
-                    }
-                };
-                mirror(kr)
+            "diffuse" => {
+                let reflectance = self.color_param(&p, "reflectance", b)?.unwrap_or(Param::Const(Color::splat(0.5)));
+                one(Model::Diffuse { reflectance })
             }
-            "dielectric" | "roughdielectric" | "thindielectric" => {
-                if p.kind == "roughdielectric" {
-                    for name in ["alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"] {
-                        let _ = self.prop(&p, name);
-                    }
-                    self.warn(el, "roughdielectric is rendered as smooth glass (its roughness is ignored)")?;
+            "conductor" | "roughconductor" => {
+                let (eta, k) = self.complex_ior(&p)?;
+                let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
+                if p.kind == "conductor" {
+                    one(Model::Conductor { eta, k, specular })
+                } else {
+                    let roughness = self.roughness(&p, b, true)?;
+                    one(Model::RoughConductor { roughness, eta, k, specular })
                 }
-                let int_ior = self.ior(&p, "int_ior", 1.5046)?;
-                let ext_ior = self.ior(&p, "ext_ior", 1.000277)?;
+            }
+            "dielectric" | "roughdielectric" => {
+                let eta = self.eta(&p, BK7)?;
+                let reflectance = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
+                let transmittance = self.color_param(&p, "specular_transmittance", b)?.unwrap_or(unit);
+                if p.kind == "dielectric" {
+                    Material::two_sided(Model::Dielectric { eta, reflectance, transmittance })
+                } else {
+                    if (eta - 1.0).abs() < 1e-7 {
+                        return Err(self.err(el, "roughdielectric needs int_ior and ext_ior to differ"));
+                    }
+                    let roughness = self.roughness(&p, b, true)?;
+                    Material::two_sided(Model::RoughDielectric { roughness, eta, reflectance, transmittance })
+                }
+            }
+            "thindielectric" => {
+                let eta = self.eta(&p, BK7)?;
                 for name in ["specular_reflectance", "specular_transmittance"] {
                     if let Some(c) = self.color(&p, name)?
                         && c != Color::ONE
                     {
-                        self.warn(el, format!("`{name}` other than 1 is not supported and is ignored"))?;
+                        self.warn(
+                            el,
+                            format!("`{name}` other than 1 is not supported on thindielectric and is ignored"),
+                        )?;
                     }
                 }
-                let eta = int_ior / ext_ior;
-                if p.kind == "thindielectric" {
-                    // A thin sheet: light passes straight through, and the sheet reflects
-                    // R + T^2 R / (1 - R^2) = 2R / (1 + R). We keep its value at normal incidence.
-                    let r = f0(eta);
-                    let kr = 2.0 * r / (1.0 + r);
-                    self.warn(el, format!("thindielectric is approximated with a fixed reflectance {kr:.4} (its value at normal incidence)"))?;
-                    Material {
-                        kind: MaterialKind::Transparent,
-                        color: Color::ONE,
-                        ka: 0.0,
-                        kd: 0.0,
-                        ks: 0.0,
-                        kr,
-                        kt: 1.0 - kr,
-                        ior: 1.0,
-                        ..Material::default()
-                    }
-                } else {
-                    Material {
-                        kind: MaterialKind::Dielectric,
-                        color: Color::ONE,
-                        ka: 0.0,
-                        kd: 0.0,
-                        ks: 0.0,
-                        ior: eta,
-                        ..Material::default()
-                    }
+                // A thin sheet: light passes straight through, and the sheet reflects
+                // R + T^2 R / (1 - R^2) = 2R / (1 + R). We keep its value at normal incidence.
+                let r = f0(eta);
+                let kr = 2.0 * r / (1.0 + r);
+                self.warn(
+                    el,
+                    format!("thindielectric is approximated with a fixed reflectance {kr:.4} (its value at normal incidence)"),
+                )?;
+                Classic {
+                    kind: ClassicKind::Transparent,
+                    color: Color::ONE,
+                    ka: 0.0,
+                    kd: 0.0,
+                    ks: 0.0,
+                    kr,
+                    kt: 1.0 - kr,
+                    ior: 1.0,
+                    ..Classic::default()
                 }
+                .into()
             }
             "plastic" | "roughplastic" => {
-                let color = self.color(&p, "diffuse_reflectance")?.unwrap_or(Color::splat(0.5));
-                let int_ior = self.ior(&p, "int_ior", 1.49)?;
-                let ext_ior = self.ior(&p, "ext_ior", 1.000277)?;
-                for name in ["alpha", "distribution", "nonlinear", "sample_visible", "specular_reflectance"] {
-                    let _ = self.prop(&p, name);
-                }
+                let diffuse =
+                    self.color_param(&p, "diffuse_reflectance", b)?.unwrap_or(Param::Const(Color::splat(0.5)));
+                let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
+                let eta = self.eta(&p, POLYPROPYLENE)?;
+                let nonlinear = self.boolean(&p, "nonlinear")?.unwrap_or(false);
+                let textures = b.geometry.textures();
                 if p.kind == "plastic" {
-                    let kr = f0(int_ior / ext_ior);
-                    self.warn(el, format!("plastic is approximated by a diffuse base with albedo (1 - {kr:.3}) x reflectance and a mirror coat of constant reflectance {kr:.3}"))?;
-                    Material {
-                        kind: MaterialKind::Reflective,
-                        color,
-                        ka: 0.0,
-                        kd: 1.0 - kr,
-                        ks: 0.0,
-                        kr,
-                        ..Material::default()
-                    }
+                    one(Material::plastic(diffuse, specular, eta, nonlinear, textures))
                 } else {
-                    self.warn(el, "roughplastic is approximated by its diffuse base (the glossy coat is dropped)")?;
-                    diffuse(color)
+                    let roughness = self.roughness(&p, b, false)?;
+                    let Param::Const(alpha) = roughness.alpha_u else {
+                        return Err(self.err(el, "roughplastic takes a number for `alpha`, not a texture"));
+                    };
+                    let mf = Microfacet::new(roughness.distribution, alpha, alpha);
+                    let textures = b.geometry.textures();
+                    one(Material::rough_plastic(mf, diffuse, specular, eta, nonlinear, textures))
                 }
             }
             "twosided" => {
-                // Our surfaces reflect the same way on both sides already.
-                let inner = self.object(&p, None, "bsdf");
+                let inner = self.nested(&p, b, depth)?;
+                let check = |this: &mut Self, m: u32| -> Result<(), SceneError> {
+                    if b_is_glass(b, m) {
+                        return Err(this.err(el, "twosided cannot wrap a BSDF that transmits light"));
+                    }
+                    Ok(())
+                };
                 match inner.as_slice() {
+                    [m] => {
+                        check(self, *m)?;
+                        Material { two_sided: true, ..*b.geometry.material(*m) }
+                    }
+                    [front, back] => {
+                        check(self, *front)?;
+                        check(self, *back)?;
+                        Material::two_sided(Model::TwoSided { front: *front, back: *back })
+                    }
                     [] => return Err(self.err(el, "twosided needs a nested <bsdf>")),
-                    [(first, _), rest @ ..] => {
-                        if !rest.is_empty() {
+                    _ => return Err(self.err(el, "twosided takes one or two nested <bsdf>s")),
+                }
+            }
+            "bumpmap" => {
+                let height = match self.object(&p, None, "texture").as_slice() {
+                    [(t, _)] => self.texture(t, b)?,
+                    _ => return Err(self.err(el, "bumpmap needs one nested <texture> (the heights)")),
+                };
+                if !matches!(b.geometry.textures()[height as usize], crate::texture::Texture::Bitmap(_)) {
+                    return Err(self.err(el, "bumpmap needs a bitmap texture: only bitmaps have height gradients"));
+                }
+                let scale = self.float(&p, "scale")?.unwrap_or(1.0);
+                self.perturbation_switches(&p)?;
+                let inner = self.one_nested(&p, b, depth)?;
+                Material::two_sided(Model::BumpMap { height, scale, inner })
+            }
+            "normalmap" => {
+                let normals = match self.object(&p, Some("normalmap"), "texture").first() {
+                    Some(&(t, _)) => self.texture(t, b)?,
+                    None => return Err(self.err(el, "normalmap needs a nested <texture name=\"normalmap\">")),
+                };
+                self.perturbation_switches(&p)?;
+                let inner = self.one_nested(&p, b, depth)?;
+                Material::two_sided(Model::NormalMap { normals, inner })
+            }
+            "mask" => {
+                let opacity = self.float_param(&p, "opacity", b)?.unwrap_or(Param::Const(0.5));
+                let inner = self.one_nested(&p, b, depth)?;
+                Material::two_sided(Model::Mask { opacity, inner })
+            }
+            "blendbsdf" => {
+                let weight = self
+                    .float_param(&p, "weight", b)?
+                    .ok_or_else(|| self.err(el, "blendbsdf needs a `weight` (a number or a texture)"))?;
+                match self.nested(&p, b, depth)?.as_slice() {
+                    [first, second] => {
+                        for m in [*first, *second] {
+                            if !matches!(
+                                b.geometry.material(m).model,
+                                Model::TwoSided { .. }
+                                    | Model::BumpMap { .. }
+                                    | Model::NormalMap { .. }
+                                    | Model::Mask { .. }
+                            ) {
+                                continue;
+                            }
                             self.warn(
                                 el,
-                                "twosided with a different back side is not supported: both sides use the first BSDF",
+                                "a wrapper (twosided, bump/normal map, mask) inside blendbsdf is not applied",
                             )?;
                         }
-                        self.bsdf(first, depth + 1)?
+                        Material::two_sided(Model::Blend { weight, first: *first, second: *second })
                     }
+                    _ => return Err(self.err(el, "blendbsdf needs exactly two nested <bsdf>s")),
                 }
             }
             other => {
@@ -176,10 +240,92 @@ impl<'a> Cx<'a> {
                 for u in &p.used {
                     u.set(true);
                 }
-                diffuse(Color::splat(0.5))
+                default_diffuse()
             }
         };
         self.finish(&p)?;
         Ok(m)
     }
+
+    /// `flip_invalid_normals` and `use_shadowing_function`: both on is what we do.
+    fn perturbation_switches(&mut self, p: &Props<'a>) -> Result<(), SceneError> {
+        for name in ["flip_invalid_normals", "use_shadowing_function"] {
+            if self.boolean(p, name)? == Some(false) {
+                self.warn(p.el, format!("`{name}` false is not supported: it is taken as true"))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// int_ior / ext_ior (numbers or Mitsuba's named materials).
+    fn eta(&self, p: &Props<'a>, int_default: f32) -> Result<f32, SceneError> {
+        let int_ior = self.ior(p, "int_ior", int_default)?;
+        let ext_ior = self.ior(p, "ext_ior", AIR)?;
+        Ok(int_ior / ext_ior)
+    }
+
+    /// A conductor's complex index: a named `material` (default `none`: a perfect mirror), or
+    /// `eta` and `k` (0 and 1 when missing, as Mitsuba).
+    fn complex_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color), SceneError> {
+        let material = self.string(p, "material")?;
+        let eta = self.color(p, "eta")?;
+        let k = self.color(p, "k")?;
+        match material {
+            Some((name, at)) => {
+                if eta.is_some() || k.is_some() {
+                    return Err(self.err(at, "give either `material` or `eta` and `k`, not both"));
+                }
+                conductors::lookup(&name).ok_or_else(|| {
+                    let names: Vec<&str> = conductors::names().collect();
+                    self.err(at, format!("unknown conductor `{name}`; expected one of: {}", names.join(", ")))
+                })
+            }
+            None => Ok((eta.unwrap_or(Color::ZERO), k.unwrap_or(Color::ONE))),
+        }
+    }
+
+    /// `distribution` and `alpha` (or `alpha_u` and `alpha_v` when `anisotropic` is allowed).
+    fn roughness(&mut self, p: &Props<'a>, b: &mut Build, anisotropic: bool) -> Result<Roughness, SceneError> {
+        let distribution = match self.string(p, "distribution")? {
+            None => Distribution::Beckmann,
+            Some((s, at)) => match s.as_str() {
+                "beckmann" => Distribution::Beckmann,
+                "ggx" => Distribution::Ggx,
+                _ => return Err(self.err(at, format!("distribution must be `beckmann` or `ggx`, found `{s}`"))),
+            },
+        };
+        // Visible-normal sampling or not changes only the noise.
+        let _ = self.prop(p, "sample_visible");
+        let alpha = self.float_param(p, "alpha", b)?;
+        let (au, av) = if anisotropic {
+            (self.float_param(p, "alpha_u", b)?, self.float_param(p, "alpha_v", b)?)
+        } else {
+            (None, None)
+        };
+        let (alpha_u, alpha_v) = match (alpha, au, av) {
+            (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                return Err(self.err(p.el, "give either `alpha` or `alpha_u` and `alpha_v`, not both"));
+            }
+            (Some(a), None, None) => (a, a),
+            (None, Some(u), Some(v)) => (u, v),
+            (None, Some(_), None) | (None, None, Some(_)) => {
+                return Err(self.err(p.el, "an anisotropic roughness needs both `alpha_u` and `alpha_v`"));
+            }
+            (None, None, None) => (Param::Const(0.1), Param::Const(0.1)),
+        };
+        for a in [alpha_u, alpha_v] {
+            if let Param::Const(v) = a
+                && !(v >= 0.0 && v.is_finite())
+            {
+                return Err(self.err(p.el, format!("roughness must be a number of at least 0, found {v}")));
+            }
+        }
+        Ok(Roughness { distribution, alpha_u, alpha_v })
+    }
+}
+
+/// True when material `m` of the scene being built transmits light.
+fn b_is_glass(b: &Build, m: u32) -> bool {
+    let model = &b.geometry.material(m).model;
+    model.is_glass() || model.children().into_iter().any(|c| b_is_glass(b, c))
 }

@@ -19,6 +19,7 @@ mod emitters;
 mod props;
 mod sensor;
 mod shapes;
+mod texture;
 mod transform;
 mod xml;
 
@@ -70,6 +71,10 @@ struct Build {
     geometry: SceneBuilder,
     /// Material index of each `<bsdf>` element already built (by address).
     bsdf_cache: HashMap<usize, u32>,
+    /// Texture index of each `<texture>` element already built (by address).
+    texture_cache: HashMap<usize, u32>,
+    /// Images read so far, by file and decoding (`raw`), shared between textures.
+    images: HashMap<(std::path::PathBuf, bool), std::sync::Arc<crate::texture::image::TexImage>>,
     default_material: Option<u32>,
     background: Color,
 }
@@ -81,6 +86,8 @@ impl<'a> Cx<'a> {
         let mut b = Build {
             geometry: SceneBuilder::new(),
             bsdf_cache: HashMap::new(),
+            texture_cache: HashMap::new(),
+            images: HashMap::new(),
             default_material: None,
             background: Color::ZERO,
         };

@@ -181,7 +181,8 @@ impl<'a> Cx<'a> {
         if let Some(radiance) = radiance {
             // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
             // exactly our plain emitter material.
-            let reflects = m.is_specular() || (m.color * m.kd).max_element() > 0.0 || m.ks > 0.0;
+            let reflects = !m.model.children().is_empty()
+                || !m.model.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty();
             for e in emitters_out {
                 b.geometry.add_area_light(e, radiance, reflects.then_some(m));
             }

@@ -7,6 +7,7 @@
 //! Loading runs in named steps, one per section: render settings, camera, materials, lights,
 //! objects.
 
+mod materials;
 mod objects;
 mod schema;
 
@@ -14,9 +15,10 @@ use super::SceneError;
 use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
 use crate::camera::{CameraDesc, FieldOfView, FovAxis, Placement};
-use crate::material::{Material, MaterialKind};
+use crate::material::Material;
 use crate::math::{Color, Vec3};
-use schema::{CameraTable, MaterialDesc, RenderDesc};
+use materials::MaterialNames;
+use schema::{CameraTable, RenderDesc};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -38,7 +40,8 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
     };
     let camera = cx.camera(sections.remove("camera"))?;
     let mut geometry = SceneBuilder::new();
-    let materials = cx.materials(sections.remove("materials"), &mut geometry)?;
+    let textures = cx.textures(sections.remove("textures"), &mut geometry)?;
+    let materials = cx.materials(sections.remove("materials"), &textures, &mut geometry)?;
     if let Some(v) = sections.remove("lights") {
         cx.lights(v, &mut geometry)?;
     }
@@ -74,13 +77,6 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
         warnings: Vec::new(),
         files: geometry_files,
     })
-}
-
-/// Material indices by name, with a default material made on first use.
-struct MaterialNames {
-    index: HashMap<String, u32>,
-    names: Vec<String>,
-    default: std::cell::Cell<Option<u32>>,
 }
 
 /// The file being loaded, for error positions.
@@ -123,11 +119,14 @@ impl<'a> Cx<'a> {
         let mut sections = HashMap::new();
         for (key, value) in doc.into_inner() {
             let k: &str = key.get_ref();
-            let known = ["render", "camera", "materials", "lights", "objects"].into_iter().find(|s| *s == k);
+            let known =
+                ["render", "camera", "textures", "materials", "lights", "objects"].into_iter().find(|s| *s == k);
             let Some(section) = known else {
                 return Err(self.at(
                     key.span(),
-                    format!("unknown section `{k}`; expected one of render, camera, materials, lights, objects"),
+                    format!(
+                        "unknown section `{k}`; expected one of render, camera, textures, materials, lights, objects"
+                    ),
                 ));
             };
             sections.insert(section, value);
@@ -219,29 +218,6 @@ impl<'a> Cx<'a> {
         })
     }
 
-    /// Step 3: named materials.
-    fn materials(
-        &self,
-        value: Option<Spanned<DeValue<'a>>>,
-        geometry: &mut SceneBuilder,
-    ) -> Result<MaterialNames, SceneError> {
-        let mut names = MaterialNames { index: HashMap::new(), names: Vec::new(), default: std::cell::Cell::new(None) };
-        let Some(v) = value else { return Ok(names) };
-        let span = v.span();
-        let DeValue::Table(table) = v.into_inner() else {
-            return Err(self.at(span, "`materials` must be a table of named materials ([materials.NAME])"));
-        };
-        for (name, value) in table {
-            let (kind, value) = self.tagged(value, "material", schema::MATERIAL_KINDS)?;
-            let desc: MaterialDesc = self.de(value)?;
-            let name = name.get_ref().to_string();
-            let i = geometry.add_material(name.clone(), material(&desc, kind));
-            names.index.insert(name.clone(), i);
-            names.names.push(name);
-        }
-        Ok(names)
-    }
-
     /// The material an object names (or the default one), with an error listing the names.
     fn material_of(
         &self,
@@ -269,36 +245,5 @@ impl<'a> Cx<'a> {
                 ),
             )
         })
-    }
-}
-
-/// A material of the seed report's model from its table.
-fn material(desc: &MaterialDesc, kind: &str) -> Material {
-    let d = Material::default();
-    let kind = match kind {
-        "diffuse" => MaterialKind::Diffuse,
-        "reflective" => MaterialKind::Reflective,
-        "transparent" => MaterialKind::Transparent,
-        _ => MaterialKind::Dielectric,
-    };
-    // Glass defaults to no diffuse term: all its light comes from reflection and refraction.
-    let clear = kind == MaterialKind::Dielectric || kind == MaterialKind::Transparent;
-    Material {
-        kind,
-        color: desc.color.map_or(if clear { Color::ONE } else { d.color }, |c| c.0),
-        ka: desc.ka.map_or(if clear { 0.0 } else { d.ka }, |v| v.0),
-        kd: desc.kd.map_or(if clear { 0.0 } else { d.kd }, |v| v.0),
-        ks: desc.ks.map_or(d.ks, |v| v.0),
-        exponent: desc.exponent.map_or(d.exponent, |v| v.0),
-        kr: desc.kr.map_or(
-            match kind {
-                MaterialKind::Reflective => 0.5,
-                MaterialKind::Transparent => 0.1,
-                _ => 0.0,
-            },
-            |v| v.0,
-        ),
-        kt: desc.kt.map_or(if kind == MaterialKind::Transparent { 0.9 } else { 0.0 }, |v| v.0),
-        ior: desc.ior.map_or(d.ior, |v| v.0),
     }
 }

@@ -1,8 +1,9 @@
 //! The `[[lights]]` and `[[objects]]` sections of a TOML scene: each entry checked and added to
 //! the scene builder.
 
+use super::Cx;
+use super::materials::MaterialNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
-use super::{Cx, MaterialNames};
 use crate::geometry::Transform;
 use crate::light::{Emitter, Light};
 use crate::math::{Color, Vec3};

@@ -2,7 +2,9 @@
 //! validating values, and the keys each `type` of material, light and object accepts.
 
 use crate::sampling::SamplerKind;
-use crate::scene::de::{Direction, Finite, NonNegative, Point, Positive, Rgb, Scale, Unit};
+use crate::scene::de::{
+    ColorOrTexture, Direction, Finite, NonNegative, NumberOrTexture, Pair, Point, Positive, Rgb, Scale, Unit,
+};
 use crate::scene::desc::{IntegratorKind, PhotonOptions};
 use serde::Deserialize;
 use std::path::PathBuf;
@@ -13,6 +15,21 @@ pub const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("reflective", &["color", "ka", "kd", "ks", "exponent", "kr"]),
     ("transparent", &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"]),
     ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior"]),
+    ("conductor", &["metal", "eta", "k", "specular", "two_sided"]),
+    ("roughconductor", &["metal", "eta", "k", "specular", "two_sided", "distribution", "alpha", "alpha_u", "alpha_v"]),
+    ("roughdielectric", &["ior", "distribution", "alpha", "alpha_u", "alpha_v"]),
+    ("plastic", &["color", "specular", "ior", "nonlinear", "two_sided"]),
+    ("roughplastic", &["color", "specular", "ior", "nonlinear", "two_sided", "distribution", "alpha"]),
+    ("bumpmap", &["material", "texture", "scale"]),
+    ("normalmap", &["material", "texture"]),
+    ("mask", &["material", "opacity"]),
+    ("blend", &["first", "second", "weight"]),
+    ("twosided", &["front", "back"]),
+];
+
+pub const TEXTURE_KINDS: &[(&str, &[&str])] = &[
+    ("bitmap", &["file", "filter", "wrap", "raw", "scale", "offset", "rotate"]),
+    ("checkerboard", &["color0", "color1", "scale", "offset", "rotate"]),
 ];
 
 pub const LIGHT_KINDS: &[(&str, &[&str])] = &[
@@ -73,7 +90,7 @@ pub struct CameraTable {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
-    pub color: Option<Rgb>,
+    pub color: Option<Spanned<ColorOrTexture>>,
     pub ka: Option<NonNegative>,
     pub kd: Option<NonNegative>,
     pub ks: Option<NonNegative>,
@@ -81,6 +98,39 @@ pub struct MaterialDesc {
     pub kr: Option<Unit>,
     pub kt: Option<Unit>,
     pub ior: Option<Positive>,
+    pub metal: Option<Spanned<String>>,
+    pub eta: Option<Rgb>,
+    pub k: Option<Rgb>,
+    pub specular: Option<Spanned<ColorOrTexture>>,
+    pub two_sided: Option<bool>,
+    pub distribution: Option<Spanned<String>>,
+    pub alpha: Option<Spanned<NumberOrTexture>>,
+    pub alpha_u: Option<Spanned<NumberOrTexture>>,
+    pub alpha_v: Option<Spanned<NumberOrTexture>>,
+    pub nonlinear: Option<bool>,
+    pub material: Option<Spanned<String>>,
+    pub texture: Option<Spanned<String>>,
+    pub scale: Option<Finite>,
+    pub opacity: Option<Spanned<NumberOrTexture>>,
+    pub first: Option<Spanned<String>>,
+    pub second: Option<Spanned<String>>,
+    pub weight: Option<Spanned<NumberOrTexture>>,
+    pub front: Option<Spanned<String>>,
+    pub back: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDesc {
+    pub file: Option<Spanned<PathBuf>>,
+    pub filter: Option<Spanned<String>>,
+    pub wrap: Option<Spanned<String>>,
+    pub raw: Option<bool>,
+    pub scale: Option<Pair>,
+    pub offset: Option<Pair>,
+    pub rotate: Option<Finite>,
+    pub color0: Option<Rgb>,
+    pub color1: Option<Rgb>,
 }
 
 #[derive(Deserialize)]

@@ -8,6 +8,14 @@
 //! delta lobe its discrete probability as `pdf`. Transport mode: radiance refracting into a denser
 //! medium is scaled by 1 / eta^2, importance (photon flux) is not.
 
+mod conductor;
+mod plastic;
+mod rough_dielectric;
+
+pub use conductor::{Conductor, RoughConductor, reflect_about};
+pub use plastic::{CoatingTable, FresnelMirror, PlasticDiffuse, RoughCoating, RoughPlasticDiffuse};
+pub use rough_dielectric::RoughDielectric;
+
 use super::fresnel::fresnel_dielectric;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
 use crate::sampling::warp::cosine_hemisphere;
@@ -36,6 +44,9 @@ impl LobeFlags {
     pub const GLOSSY_REFLECTION: LobeFlags = LobeFlags(1 | 8);
     pub const SPECULAR_REFLECTION: LobeFlags = LobeFlags(1 | 16);
     pub const SPECULAR_TRANSMISSION: LobeFlags = LobeFlags(2 | 16);
+    pub const GLOSSY_TRANSMISSION: LobeFlags = LobeFlags(2 | 8);
+    /// Straight through without scattering (the transparent part of a `mask`).
+    pub const NULL: LobeFlags = LobeFlags(32);
 
     /// True when every bit of `other` is set.
     #[inline]
@@ -49,9 +60,15 @@ impl LobeFlags {
         self.0 & other.0 != 0
     }
 
+    /// A delta direction: specular scattering or passing straight through.
     #[inline]
     pub fn is_specular(self) -> bool {
-        self.intersects(LobeFlags::SPECULAR)
+        self.intersects(LobeFlags(16 | 32))
+    }
+
+    #[inline]
+    pub fn is_null(self) -> bool {
+        self.intersects(LobeFlags::NULL)
     }
 
     #[inline]
@@ -124,10 +141,20 @@ pub struct Transmission {
 }
 
 /// A smooth dielectric interface: reflection and refraction weighted by the Fresnel equations
-/// (seed eq. 5-8), total internal reflection included; `eta` as for `Transmission`.
+/// (seed eq. 5-8), total internal reflection included; `eta` as for `Transmission`. `r` and `t`
+/// scale the two (Mitsuba's `specular_reflectance` and `specular_transmittance`, 1 for glass).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dielectric {
     pub eta: f32,
+    pub r: Color,
+    pub t: Color,
+}
+
+impl Dielectric {
+    /// Clear glass of relative index `eta`.
+    pub fn clear(eta: f32) -> Self {
+        Dielectric { eta, r: Color::ONE, t: Color::ONE }
+    }
 }
 
 /// One scattering lobe.
@@ -138,6 +165,13 @@ pub enum Bxdf {
     Mirror(Mirror),
     Transmission(Transmission),
     Dielectric(Dielectric),
+    Conductor(Conductor),
+    RoughConductor(RoughConductor),
+    RoughDielectric(RoughDielectric),
+    FresnelMirror(FresnelMirror),
+    PlasticDiffuse(PlasticDiffuse),
+    RoughCoating(RoughCoating),
+    RoughPlasticDiffuse(RoughPlasticDiffuse),
 }
 
 /// Mirror direction of `w` about the local normal (seed eq. 3 with I = -w).
@@ -165,7 +199,7 @@ pub fn sample_phong(r: Vec3, exponent: f32, u: Vec2) -> Vec3 {
 /// The weight with which a lobe of reflectance `c` is chosen for sampling: its luminance, but
 /// never below a tenth of its brightest channel (so a saturated colour is still sampled).
 #[inline]
-fn colour_weight(c: Color) -> f32 {
+pub(crate) fn colour_weight(c: Color) -> f32 {
     luminance(c).max(c.max_element() * 0.1)
 }
 
@@ -178,6 +212,10 @@ impl Bxdf {
             Bxdf::Mirror(_) => LobeFlags::SPECULAR_REFLECTION,
             Bxdf::Transmission(_) => LobeFlags::SPECULAR_TRANSMISSION,
             Bxdf::Dielectric(_) => LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION,
+            Bxdf::Conductor(_) | Bxdf::FresnelMirror(_) => LobeFlags::SPECULAR_REFLECTION,
+            Bxdf::RoughConductor(_) | Bxdf::RoughCoating(_) => LobeFlags::GLOSSY_REFLECTION,
+            Bxdf::RoughDielectric(_) => LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION,
+            Bxdf::PlasticDiffuse(_) | Bxdf::RoughPlasticDiffuse(_) => LobeFlags::DIFFUSE_REFLECTION,
         }
     }
 
@@ -185,20 +223,78 @@ impl Bxdf {
     /// but anisotropic lobes), so its frame's tangent may be any perpendicular direction.
     #[inline]
     pub fn is_isotropic(&self) -> bool {
-        true
+        match self {
+            Bxdf::RoughConductor(b) => b.mf.is_isotropic(),
+            Bxdf::RoughDielectric(b) => b.mf.is_isotropic(),
+            Bxdf::RoughCoating(b) => b.mf.is_isotropic(),
+            _ => true,
+        }
     }
 
     /// How often this lobe is sampled relative to the others of a mixture: an estimate of its
     /// albedo (1 for a dielectric, which always reflects or transmits everything).
     #[inline]
     pub fn sampling_weight(&self) -> f32 {
+        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match self {
             Bxdf::Lambert(b) => colour_weight(b.r),
             Bxdf::Phong(b) => b.ks,
             Bxdf::Mirror(b) => colour_weight(b.r),
             Bxdf::Transmission(b) => b.t,
-            Bxdf::Dielectric(_) => 1.0,
+            Bxdf::Dielectric(b) => colour_weight(b.r.max(b.t)),
+            Bxdf::Conductor(b) => colour_weight(b.albedo()),
+            Bxdf::RoughConductor(b) => colour_weight(b.albedo()),
+            Bxdf::RoughDielectric(b) => colour_weight(b.r.max(b.t)),
+            // A plastic's two lobes in Mitsuba's proportion: the coating's mean specular
+            // reflectance against the base's mean reflectance (then times `selection`).
+            Bxdf::FresnelMirror(b) => mean(b.scale),
+            Bxdf::RoughCoating(b) => mean(b.scale),
+            Bxdf::PlasticDiffuse(b) => b.d_mean,
+            Bxdf::RoughPlasticDiffuse(b) => b.d_mean,
         }
+    }
+
+    /// How much more or less likely the lobe is to be chosen when seen from `wo` (local): a
+    /// plastic's coating in proportion to its reflectance, its base to its transmittance.
+    #[inline]
+    pub fn selection(&self, wo: Vec3) -> f32 {
+        match self {
+            Bxdf::FresnelMirror(b) => fresnel_dielectric(wo.z, b.eta),
+            Bxdf::PlasticDiffuse(b) => 1.0 - fresnel_dielectric(wo.z, b.eta),
+            Bxdf::RoughCoating(b) => 1.0 - b.table.transmittance(wo.z),
+            Bxdf::RoughPlasticDiffuse(b) => b.table.transmittance(wo.z),
+            _ => 1.0,
+        }
+    }
+
+    /// The lobe with its values (and so its albedo) scaled by `w` in [0, 1]: a blend's share.
+    pub fn scaled(self, w: f32) -> Bxdf {
+        let c = Color::splat(w);
+        match self {
+            Bxdf::Lambert(b) => Bxdf::Lambert(Lambert { r: b.r * c }),
+            Bxdf::Phong(b) => Bxdf::Phong(Phong { ks: b.ks * w, ..b }),
+            Bxdf::Mirror(b) => Bxdf::Mirror(Mirror { r: b.r * c }),
+            Bxdf::Transmission(b) => Bxdf::Transmission(Transmission { t: b.t * w, ..b }),
+            Bxdf::Dielectric(b) => Bxdf::Dielectric(Dielectric { r: b.r * c, t: b.t * c, ..b }),
+            Bxdf::Conductor(b) => Bxdf::Conductor(Conductor { scale: b.scale * c, ..b }),
+            Bxdf::RoughConductor(b) => Bxdf::RoughConductor(RoughConductor { scale: b.scale * c, ..b }),
+            Bxdf::RoughDielectric(b) => Bxdf::RoughDielectric(RoughDielectric { r: b.r * c, t: b.t * c, ..b }),
+            Bxdf::FresnelMirror(b) => Bxdf::FresnelMirror(FresnelMirror { scale: b.scale * c, ..b }),
+            Bxdf::PlasticDiffuse(b) => Bxdf::PlasticDiffuse(PlasticDiffuse { d: b.d * c, d_mean: b.d_mean * w, ..b }),
+            Bxdf::RoughCoating(b) => Bxdf::RoughCoating(RoughCoating { scale: b.scale * c, ..b }),
+            Bxdf::RoughPlasticDiffuse(b) => {
+                Bxdf::RoughPlasticDiffuse(RoughPlasticDiffuse { d: b.d * c, d_mean: b.d_mean * w, ..b })
+            }
+        }
+    }
+
+    /// True when the lobe's choice depends on the viewing direction (see `selection`).
+    #[inline]
+    pub fn directional_selection(&self) -> bool {
+        matches!(
+            self,
+            Bxdf::FresnelMirror(_) | Bxdf::PlasticDiffuse(_) | Bxdf::RoughCoating(_) | Bxdf::RoughPlasticDiffuse(_)
+        )
     }
 
     /// The lobe's albedo averaged over the colour channels (1 for a dielectric): photons pick
@@ -211,14 +307,27 @@ impl Bxdf {
             Bxdf::Phong(b) => b.ks,
             Bxdf::Mirror(b) => mean(b.r),
             Bxdf::Transmission(b) => b.t,
-            Bxdf::Dielectric(_) => 1.0,
+            Bxdf::Dielectric(b) => mean(b.r.max(b.t)),
+            Bxdf::Conductor(b) => mean(b.albedo()),
+            Bxdf::RoughConductor(b) => mean(b.albedo()),
+            Bxdf::RoughDielectric(b) => mean(b.r.max(b.t)),
+            // Fresnel reflectance of a coating averaged over directions is about its F_dr.
+            Bxdf::FresnelMirror(b) => mean(b.scale) * super::fresnel::fresnel_diffuse_reflectance(b.eta),
+            Bxdf::RoughCoating(b) => mean(b.scale) * super::fresnel::fresnel_diffuse_reflectance(b.eta),
+            Bxdf::PlasticDiffuse(b) => mean(b.d),
+            Bxdf::RoughPlasticDiffuse(b) => mean(b.d),
         }
     }
 
     /// The lobe's value for the pair (reflection lobes only where `wi` is above the surface).
     #[inline]
-    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> Color {
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
         match self {
+            Bxdf::RoughConductor(b) => b.f(wo, wi),
+            Bxdf::RoughDielectric(b) => b.f(wo, wi, mode),
+            Bxdf::PlasticDiffuse(b) => b.f(wo, wi),
+            Bxdf::RoughCoating(b) => b.f(wo, wi),
+            Bxdf::RoughPlasticDiffuse(b) => b.f(wo, wi),
             Bxdf::Lambert(b) if wi.z > 0.0 => b.r * FRAC_1_PI,
             Bxdf::Phong(b) if wi.z > 0.0 => {
                 let c = reflect_local(wo).dot(wi);
@@ -236,6 +345,10 @@ impl Bxdf {
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> f32 {
         match self {
+            Bxdf::RoughConductor(b) => b.pdf(wo, wi),
+            Bxdf::RoughDielectric(b) => b.pdf(wo, wi),
+            Bxdf::PlasticDiffuse(_) | Bxdf::RoughPlasticDiffuse(_) if wi.z > 0.0 && wo.z > 0.0 => wi.z * FRAC_1_PI,
+            Bxdf::RoughCoating(b) => b.pdf(wo, wi),
             Bxdf::Lambert(_) if wi.z > 0.0 => wi.z * FRAC_1_PI,
             Bxdf::Phong(b) if wi.z > 0.0 => {
                 let c = reflect_local(wo).dot(wi);
@@ -281,18 +394,20 @@ impl Bxdf {
                 let fr = fresnel_dielectric(wo.z, b.eta);
                 if uc < fr {
                     let wi = reflect_local(wo);
-                    Some(BxdfSample { wi, weight: Color::ONE, pdf: fr, flags: LobeFlags::SPECULAR_REFLECTION })
+                    Some(BxdfSample { wi, weight: b.r, pdf: fr, flags: LobeFlags::SPECULAR_REFLECTION })
                 } else {
                     let wi = refract_local(wo, b.eta)?;
                     let scale = if mode == Transport::Radiance { 1.0 / (b.eta * b.eta) } else { 1.0 };
-                    Some(BxdfSample {
-                        wi,
-                        weight: Color::splat(scale),
-                        pdf: 1.0 - fr,
-                        flags: LobeFlags::SPECULAR_TRANSMISSION,
-                    })
+                    Some(BxdfSample { wi, weight: b.t * scale, pdf: 1.0 - fr, flags: LobeFlags::SPECULAR_TRANSMISSION })
                 }
             }
+            Bxdf::Conductor(b) => b.sample(wo),
+            Bxdf::RoughConductor(b) => b.sample(wo, u),
+            Bxdf::RoughDielectric(b) => b.sample(wo, uc, u, mode),
+            Bxdf::FresnelMirror(b) => b.sample(wo),
+            Bxdf::PlasticDiffuse(b) => b.sample(wo, u),
+            Bxdf::RoughCoating(b) => b.sample(wo, u),
+            Bxdf::RoughPlasticDiffuse(b) => b.sample(wo, u),
         }
     }
 

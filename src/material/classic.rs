@@ -1,0 +1,120 @@
+//! The seed report's material model (eq. 1-2): ambient k_a, diffuse k_d with a colour, Phong
+//! specular k_s with exponent n, mirror reflection k_r, transmission k_t with an index of
+//! refraction, and the four kinds the report mixes in one scene. The Whitted integrator shades
+//! with it directly; the physical integrators read its lobes.
+
+use super::bsdf::Lobes;
+use super::bxdf::{Bxdf, Dielectric, Lambert, Mirror, Phong, Transmission};
+use crate::math::Color;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassicKind {
+    /// Ambient, diffuse and Phong highlight only.
+    Diffuse,
+    /// Adds mirror reflection weighted by k_r.
+    Reflective,
+    /// Adds reflection k_r and refraction k_t with fixed coefficients.
+    Transparent,
+    /// Reflection and refraction weighted by the Fresnel equations: k_s from eq. 5-7, k_t = 1 - k_s.
+    Dielectric,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Classic {
+    pub kind: ClassicKind,
+    pub color: Color,
+    /// A texture (index into the scene's textures) giving `color` over the surface.
+    pub color_texture: Option<u32>,
+    pub ka: f32,
+    pub kd: f32,
+    /// Phong highlight coefficient (eq. 1).
+    pub ks: f32,
+    /// Phong exponent n.
+    pub exponent: f32,
+    /// Mirror reflection coefficient (Reflective, Transparent).
+    pub kr: f32,
+    /// Transmission coefficient (Transparent).
+    pub kt: f32,
+    /// Index of refraction of the inside of the object (Transparent, Dielectric).
+    pub ior: f32,
+}
+
+impl Default for Classic {
+    fn default() -> Self {
+        Classic {
+            kind: ClassicKind::Diffuse,
+            color: Color::splat(0.8),
+            color_texture: None,
+            ka: 0.1,
+            kd: 0.8,
+            ks: 0.0,
+            exponent: 32.0,
+            kr: 0.0,
+            kt: 0.0,
+            ior: 1.5,
+        }
+    }
+}
+
+impl Classic {
+    /// A surface that reflects nothing (the surface of a plain area light).
+    pub fn black() -> Self {
+        Classic { color: Color::ZERO, ka: 0.0, kd: 0.0, ..Classic::default() }
+    }
+
+    /// True when the material has a perfectly specular (mirror or refracting) part, so light
+    /// arriving through it can form caustics.
+    pub fn is_specular(&self) -> bool {
+        match self.kind {
+            ClassicKind::Diffuse => false,
+            ClassicKind::Reflective => self.kr > 0.0,
+            ClassicKind::Transparent => self.kr > 0.0 || self.kt > 0.0,
+            ClassicKind::Dielectric => true,
+        }
+    }
+
+    /// The material's lobes seen from the outward side (`front`) or the inside: a Lambertian
+    /// lobe with albedo k_d x colour, a normalised Phong lobe with k_s, a mirror with k_r, a
+    /// fixed-transmittance refraction with k_t (`Transparent`), or the two Fresnel-weighted
+    /// lobes of a smooth dielectric. If the lobes' albedos add up to more than one they are
+    /// scaled down together, so no surface reflects more than it receives.
+    pub fn lobes(&self, front: bool) -> Lobes {
+        let mut lobes = Lobes::default();
+        // The index of the side light enters over the side it comes from.
+        let eta = if front { self.ior } else { 1.0 / self.ior };
+        if self.kind == ClassicKind::Dielectric {
+            // A smooth dielectric is only its two Fresnel lobes: the classic model's diffuse and
+            // highlight terms on glass have no physical counterpart (highlights of area lights
+            // show up in the mirror lobe by themselves).
+            lobes.add(Bxdf::Dielectric(Dielectric::clear(eta)));
+            return lobes;
+        }
+        let mut diffuse = self.color * self.kd;
+        let mut glossy = self.ks;
+        let (mut mirror, mut transmit) = match self.kind {
+            ClassicKind::Reflective => (Color::splat(self.kr), 0.0),
+            ClassicKind::Transparent => (Color::splat(self.kr), self.kt),
+            _ => (Color::ZERO, 0.0),
+        };
+        // Energy conservation: the lobes share at most all the light.
+        let total = (diffuse + Color::splat(glossy) + mirror + Color::splat(transmit)).max_element();
+        if total > 1.0 {
+            let s = 1.0 / total;
+            diffuse *= s;
+            glossy *= s;
+            mirror *= s;
+            transmit *= s;
+        }
+        lobes.add(Bxdf::Lambert(Lambert { r: diffuse }));
+        lobes.add(Bxdf::Phong(Phong { ks: glossy, exponent: self.exponent }));
+        lobes.add(Bxdf::Mirror(Mirror { r: mirror }));
+        lobes.add(Bxdf::Transmission(Transmission { t: transmit, eta }));
+        lobes
+    }
+
+    /// True when light passes through the surface (refraction happens).
+    #[inline]
+    pub fn transmits(&self) -> bool {
+        matches!(self.kind, ClassicKind::Transparent | ClassicKind::Dielectric)
+    }
+}
