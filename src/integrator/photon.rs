@@ -231,6 +231,9 @@ impl PhotonIntegrator {
         let r = r2.sqrt();
         // Photons further than this from the tangent plane lie on other surfaces.
         let thickness = 0.25 * r;
+        // Light arrives from behind only through a transmitting surface (rough glass); elsewhere
+        // photons from behind belong to the other side of a thin object.
+        let both_sides = bsdf.flags().is_transmission();
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
             let ph = map.photon(i);
@@ -238,7 +241,7 @@ impl PhotonIntegrator {
                 continue;
             }
             let dir = ph.direction();
-            if dir.dot(n) >= 0.0 || (ph.position() - hit.p).dot(n).abs() > thickness {
+            if (!both_sides && dir.dot(n) >= 0.0) || (ph.position() - hit.p).dot(n).abs() > thickness {
                 continue;
             }
             let w = match cone {

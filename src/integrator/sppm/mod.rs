@@ -271,9 +271,11 @@ impl Sppm {
                     let r2 = px.r * px.r;
                     // The flux in all, and the part that came only through mirrors and glass.
                     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
+                    // Photons from behind count only on a transmitting surface (rough glass).
+                    let both_sides = v.bsdf.flags().is_transmission();
                     grid.for_each_near(v.p, px.r, |i| {
                         let ph = &hits[i as usize];
-                        if (ph.p - v.p).length_squared() > r2 || ph.dir.dot(v.bsdf.normal()) >= 0.0 {
+                        if (ph.p - v.p).length_squared() > r2 || (!both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0) {
                             return;
                         }
                         let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
