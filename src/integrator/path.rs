@@ -145,7 +145,7 @@ pub fn direct_light(
 ) -> Color {
     let Some((li, p_pick)) = scene.light_picker.pick(sampler.next_1d()) else { return Color::ZERO };
     let light = &scene.lights[li];
-    let Some(ls) = light.sample(hit.p, sampler.next_2d()) else { return Color::ZERO };
+    let Some(ls) = scene.sample_light(light, hit.p, sampler.next_2d()) else { return Color::ZERO };
     let f = bsdf.f(wo, ls.wi, Transport::Radiance);
     if f == Color::ZERO {
         return Color::ZERO;

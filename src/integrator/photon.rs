@@ -272,7 +272,7 @@ impl PhotonIntegrator {
             let n_samples = if light.is_delta() { 1 } else { self.config.light_samples.max(1) };
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
-                let Some(ls) = light.sample(hit.p, sampler.rng().uniform2()) else { continue };
+                let Some(ls) = scene.sample_light(light, hit.p, sampler.rng().uniform2()) else { continue };
                 let f = bsdf.f(wo, ls.wi, Transport::Radiance);
                 if f == Color::ZERO {
                     continue;
@@ -337,11 +337,12 @@ impl PhotonIntegrator {
             for _ in 0..4 {
                 stats.rays += 1;
                 let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
-                if y.is_emitter() {
-                    break;
-                }
                 let wo_y = -ray.d;
                 let by = scene.bsdf(&y, wo_y);
+                // Emission is direct light or a caustic; what a reflecting emitter reflects is not.
+                if by.is_black() {
+                    break;
+                }
                 if by.is_specular_only() {
                     let Some(s) =
                         by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
@@ -436,7 +437,10 @@ impl RayIntegrator for PhotonIntegrator {
                 if hit.is_front(ray.d) && !lit_by_shadow_rays {
                     layers[first] += beta * scene.emitted(&hit, wo);
                 }
-                break;
+                // A reflecting emitter (one with a BSDF) also reflects.
+                if scene.bsdf(&hit, wo).is_black() {
+                    break;
+                }
             }
             // This surface is bounce depth + 1: lit only within the depth limit.
             if depth >= self.config.max_depth {

@@ -20,15 +20,116 @@ use std::f32::consts::PI;
 pub enum Light {
     /// Isotropic point light; `intensity` is colour x intensity in W/sr.
     Point { position: Vec3, intensity: Color },
-    /// A point light emitting into a cone around `direction`: full intensity within
-    /// `cos_falloff`, fading smoothly (smoothstep in cos theta) to zero at `cos_total`.
-    Spot { position: Vec3, direction: Vec3, intensity: Color, cos_total: f32, cos_falloff: f32 },
+    /// A point light emitting into a cone around its frame's z axis, as Mitsuba 3's `spot`: full
+    /// intensity within the beam width, then fading linearly in angle to zero at the cutoff
+    /// angle, optionally through a texture projected onto the square circumscribing the cone.
+    Spot(Spot),
+    /// Mitsuba 3's `projector`: a pinhole that projects a texture (irradiance on a virtual image
+    /// plane at distance 1 along its z axis) like a perspective camera in reverse.
+    Projector(Projector),
     /// Light from infinitely far away; `direction` is the unit direction the light travels,
     /// `irradiance` what a surface facing it receives. `scene_radius`/`scene_center` bound the
     /// scene, for its power and photon emission.
     Directional { direction: Vec3, irradiance: Color, scene_center: Vec3, scene_radius: f32 },
     /// A shape emitting constant radiance from its front side.
     Area { emitter: Emitter, radiance: Color },
+}
+
+/// No texture: a spot light of uniform intensity.
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// A spot light (see [`Light::Spot`]); angles in radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    pub position: Vec3,
+    /// z: the direction the light shines; x and y orient the projected texture.
+    pub frame: Frame,
+    /// Intensity on the axis, W/sr.
+    pub intensity: Color,
+    pub cos_cutoff: f32,
+    pub cos_beam: f32,
+    pub cutoff: f32,
+    /// cutoff - beam width.
+    pub transition: f32,
+    pub tan_cutoff: f32,
+    /// Texture index in the scene's textures, or [`NO_TEXTURE`].
+    pub texture: u32,
+}
+
+impl Spot {
+    /// A spot at `position` shining along `frame.z`, with angles in degrees (0 <= beam <= cutoff
+    /// <= 90 checked by the loaders).
+    pub fn new(position: Vec3, frame: Frame, intensity: Color, cutoff_deg: f32, beam_deg: f32, texture: u32) -> Spot {
+        let (cutoff, beam) = (cutoff_deg.to_radians(), beam_deg.to_radians());
+        Spot {
+            position,
+            frame,
+            intensity,
+            cos_cutoff: cutoff.cos(),
+            cos_beam: beam.cos(),
+            cutoff,
+            transition: cutoff - beam,
+            tan_cutoff: cutoff.tan(),
+            texture,
+        }
+    }
+
+    /// Mitsuba's fall-off for a direction at cos `cos_theta` from the axis: 1 inside the beam,
+    /// linear in the angle from the beam width to the cutoff, 0 beyond.
+    #[inline]
+    pub fn falloff(&self, cos_theta: f32) -> f32 {
+        if !(cos_theta > self.cos_cutoff) {
+            0.0
+        } else if cos_theta >= self.cos_beam {
+            1.0
+        } else {
+            ((self.cutoff - cos_theta.min(1.0).acos()) / self.transition).clamp(0.0, 1.0)
+        }
+    }
+
+    /// The texture coordinates of a direction leaving the light (local frame), as Mitsuba maps
+    /// them: the square circumscribing the cutoff cone, local +y towards v = 0.
+    #[inline]
+    fn uv(&self, local: Vec3) -> Vec2 {
+        let k = 0.5 / (local.z * self.tan_cutoff);
+        Vec2::new(0.5 + local.x * k, 0.5 + local.y * k)
+    }
+}
+
+/// A projector (see [`Light::Projector`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projector {
+    pub position: Vec3,
+    /// z: the optical axis; image x runs along -x, image y (v = 0 at the top) along -y.
+    pub frame: Frame,
+    /// pi x scale: the intensity on the axis of a texel of irradiance 1 (W/sr).
+    pub intensity: Color,
+    /// Half-extent of the image plane at distance 1: tan(fov_x / 2) and tan(fov_y / 2).
+    pub tan_x: f32,
+    pub tan_y: f32,
+    /// Texture index, or [`NO_TEXTURE`] for irradiance 1 everywhere.
+    pub texture: u32,
+    /// The texture's mean (1 without one): the share of the image plane's power it passes.
+    pub mean: Color,
+}
+
+impl Projector {
+    /// (uv, local direction) of a direction leaving the projector, `None` outside its image.
+    #[inline]
+    fn uv(&self, d: Vec3) -> Option<(Vec2, Vec3)> {
+        let local = self.frame.to_local(d);
+        if !(local.z > 0.0) {
+            return None;
+        }
+        let (x, y) = (local.x / local.z, local.y / local.z);
+        let uv = Vec2::new(0.5 - 0.5 * x / self.tan_x, 0.5 - 0.5 * y / self.tan_y);
+        (uv.cmpge(Vec2::ZERO).all() && uv.cmple(Vec2::ONE).all()).then_some((uv, local))
+    }
+
+    /// Area of the image plane at distance 1.
+    fn plane_area(&self) -> f32 {
+        4.0 * self.tan_x * self.tan_y
+    }
 }
 
 /// Light arriving at a point from one light sample: its contribution to a Monte Carlo estimate
@@ -67,15 +168,6 @@ pub struct EmittedPhoton {
     pub n: Vec3,
 }
 
-#[inline]
-fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
-    if e0 == e1 {
-        return if x < e0 { 0.0 } else { 1.0 };
-    }
-    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
 impl Light {
     /// True for lights no ray can hit (points, spots, directional).
     #[inline]
@@ -83,20 +175,54 @@ impl Light {
         !matches!(self, Light::Area { .. })
     }
 
-    /// Spot falloff for a direction making cos `cos_theta` with the axis.
+    /// Intensity (W/sr) a delta-position light sends in direction `d` (unit, leaving it),
+    /// before any texture; zero for other lights.
     #[inline]
-    pub(crate) fn spot_falloff(cos_theta: f32, cos_total: f32, cos_falloff: f32) -> f32 {
-        smoothstep(cos_total, cos_falloff, cos_theta)
+    pub fn intensity_towards(&self, d: Vec3) -> Color {
+        match *self {
+            Light::Point { intensity, .. } => intensity,
+            Light::Spot(s) => s.intensity * s.falloff(d.dot(s.frame.z)),
+            Light::Projector(p) => match p.uv(d) {
+                // A texel of the image plane at distance 1 seen at angle a: dw = cos^3 a dA.
+                Some((_, local)) => p.intensity / (local.z * local.z * local.z),
+                None => Color::ZERO,
+            },
+            _ => Color::ZERO,
+        }
+    }
+
+    /// The texture a spot or projector casts and where direction `d` (leaving the light) reads
+    /// it: (texture index, uv).
+    #[inline]
+    pub fn projection(&self, d: Vec3) -> Option<(u32, Vec2)> {
+        match *self {
+            Light::Spot(s) if s.texture != NO_TEXTURE => {
+                let local = s.frame.to_local(d);
+                (local.z > 0.0).then(|| (s.texture, s.uv(local)))
+            }
+            Light::Projector(p) if p.texture != NO_TEXTURE => p.uv(d).map(|(uv, _)| (p.texture, uv)),
+            _ => None,
+        }
     }
 
     /// Total emitted power (W per channel).
     pub fn power(&self) -> Color {
         match *self {
             Light::Point { intensity, .. } => 4.0 * PI * intensity,
-            Light::Spot { intensity, cos_total, cos_falloff, .. } => {
-                // Integral of the smoothstep falloff over the cone (exact for a cubic in cos).
-                intensity * 2.0 * PI * ((1.0 - cos_falloff) + (cos_falloff - cos_total) * 0.5)
+            Light::Spot(s) => {
+                // 2 pi times the integral of the fall-off times sin(theta) over theta: 1 - cos b
+                // inside the beam, and for the linear ramp from b to c
+                // ((c - b) cos b + sin b - sin c) / (c - b).
+                let b = s.cutoff - s.transition;
+                let ramp = if s.transition > 1e-4 {
+                    (s.transition * b.cos() + b.sin() - s.cutoff.sin()) / s.transition
+                } else {
+                    0.0
+                };
+                s.intensity * 2.0 * PI * ((1.0 - s.cos_beam) + ramp)
             }
+            // Untextured power times the texture's mean: the image plane's irradiance integral.
+            Light::Projector(p) => p.intensity * p.plane_area() * p.mean,
             Light::Directional { irradiance, scene_radius, .. } => irradiance * PI * scene_radius * scene_radius,
             Light::Area { emitter, radiance } => radiance * PI * emitter.area(),
         }
@@ -117,7 +243,7 @@ impl Light {
                 let dist = d2.sqrt();
                 Some(delta(v / dist, dist, intensity / d2))
             }
-            Light::Spot { position, direction, intensity, cos_total, cos_falloff } => {
+            Light::Spot(Spot { position, .. }) | Light::Projector(Projector { position, .. }) => {
                 let v = position - p;
                 let d2 = v.length_squared();
                 if !(d2 > 0.0) {
@@ -125,8 +251,8 @@ impl Light {
                 }
                 let dist = d2.sqrt();
                 let wi = v / dist;
-                let f = Self::spot_falloff((-wi).dot(direction), cos_total, cos_falloff);
-                (f > 0.0).then(|| delta(wi, dist, intensity * (f / d2)))
+                let i = self.intensity_towards(-wi);
+                (i.max_element() > 0.0).then(|| delta(wi, dist, i / d2))
             }
             Light::Directional { direction, irradiance, .. } => Some(delta(-direction, f32::INFINITY, irradiance)),
             Light::Area { emitter, radiance } => {
@@ -175,12 +301,21 @@ impl Light {
                 let d = uniform_sphere(u_dir);
                 Some(EmittedPhoton { ray: Ray::new(position, d), flux: intensity * 4.0 * PI, n: d })
             }
-            Light::Spot { position, direction, intensity, cos_total, cos_falloff } => {
-                let local = uniform_cone(u_dir, cos_total);
-                let d = Frame::from_z(direction).to_world(local);
-                let pdf = 1.0 / (2.0 * PI * (1.0 - cos_total));
-                let f = Self::spot_falloff(local.z, cos_total, cos_falloff);
-                Some(EmittedPhoton { ray: Ray::new(position, d), flux: intensity * (f / pdf), n: d })
+            Light::Spot(s) => {
+                let local = uniform_cone(u_dir, s.cos_cutoff);
+                let d = s.frame.to_world(local);
+                let pdf = 1.0 / (2.0 * PI * (1.0 - s.cos_cutoff));
+                let flux = s.intensity * (s.falloff(local.z) / pdf);
+                Some(EmittedPhoton { ray: Ray::new(s.position, d), flux, n: d })
+            }
+            Light::Projector(p) => {
+                // A uniform point of the image plane: flux = intensity(d) / pdf(d), where
+                // pdf(d) = 1 / (area cos^3): pi scale x area (times the texel, applied by the
+                // scene).
+                let x = (1.0 - 2.0 * u_dir.x) * p.tan_x;
+                let y = (1.0 - 2.0 * u_dir.y) * p.tan_y;
+                let d = p.frame.to_world(Vec3::new(x, y, 1.0).normalize());
+                Some(EmittedPhoton { ray: Ray::new(p.position, d), flux: p.intensity * p.plane_area(), n: d })
             }
             Light::Directional { direction, irradiance, scene_center, scene_radius } => {
                 // A disk as wide as the scene, just outside it, facing along the light.
@@ -217,13 +352,17 @@ mod tests {
         let quad = Quad::new(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * -0.5).unwrap();
         let lights = [
             Light::Point { position: Vec3::ONE, intensity: Color::new(1.0, 2.0, 3.0) },
-            Light::Spot {
-                position: Vec3::ZERO,
-                direction: -Vec3::Y,
-                intensity: Color::splat(5.0),
-                cos_total: 0.5,
-                cos_falloff: 0.8,
-            },
+            Light::Spot(Spot::new(Vec3::ZERO, Frame::from_z(-Vec3::Y), Color::splat(5.0), 60.0, 36.0, NO_TEXTURE)),
+            Light::Spot(Spot::new(Vec3::ZERO, Frame::from_z(Vec3::X), Color::splat(2.0), 20.0, 20.0, NO_TEXTURE)),
+            Light::Projector(Projector {
+                position: Vec3::ONE,
+                frame: Frame::from_z(Vec3::Z),
+                intensity: Color::splat(PI * 2.0),
+                tan_x: 0.7,
+                tan_y: 0.4,
+                texture: NO_TEXTURE,
+                mean: Color::ONE,
+            }),
             Light::Directional {
                 direction: -Vec3::Y,
                 irradiance: Color::splat(2.0),
@@ -248,6 +387,71 @@ mod tests {
             let p = l.power();
             assert!((mean - p).abs().max_element() < 0.01 * p.max_element(), "{l:?}: {mean} vs {p}");
         }
+    }
+
+    #[test]
+    fn spot_falloff_is_mitsubas_linear_ramp_in_angle() {
+        // Values Mitsuba 3.9.1 gives (default cutoff 20, beam 15; and cutoff 30, beam 10).
+        let frame = Frame::from_z(Vec3::Z);
+        let a = Spot::new(Vec3::ZERO, frame, Color::ONE, 20.0, 15.0, NO_TEXTURE);
+        let b = Spot::new(Vec3::ZERO, frame, Color::ONE, 30.0, 10.0, NO_TEXTURE);
+        let at = |s: &Spot, deg: f32| s.falloff(deg.to_radians().cos());
+        for (deg, want) in [(0.0, 1.0), (15.0, 1.0), (16.0, 0.8), (17.5, 0.5), (19.0, 0.2), (19.9, 0.02), (20.0, 0.0)] {
+            assert!((at(&a, deg) - want).abs() < 2e-4, "{deg}: {} vs {want}", at(&a, deg));
+        }
+        for (deg, want) in [(20.0, 0.5), (25.0, 0.25), (29.0, 0.05), (45.0, 0.0)] {
+            assert!((at(&b, deg) - want).abs() < 2e-4, "{deg}: {} vs {want}", at(&b, deg));
+        }
+    }
+
+    #[test]
+    fn spot_power_is_the_integral_of_its_falloff() {
+        for (cutoff, beam) in [(20.0, 15.0), (60.0, 10.0), (90.0, 0.0), (30.0, 30.0)] {
+            let s = Spot::new(Vec3::ZERO, Frame::from_z(Vec3::Y), Color::splat(3.0), cutoff, beam, NO_TEXTURE);
+            // Midpoint rule over theta of 2 pi I f(theta) sin(theta).
+            let n = 200_000;
+            let h = std::f64::consts::PI / n as f64;
+            let integral: f64 = (0..n)
+                .map(|i| {
+                    let t = (i as f64 + 0.5) * h;
+                    s.falloff(t.cos() as f32) as f64 * t.sin() * h
+                })
+                .sum::<f64>()
+                * 2.0
+                * std::f64::consts::PI
+                * 3.0;
+            let p = Light::Spot(s).power().x as f64;
+            assert!((p - integral).abs() < 1e-4 * integral, "{cutoff}/{beam}: {p} vs {integral}");
+        }
+    }
+
+    #[test]
+    fn projector_maps_its_image_plane_as_a_camera_does() {
+        let p = Projector {
+            position: Vec3::ZERO,
+            frame: Frame { x: Vec3::X, y: Vec3::Y, z: Vec3::Z },
+            intensity: Color::splat(PI),
+            tan_x: 0.5,
+            tan_y: 0.25,
+            texture: 0,
+            mean: Color::ONE,
+        };
+        let light = Light::Projector(p);
+        // The axis reads the image centre; local +x is image-left (u = 0), +y the top (v = 0).
+        let uv = |d: Vec3| light.projection(d.normalize()).map(|(_, uv)| uv);
+        assert!((uv(Vec3::Z).unwrap() - Vec2::splat(0.5)).length() < 1e-6);
+        assert!((uv(Vec3::new(0.5, 0.25, 1.0)).unwrap() - Vec2::ZERO).length() < 1e-6);
+        assert!((uv(Vec3::new(-0.5, -0.25, 1.0)).unwrap() - Vec2::ONE).length() < 1e-6);
+        assert!(uv(Vec3::new(0.6, 0.0, 1.0)).is_none() && uv(-Vec3::Z).is_none());
+        // Mitsuba's received value: irradiance x pi x scale / (z_local^2 cos a), z_local the
+        // depth along the axis: a point at depth 2, off axis.
+        let target = Vec3::new(0.3, -0.2, 2.0);
+        let ls = light.sample(Vec3::ZERO, Vec2::ZERO);
+        assert!(ls.is_none(), "the projector's own position receives nothing");
+        let seen = Light::Projector(Projector { position: -target, ..p }).sample(Vec3::ZERO, Vec2::ZERO).unwrap();
+        let cos_a = target.normalize().z;
+        let want = PI / (target.z * target.z * cos_a);
+        assert!((seen.radiance.x - want).abs() < 1e-5 * want, "{} vs {want}", seen.radiance.x);
     }
 
     #[test]

@@ -207,6 +207,13 @@ impl Bsdf {
         self.lobes.as_slice()
     }
 
+    /// True when the surface scatters nothing: no lobe and no transparent part (a plain emitter,
+    /// or the back of a one-sided material).
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        self.lobes.count == 0 && self.opacity >= 1.0
+    }
+
     /// The shading normal on the viewer's side.
     #[inline]
     pub fn normal(&self) -> Vec3 {

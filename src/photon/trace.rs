@@ -96,7 +96,7 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> Phot
         |i| {
             let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
             let (li, p) = scene.light_picker.pick(rng.uniform())?;
-            let e = scene.lights[li].emit(rng.uniform2(), rng.uniform2())?;
+            let e = scene.emit_photon(&scene.lights[li], rng.uniform2(), rng.uniform2())?;
             Some((e, p, rng))
         },
         scene,
@@ -124,7 +124,9 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
             |i| {
                 let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
                 let (li, p) = scene.light_picker.pick(rng.uniform())?;
-                let e = emit_towards(&scene.lights[li], &scene.specular_targets, &mut rng)?;
+                let light = &scene.lights[li];
+                let mut e = emit_towards(light, &scene.specular_targets, &mut rng)?;
+                e.flux *= scene.projected_texture(light, e.ray.d);
                 Some((e, p, rng))
             },
             scene,
@@ -189,11 +191,12 @@ pub fn trace_photon(
     let mut depth = 0;
     for _ in 0..MAX_BOUNCES {
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
-        if hit.is_emitter() {
-            return;
-        }
         let wo = -ray.d;
         let bsdf = scene.bsdf(&hit, wo);
+        // Plain emitters absorb; a reflecting emitter (one with a BSDF) scatters like any surface.
+        if bsdf.is_black() {
+            return;
+        }
         if bsdf.has_smooth() {
             let caustic = depth > 0 && only_specular;
             let n = bsdf.normal();
@@ -295,7 +298,10 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
     // Position (on area lights), then a direction towards one of the targets.
     let (p, p_error, n, pos_weight, radiance_like) = match *light {
         Light::Point { position, intensity } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity),
-        Light::Spot { position, intensity, .. } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity),
+        Light::Spot(crate::light::Spot { position, .. })
+        | Light::Projector(crate::light::Projector { position, .. }) => {
+            (position, Vec3::ZERO, Vec3::ZERO, 1.0, Color::ONE)
+        }
         Light::Area { emitter, radiance } => {
             let s = emitter.sample_area(u_pos);
             (s.p, s.p_error, s.n, emitter.area(), radiance)
@@ -312,9 +318,7 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
     let pdf_dir = covering as f32 / total;
     let emitted = match *light {
         Light::Point { .. } => radiance_like,
-        Light::Spot { direction, cos_total, cos_falloff, .. } => {
-            radiance_like * Light::spot_falloff(d.dot(direction), cos_total, cos_falloff)
-        }
+        Light::Spot(_) | Light::Projector(_) => light.intensity_towards(d),
         Light::Area { .. } => {
             let cos = n.dot(d);
             if cos <= 0.0 {

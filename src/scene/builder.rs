@@ -115,10 +115,38 @@ impl SceneBuilder {
     /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
     /// reflects with (a reflecting emitter); `None` makes it black.
     pub fn add_area_light(&mut self, emitter: Emitter, radiance: crate::math::Color, surface: Option<Material>) {
-        let light = self.lights.len() as u32;
-        let m = self.add_material(format!("(area light {})", light + 1), surface.unwrap_or_else(Material::black));
-        self.area_prims.push(Primitive { shape: emitter.shape(), material: m, light });
-        self.lights.push(Light::Area { emitter, radiance });
+        self.add_area_lights([emitter], radiance, surface);
+    }
+
+    /// Adds one emitting object made of several surfaces (the faces of a cube, the triangles of
+    /// a mesh): a light per surface, so light sampling picks among them by power (by area, as
+    /// they share the radiance), and one material for all.
+    pub fn add_area_lights(
+        &mut self,
+        emitters: impl IntoIterator<Item = Emitter>,
+        radiance: crate::math::Color,
+        surface: Option<Material>,
+    ) {
+        let first = self.lights.len();
+        let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
+        for emitter in emitters {
+            if !(emitter.area() > 0.0) {
+                continue;
+            }
+            let light = self.lights.len() as u32;
+            self.area_prims.push(Primitive { shape: emitter.shape(), material: m, light });
+            self.lights.push(Light::Area { emitter, radiance });
+        }
+    }
+
+    /// The surfaces of a triangle mesh as emitters, each emitting from the side its winding
+    /// faces (as the mesh's geometric normals do).
+    pub fn mesh_emitters(mesh: &TriangleMesh) -> Vec<Emitter> {
+        mesh.indices
+            .iter()
+            .map(|t| Emitter::Triangle(t.map(|i| mesh.positions[i as usize])))
+            .filter(|e| e.area() > 0.0)
+            .collect()
     }
 
     /// True when light through material `m` (or any material it wraps) can form caustics.

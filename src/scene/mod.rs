@@ -16,10 +16,10 @@ pub use error::SceneError;
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
-use crate::light::{Light, LightPicker};
+use crate::light::{EmittedPhoton, Light, LightPicker, LightSample};
 use crate::material::bsdf::Bsdf;
 use crate::material::{Classic, Materials};
-use crate::math::Color;
+use crate::math::{Color, Vec3};
 use crate::shape::{Plane, SurfacePoint, TriangleMesh};
 use std::path::Path;
 
@@ -71,6 +71,39 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Samples light `light` from `p` (see `Light::sample`), with the texture a spot or
+    /// projector casts.
+    #[inline]
+    pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
+        let mut s = light.sample(p, u)?;
+        if light.is_delta() {
+            s.radiance *= self.projected_texture(light, -s.wi);
+        }
+        Some(s)
+    }
+
+    /// Emits a photon from `light` (see `Light::emit`), with the texture it casts.
+    pub fn emit_photon(
+        &self,
+        light: &Light,
+        u_pos: crate::math::Vec2,
+        u_dir: crate::math::Vec2,
+    ) -> Option<EmittedPhoton> {
+        let mut e = light.emit(u_pos, u_dir)?;
+        e.flux *= self.projected_texture(light, e.ray.d);
+        Some(e)
+    }
+
+    /// The colour of the texture a spot or projector casts in direction `d` (leaving it); 1 for
+    /// every other light.
+    #[inline]
+    pub fn projected_texture(&self, light: &Light, d: Vec3) -> Color {
+        match light.projection(d) {
+            Some((t, uv)) => self.materials.textures[t as usize].eval(uv),
+            None => Color::ONE,
+        }
+    }
+
     /// Bounds of all bounded geometry (planes excluded).
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds()

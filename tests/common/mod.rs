@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod mitsuba_refs;
 pub mod slurm;
 
 use caustic::app::{LoadedScene, load, load_toml_str};

@@ -348,7 +348,10 @@ impl Sppm {
                 if hit.is_front(ray.d) && !lit_by_light_sample {
                     ld += beta * scene.emitted(&hit, wo);
                 }
-                break;
+                // A reflecting emitter (one with a BSDF) also reflects.
+                if scene.bsdf(&hit, wo).is_black() {
+                    break;
+                }
             }
             // This surface is bounce depth + 1: lit only within the depth limit.
             if depth >= config.max_depth {

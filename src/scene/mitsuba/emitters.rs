@@ -1,11 +1,12 @@
-//! Mitsuba emitters outside shapes: point, spot, directional and constant.
+//! Mitsuba emitters outside shapes: point, spot (with its texture), projector, directional and
+//! constant.
 
 use super::Build;
 use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
-use crate::light::Light;
-use crate::math::{Color, Vec3};
+use crate::light::{Light, NO_TEXTURE, Projector, Spot};
+use crate::math::{Color, Frame, Vec3};
 use crate::scene::SceneError;
 
 impl<'a> Cx<'a> {
@@ -31,20 +32,77 @@ impl<'a> Cx<'a> {
                 if !(cutoff > 0.0 && cutoff <= 90.0 && beam >= 0.0 && beam <= cutoff) {
                     return Err(self.err(el, format!("spot needs 0 <= beam_width <= cutoff_angle <= 90 degrees (got beam_width {beam}, cutoff_angle {cutoff})")));
                 }
-                if !self.object(&p, Some("texture"), "texture").is_empty() {
-                    self.warn(el, "spot light textures are not supported and are ignored")?;
-                }
-                let direction = x.vector(Vec3::Z).normalize_or_zero();
-                if direction == Vec3::ZERO {
-                    return Err(self.err(el, "spot light to_world has no +z direction"));
-                }
-                b.geometry.add_light(Light::Spot {
-                    position: x.point(Vec3::ZERO),
-                    direction,
+                let texture = match self.object(&p, Some("texture"), "texture").first() {
+                    Some(&(tex, _)) => self.texture(tex, b)?,
+                    None => NO_TEXTURE,
+                };
+                let frame = self.light_frame(el, &x)?;
+                b.geometry.add_light(Light::Spot(Spot::new(
+                    x.point(Vec3::ZERO),
+                    frame,
                     intensity,
-                    cos_total: cutoff.to_radians().cos(),
-                    cos_falloff: beam.to_radians().cos(),
-                });
+                    cutoff,
+                    beam,
+                    texture,
+                )));
+            }
+            "projector" => {
+                let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
+                let frame = self.light_frame(el, &x)?;
+                let scale = self.float(&p, "scale")?.unwrap_or(1.0);
+                let (texture, size, mean) = match self.object(&p, Some("irradiance"), "texture").first() {
+                    Some(&(tex, _)) => {
+                        let t = self.texture(tex, b)?;
+                        let texture = &b.geometry.textures()[t as usize];
+                        (t, texture.resolution().unwrap_or((1, 1)), texture.mean())
+                    }
+                    None => match self.color(&p, "irradiance")? {
+                        // A constant irradiance: the texture's value becomes the intensity.
+                        Some(c) => (NO_TEXTURE, (1, 1), c),
+                        None => (NO_TEXTURE, (1, 1), Color::ONE),
+                    },
+                };
+                let aspect = size.0 as f32 / size.1 as f32;
+                let fov = self.float(&p, "fov")?.unwrap_or(50.0);
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(self.err(el, format!("projector fov must be between 0 and 180 degrees, found {fov}")));
+                }
+                let t = (fov.to_radians() * 0.5).tan();
+                let axis = self.string(&p, "fov_axis")?.map(|(s, _)| s);
+                // tan of the half-angle along x, from the axis the fov applies to.
+                let tan_x = match axis.as_deref().unwrap_or("x") {
+                    "x" => t,
+                    "y" => t * aspect,
+                    "diagonal" => t * aspect / (1.0 + aspect * aspect).sqrt(),
+                    "smaller" => {
+                        if aspect > 1.0 {
+                            t * aspect
+                        } else {
+                            t
+                        }
+                    }
+                    "larger" => {
+                        if aspect > 1.0 {
+                            t
+                        } else {
+                            t * aspect
+                        }
+                    }
+                    other => {
+                        return Err(self
+                            .err(el, format!("fov_axis must be x, y, diagonal, smaller or larger, found `{other}`")));
+                    }
+                };
+                let constant = if texture == NO_TEXTURE { mean } else { Color::ONE };
+                b.geometry.add_light(Light::Projector(Projector {
+                    position: x.point(Vec3::ZERO),
+                    frame,
+                    intensity: constant * (std::f32::consts::PI * scale),
+                    tan_x,
+                    tan_y: tan_x / aspect,
+                    texture,
+                    mean: if texture == NO_TEXTURE { Color::ONE } else { mean },
+                }));
             }
             "directional" => {
                 let irradiance = self.color(&p, "irradiance")?.unwrap_or(Color::ONE);
@@ -78,5 +136,21 @@ impl<'a> Cx<'a> {
         }
         self.finish(&p)?;
         Ok(())
+    }
+
+    /// The orthonormal frame of a light's `to_world`: z the direction it shines, x and y its
+    /// image axes (Mitsuba's local frame, rotation only).
+    fn light_frame(&self, el: &'a El, x: &Transform) -> Result<Frame, SceneError> {
+        let z = x.vector(Vec3::Z).normalize_or_zero();
+        if z == Vec3::ZERO {
+            return Err(self.err(el, "the light's to_world has no +z direction"));
+        }
+        let f = Frame::from_z_x(z, x.vector(Vec3::X));
+        if !f.x.is_finite() || f.x == Vec3::ZERO {
+            return Ok(Frame::from_z(z));
+        }
+        // Keep the handedness of the transform's y axis (a mirroring to_world mirrors the image).
+        let y = if f.y.dot(x.vector(Vec3::Y)) < 0.0 { -f.y } else { f.y };
+        Ok(Frame { x: f.x, y, z })
     }
 }

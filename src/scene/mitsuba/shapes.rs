@@ -8,6 +8,7 @@ use crate::geometry::Transform;
 use crate::light::Emitter;
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
+use crate::scene::builder::SceneBuilder;
 use crate::shape::{Quad, Sphere, TriangleMesh, box_faces, transformed_quad};
 
 /// Triangles in the fan that stands in for a `disk`.
@@ -144,14 +145,15 @@ impl<'a> Cx<'a> {
                 if !face_normals {
                     mesh.ensure_vertex_normals();
                 }
-                // An emitting mesh can be a light here only when it is one parallelogram.
+                // An emitting mesh is a light per triangle (one parallelogram stays one quad
+                // light, as the native format writes it).
                 if radiance.is_some() {
                     match parallelogram(&mesh) {
                         Some(q) => emitters_out.push(Emitter::Quad(q)),
-                        None => {
-                            self.warn(el, format!("area emitters on `{kind}` shapes are supported only for a single planar parallelogram (two triangles): this shape does not emit"))?;
-                            radiance = None;
-                        }
+                        None => emitters_out.extend(SceneBuilder::mesh_emitters(&mesh)),
+                    }
+                    if emitters_out.is_empty() {
+                        return Err(self.err(el, "an emitting mesh has no triangle with an area"));
                     }
                 }
                 if emitters_out.is_empty() {
@@ -171,9 +173,7 @@ impl<'a> Cx<'a> {
         let Some(material) = material else {
             // A `null` BSDF: nothing to see, only the emission (if any).
             if let Some(radiance) = radiance {
-                for e in emitters_out {
-                    b.geometry.add_area_light(e, radiance, None);
-                }
+                b.geometry.add_area_lights(emitters_out, radiance, None);
             }
             return self.finish(&p);
         };
@@ -183,9 +183,7 @@ impl<'a> Cx<'a> {
             // exactly our plain emitter material.
             let reflects = !m.model.children().is_empty()
                 || !m.model.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty();
-            for e in emitters_out {
-                b.geometry.add_area_light(e, radiance, reflects.then_some(m));
-            }
+            b.geometry.add_area_lights(emitters_out, radiance, reflects.then_some(m));
             return self.finish(&p);
         }
         if let Some((mesh, mesh_name)) = mesh_out {

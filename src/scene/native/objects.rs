@@ -5,7 +5,7 @@ use super::Cx;
 use super::materials::MaterialNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
 use crate::geometry::Transform;
-use crate::light::{Emitter, Light};
+use crate::light::{Emitter, Light, NO_TEXTURE, Spot};
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
@@ -91,13 +91,12 @@ impl<'a> Cx<'a> {
                         ),
                     ));
                 }
-                geometry.add_light(Light::Spot {
-                    position,
-                    direction,
-                    intensity: power,
-                    cos_total: angle.to_radians().cos(),
-                    cos_falloff: falloff.to_radians().cos(),
-                });
+                // The texture's up is +y (or +z for a spot shining straight up or down), as a
+                // camera's: image x runs along up x direction.
+                let up = if direction.cross(Vec3::Y).length_squared() > 1e-6 { Vec3::Y } else { Vec3::Z };
+                let x = up.cross(direction).normalize();
+                let frame = crate::math::Frame { x, y: direction.cross(x), z: direction };
+                geometry.add_light(Light::Spot(Spot::new(position, frame, power, angle, falloff, NO_TEXTURE)));
             }
             "directional" => geometry.add_light(Light::Directional {
                 direction: d.direction.map_or(-Vec3::Y, |p| p.0),
@@ -180,7 +179,7 @@ impl<'a> Cx<'a> {
                 if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
                     return Err(self.at(span, "sphere is degenerate after its transform"));
                 }
-                geometry.add_object([Shape::Sphere(Sphere::new(center, radius))], material);
+                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], material, d);
             }
             "plane" => {
                 let point = transform.point(d.point.map_or(Vec3::ZERO, |p| p.0));
@@ -196,7 +195,7 @@ impl<'a> Cx<'a> {
                 let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, -2.0), |p| p.0);
                 let q = transformed_quad(transform, corner, e1, e2)
                     .ok_or_else(|| self.at(span, "quad edges are parallel or zero: it has no area"))?;
-                geometry.add_object([Shape::Quad(q)], material);
+                add_shapes(geometry, vec![Shape::Quad(q)], material, d);
             }
             "box" => {
                 let min = d.min.map_or(Vec3::splat(-1.0), |p| p.0);
@@ -210,7 +209,7 @@ impl<'a> Cx<'a> {
                         .ok_or_else(|| self.at(span.clone(), "box is degenerate after its transform"))?;
                     faces.push(Shape::Quad(q));
                 }
-                geometry.add_object(faces, material);
+                add_shapes(geometry, faces, material, d);
             }
             "mesh" | "torus_knot" => {
                 let mesh = if kind == "mesh" {
@@ -254,7 +253,17 @@ impl<'a> Cx<'a> {
                     Some(f) => f.get_ref().display().to_string(),
                     None => "torus_knot".to_string(),
                 };
-                geometry.add_mesh(mesh, material, &name);
+                match emission(d) {
+                    Some(radiance) => {
+                        let emitters = SceneBuilder::mesh_emitters(&mesh);
+                        if emitters.is_empty() {
+                            return Err(self.at(span, "an emitting mesh has no triangle with an area"));
+                        }
+                        let surface = d.material.as_ref().map(|_| *geometry.material(material));
+                        geometry.add_area_lights(emitters, radiance, surface);
+                    }
+                    None => geometry.add_mesh(mesh, material, &name),
+                }
             }
             _ => unreachable!("kind checked by tagged()"),
         }
@@ -276,4 +285,28 @@ impl<'a> Cx<'a> {
         }
         Ok(t)
     }
+}
+
+/// The radiance an object emits, when it emits.
+fn emission(d: &ObjectDesc) -> Option<Color> {
+    d.emission.map(|c| c.0).filter(|c| c.max_element() > 0.0)
+}
+
+/// Adds an object's shapes, as area lights when it emits: an emitting object reflects with the
+/// material it names, and is a plain (black) emitter when it names none.
+fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d: &ObjectDesc) {
+    let Some(radiance) = emission(d) else {
+        geometry.add_object(shapes, material);
+        return;
+    };
+    let emitters: Vec<Emitter> = shapes
+        .into_iter()
+        .map(|s| match s {
+            Shape::Sphere(s) => Emitter::Sphere(s),
+            Shape::Quad(q) => Emitter::Quad(q),
+            Shape::Triangle(t) => Emitter::Triangle(t.p),
+        })
+        .collect();
+    let surface = d.material.as_ref().map(|_| *geometry.material(material));
+    geometry.add_area_lights(emitters, radiance, surface);
 }

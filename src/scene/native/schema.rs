@@ -44,12 +44,12 @@ pub const AREA_QUAD_KEYS: &[&str] = &["corner", "edge1", "edge2"];
 pub const AREA_SPHERE_KEYS: &[&str] = &["center", "radius"];
 
 pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
-    ("sphere", &["material", "transform", "center", "radius"]),
+    ("sphere", &["material", "transform", "emission", "center", "radius"]),
     ("plane", &["material", "transform", "point", "normal"]),
-    ("quad", &["material", "transform", "corner", "edge1", "edge2"]),
-    ("box", &["material", "transform", "min", "max"]),
-    ("mesh", &["material", "transform", "file", "face_normals"]),
-    ("torus_knot", &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"]),
+    ("quad", &["material", "transform", "emission", "corner", "edge1", "edge2"]),
+    ("box", &["material", "transform", "emission", "min", "max"]),
+    ("mesh", &["material", "transform", "emission", "file", "face_normals"]),
+    ("torus_knot", &["material", "transform", "emission", "p", "q", "radius", "tube", "segments", "sides"]),
 ];
 
 #[derive(Deserialize, Default)]
@@ -173,6 +173,9 @@ pub struct Rotation {
 pub struct ObjectDesc {
     pub material: Option<Spanned<String>>,
     pub transform: Option<Vec<TransformOp>>,
+    /// Radiance the object's surface emits (W/(m^2 sr)) from its outer side: it becomes an area
+    /// light that also reflects with its material.
+    pub emission: Option<Rgb>,
     pub center: Option<Point>,
     pub radius: Option<Positive>,
     pub point: Option<Point>,

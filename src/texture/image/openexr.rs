@@ -16,6 +16,9 @@ use exr::prelude::{ReadChannels, ReadLayers, ReadSpecificChannel, Vec2, read};
 
 use super::{Problem, TexImage};
 
+/// The largest factor by which OpenEXR's compressions expand data (deflate's limit, rounded up).
+const MAX_EXPANSION: u64 = 1100;
+
 pub(super) fn decode(bytes: &[u8]) -> Result<TexImage, Problem> {
     // The header first: the channels are chosen and the size checked before any pixel memory
     // is allocated.
@@ -37,6 +40,31 @@ pub(super) fn decode(bytes: &[u8]) -> Result<TexImage, Problem> {
     }
     if width == 0 || height == 0 {
         return Err(Problem::Damaged(format!("the image has no texels ({width} x {height})")));
+    }
+    // No compression OpenEXR offers expands a block by more than deflate's ~1032:1 (RLE, PIZ,
+    // PXR24 and B44 by far less), so a header claiming more pixel data than that is damaged: it
+    // is refused before the decoder allocates its pixels (a 500-byte file could otherwise ask
+    // for gigabytes). Lossy DWA files of flat colour could exceed it; none are known in practice.
+    // The decoder also allocates a whole tile (or block) at a time, so a tile size is bounded
+    // the same way.
+    let limit = (bytes.len() as u64).saturating_mul(MAX_EXPANSION).saturating_add(1 << 20);
+    let bpp = header.channels.bytes_per_pixel as u64;
+    let raw = width.saturating_mul(height).saturating_mul(bpp);
+    let tile = match header.blocks {
+        exr::meta::BlockDescription::Tiles(t) => {
+            (t.tile_size.width() as u64).saturating_mul(t.tile_size.height() as u64)
+        }
+        exr::meta::BlockDescription::ScanLines => 0,
+    };
+    for (what, need) in
+        [(format!("{width} x {height} pixels"), raw), ("one tile".to_string(), tile.saturating_mul(bpp))]
+    {
+        if need > limit {
+            return Err(Problem::Truncated(format!(
+                "{what} need {need} bytes, more than {} bytes of compressed data can hold",
+                bytes.len()
+            )));
+        }
     }
     let reader = read().no_deep_data().largest_resolution_level().specific_channels();
     let image = match &chosen[..] {

@@ -1,0 +1,175 @@
+//! Emitters as Mitsuba 3 has them: emitting meshes and spheres (their power and the irradiance
+//! they give against the formulas), reflecting emitters, spot lights with Mitsuba's fall-off and a
+//! projected texture, and projectors; our images against Mitsuba's (tests/data/emitters,
+//! scripts/make_emitter_refs.py), and photon mapping and SPPM against the same references.
+
+mod common;
+
+use caustic::geometry::Ray;
+use caustic::light::Light;
+use caustic::math::Vec3;
+use caustic::scene::desc::IntegratorKind;
+use caustic::scene::{LoadOptions, Overrides};
+use common::mitsuba_refs::References;
+use std::f64::consts::PI;
+use std::path::Path;
+use std::sync::LazyLock;
+
+static REFS: LazyLock<References> = LazyLock::new(|| References::new("emitters"));
+
+fn xml(body: &str) -> caustic::app::LoadedScene {
+    let text = format!(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>{body}</scene>"#
+    );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let desc = caustic::scene::mitsuba::load_mitsuba_str(&text, "case.xml", root, &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    caustic::app::prepare(desc, &Overrides::default()).unwrap()
+}
+
+/// Irradiance at `p` on a surface facing `n`, by sampling every light of the scene (`n_samples`
+/// each, no occlusion: the probes look at the light through empty space).
+fn irradiance(s: &caustic::app::LoadedScene, p: Vec3, n: Vec3, n_samples: u32) -> f64 {
+    let scene = &s.scene;
+    let mut rng = caustic::sampling::Rng32::new(5);
+    let mut sum = 0.0;
+    for _ in 0..n_samples {
+        let u = rng.uniform();
+        let Some((i, prob)) = scene.light_picker.pick(u) else { continue };
+        let Some(ls) = scene.sample_light(&scene.lights[i], p, rng.uniform2()) else { continue };
+        let cos = ls.wi.dot(n).max(0.0) as f64;
+        sum += caustic::math::luminance(ls.weight()) as f64 * cos / prob as f64;
+    }
+    sum / n_samples as f64
+}
+
+#[test]
+fn an_emitting_sphere_gives_the_irradiance_of_the_formula() {
+    // A sphere of radius r and radiance L seen from distance d on its axis: E = pi L r^2 / d^2.
+    let s = xml(r#"<shape type="sphere"><float name="radius" value="0.5"/><point name="center" x="0" y="0" z="3"/>
+        <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#);
+    let e = irradiance(&s, Vec3::ZERO, Vec3::Z, 200_000);
+    let exact = PI * 2.0 * 0.25 / 9.0;
+    assert!((e - exact).abs() < 0.005 * exact, "{e} vs {exact}");
+    let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
+    let exact_power = PI * 2.0 * 4.0 * PI * 0.25;
+    assert!((power - exact_power).abs() < 1e-4 * exact_power, "{power} vs {exact_power}");
+}
+
+#[test]
+fn an_emitting_mesh_has_the_power_and_irradiance_of_the_formula() {
+    // The icosphere OBJ (320 triangles) as an emitter: its power is pi L times its area, and a
+    // distant probe sees it as a point source of intensity L x its projected area.
+    let s = xml(r#"<shape type="obj"><string name="filename" value="scenes/mitsuba/meshes/icosphere.obj"/>
+        <transform name="to_world"><scale value="0.5"/><translate z="4"/></transform>
+        <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#);
+    let mesh = caustic::shape::TriangleMesh::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mitsuba/meshes/icosphere.obj"),
+    )
+    .unwrap();
+    let area: f64 = mesh
+        .indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3() * 0.5);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    assert_eq!(s.scene.lights.len(), mesh.indices.len());
+    let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
+    assert!((power - PI * 3.0 * area).abs() < 1e-4 * power, "{power} vs {}", PI * 3.0 * area);
+    // Photons leave it with the same total power.
+    let (mut flux, n) = (0.0f64, 200_000);
+    let mut rng = caustic::sampling::Rng32::new(7);
+    for _ in 0..n {
+        let (i, prob) = s.scene.light_picker.pick(rng.uniform()).unwrap();
+        let e = s.scene.emit_photon(&s.scene.lights[i], rng.uniform2(), rng.uniform2()).unwrap();
+        flux += e.flux.x as f64 / prob as f64;
+    }
+    flux /= n as f64;
+    assert!((flux - power).abs() < 0.005 * power, "photons carry {flux}, power {power}");
+    // Far away (d = 400 radii) the irradiance is L x projected area / d^2; the icosphere's
+    // projected area along z is measured by sampling its silhouette.
+    let far = Vec3::new(0.0, 0.0, 4.0 - 200.0);
+    let e = irradiance(&s, far, Vec3::Z, 400_000);
+    let projected: f64 = mesh
+        .indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3() * 0.5);
+            (0.5 * (b - a).cross(c - a).z).abs()
+        })
+        .sum::<f64>()
+        / 2.0;
+    let exact = 3.0 * projected / (200.0f64 * 200.0);
+    assert!((e - exact).abs() < 0.01 * exact, "{e} vs {exact}");
+}
+
+#[test]
+fn objects_in_native_scenes_emit_with_their_material() {
+    let s = common::scene(
+        r#"
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials.white]
+type = "diffuse"
+color = [1, 1, 1]
+kd = 0.5
+[[objects]]
+type = "sphere"
+radius = 0.5
+center = [0, 0, -3]
+emission = [2, 2, 2]
+material = "white"
+[[objects]]
+type = "box"
+min = [2, 2, 2]
+max = [3, 3, 3]
+emission = 1
+"#,
+    );
+    let lights = &s.scene.lights;
+    assert_eq!(lights.len(), 7, "the sphere and six faces");
+    assert!(matches!(lights[0], Light::Area { .. }));
+    let box_power: f64 = lights[1..].iter().map(|l| l.power().x as f64).sum();
+    assert!((box_power - PI * 6.0).abs() < 1e-4, "{box_power}");
+    // The box is behind the probe's surface: only the sphere lights it.
+    let e = irradiance(&s, Vec3::ZERO, -Vec3::Z, 200_000);
+    let exact = PI * 2.0 * 0.25 / 9.0;
+    assert!((e - exact).abs() < 0.01 * exact, "{e} vs {exact}");
+    // The sphere reflects with its material; the box (no material) is a plain emitter.
+    let bsdf_at = |o: Vec3, d: Vec3| {
+        let hit = s.scene.intersect(&Ray::new(o, d), f32::INFINITY).expect("hit");
+        assert!(hit.is_emitter());
+        s.scene.bsdf(&hit, -d)
+    };
+    assert!(!bsdf_at(Vec3::ZERO, -Vec3::Z).is_black());
+    assert!(bsdf_at(Vec3::new(2.5, 2.5, 5.0), -Vec3::Z).is_black());
+}
+
+#[test]
+fn emitters_match_mitsuba() {
+    REFS.check_all(
+        &[
+            ("cornell_mesh", 256),
+            ("spot_ramp", 256),
+            ("spot_textured", 256),
+            ("projector", 256),
+            ("reflecting_emitter", 256),
+        ],
+        64,
+    );
+}
+
+#[test]
+fn photon_mapping_and_sppm_carry_mesh_lights_projectors_and_reflecting_emitters() {
+    let mut failures = Vec::new();
+    for (case, photon_spp, sppm_spp) in
+        [("cornell_mesh", 16, 256), ("projector", 16, 256), ("reflecting_emitter", 16, 256), ("spot_textured", 16, 256)]
+    {
+        failures.extend(REFS.compare_mean(case, 64, photon_spp, IntegratorKind::Photon, 0.03));
+        failures.extend(REFS.compare_mean(case, 64, sppm_spp, IntegratorKind::Sppm, 0.03));
+    }
+    assert!(failures.is_empty(), "photon mapping or SPPM lose light:\n{}", failures.join("\n"));
+}
