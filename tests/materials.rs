@@ -19,7 +19,7 @@ fn check_all(cases: &[(&str, u32)], res: u32) {
 }
 
 /// Each material under a point light (its BSDF evaluated by next-event estimation) and under a
-/// spherical area light (its sampling and MIS weights).
+/// 3 x 3 rectangular area light (its sampling and MIS weights).
 const SPHERE_CASES: &[&str] = &[
     "blendbsdf",
     "bumpmap",
@@ -101,4 +101,34 @@ fn photon_mapping_and_sppm_agree_with_mitsuba_on_materials() {
         failures.extend(REFS.compare_mean(case, 64, sppm_spp, IntegratorKind::Sppm, 0.03));
     }
     assert!(failures.is_empty(), "photon mapping or SPPM lose light:\n{}", failures.join("\n"));
+}
+
+/// Blends nest: a blend of a blend and a diffuse, all of albedo 0.8, is a diffuse of albedo 0.8.
+/// A convex sphere under a constant environment of radiance 1, lit directly (max_depth 2), then
+/// reflects exactly its albedo at every pixel that sees it.
+#[test]
+fn nested_blends_keep_every_part() {
+    let text = r#"<scene version="3.0.0">
+        <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+        <sensor type="perspective"><float name="fov" value="20"/>
+            <transform name="to_world"><lookat origin="0, 0, 8" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <sampler type="independent"><integer name="sample_count" value="256"/></sampler>
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+        </sensor>
+        <bsdf type="diffuse" id="d"><rgb name="reflectance" value="0.8"/></bsdf>
+        <bsdf type="blendbsdf" id="inner"><float name="weight" value="0.3"/><ref id="d"/><ref id="d"/></bsdf>
+        <shape type="sphere"><bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.6"/>
+            <ref id="inner"/><bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></bsdf></bsdf></shape>
+        <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    </scene>"#;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let desc = caustic::scene::mitsuba::load_mitsuba_str(text, "nested.xml", root, &Default::default()).unwrap();
+    let image = caustic::app::prepare(desc, &Default::default()).unwrap().render().image;
+    // The 4 x 4 centre pixels see only the sphere.
+    for y in 2..6 {
+        for x in 2..6 {
+            let c = image.get(x, y);
+            assert!((c - caustic::math::Color::splat(0.8)).abs().max_element() < 0.01, "pixel ({x}, {y}): {c}");
+        }
+    }
 }

@@ -49,6 +49,9 @@ const TABLE: &[(&str, [f32; 3], [f32; 3])] = &[
     ("TiO2-e", [3.10656, 2.51317, 2.58244], [2.98e-5, 0.0, 0.000183]),
 ];
 
+/// Materials Mitsuba 3.9.1 knows without a `_palik` twin (checked by loading each name there).
+const NO_PALIK: [&str; 6] = ["Au", "Ag", "Al", "Cr", "W", "a-C"];
+
 /// The (eta, k) of a named conductor; `none` is Mitsuba's perfect mirror (eta 0, k 1). Names
 /// ending in `_palik` that Mitsuba gives the same numbers as the plain name resolve to it.
 pub fn lookup(name: &str) -> Option<(Color, Color)> {
@@ -56,7 +59,7 @@ pub fn lookup(name: &str) -> Option<(Color, Color)> {
         return Some((Color::ZERO, Color::ONE));
     }
     let find = |n: &str| TABLE.iter().find(|(m, _, _)| *m == n).map(|(_, e, k)| (Color::from(*e), Color::from(*k)));
-    find(name).or_else(|| name.strip_suffix("_palik").and_then(find))
+    find(name).or_else(|| name.strip_suffix("_palik").filter(|n| !NO_PALIK.contains(n)).and_then(find))
 }
 
 /// Every name `lookup` knows, for error messages.
@@ -74,7 +77,8 @@ mod tests {
         assert_eq!(eta, Color::new(0.143036, 0.375307, 1.44205));
         assert_eq!(k, Color::new(3.983, 2.38556, 1.60336));
         assert_eq!(lookup("none"), Some((Color::ZERO, Color::ONE)));
-        assert_eq!(lookup("Ag_palik"), lookup("Ag"));
+        assert_eq!(lookup("TiO2_palik"), lookup("TiO2"));
+        assert!(lookup("Ag_palik").is_none() && lookup("Au_palik").is_none());
         assert_ne!(lookup("Cu_palik"), lookup("Cu"));
         assert!(lookup("gold").is_none());
         assert!(names().count() > 30);

@@ -179,12 +179,8 @@ impl Materials {
                     perturbed = Some(perturbed_frame(&base, rgb * 2.0 - Color::ONE, wo));
                     m = inner;
                 }
-                Model::Blend { weight, first, second } => {
-                    let w = weight.at(uv, &self.textures).clamp(0.0, 1.0);
-                    let a = self.lobes(self.plain_end(first), uv, front, as_front);
-                    let b = self.lobes(self.plain_end(second), uv, front, as_front);
-                    lobes.add_scaled(&a, 1.0 - w);
-                    lobes.add_scaled(&b, w);
+                Model::Blend { .. } => {
+                    self.add_blend_lobes(m, uv, front, as_front, 1.0, &mut lobes, 0);
                     break;
                 }
                 _ => {
@@ -202,6 +198,28 @@ impl Materials {
             bsdf = bsdf.perturbed(if front { p } else { p.flipped() });
         }
         bsdf
+    }
+
+    /// Adds the lobes of blend `m` (blends nested in it included), each part's lobes scaled by
+    /// `scale` times its weight.
+    #[allow(clippy::too_many_arguments)]
+    fn add_blend_lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool, scale: f32, out: &mut Lobes, depth: usize) {
+        if depth > MAX_NESTING || !(scale > 0.0) {
+            return;
+        }
+        if let Model::Blend { weight, first, second } = self.list[m as usize].model {
+            let w = weight.at(uv, &self.textures).clamp(0.0, 1.0);
+            self.add_blend_lobes(first, uv, front, as_front, scale * (1.0 - w), out, depth + 1);
+            self.add_blend_lobes(second, uv, front, as_front, scale * w, out, depth + 1);
+            return;
+        }
+        let end = self.plain_end(m);
+        if matches!(self.list[end as usize].model, Model::Blend { .. }) {
+            // A blend behind wrappers: its wrappers are dropped, its parts still count.
+            self.add_blend_lobes(end, uv, front, as_front, scale, out, depth + 1);
+        } else {
+            out.add_scaled(&self.lobes(end, uv, front, as_front), scale);
+        }
     }
 
     /// The plain material a blend's part resolves to (its wrappers are not applied inside a

@@ -494,26 +494,40 @@ impl<'a> Cx<'a> {
         }
     }
 
-    /// Textures are not supported: a checkerboard becomes the mean of its colours, anything
-    /// else grey 0.5.
+    /// A texture where only a constant colour can go (a conductor's eta and k, a spectrum that
+    /// does not vary over the surface here): its mean colour, with a warning. Images are read
+    /// only to take their mean.
     pub(super) fn texture_mean(&mut self, tex: &'a El, at: &'a El) -> Result<Color, SceneError> {
         let p = self.props(tex)?;
-        let c = if p.kind == "checkerboard" {
-            let c0 = self.color(&p, "color0")?.unwrap_or(Color::splat(0.4));
-            let c1 = self.color(&p, "color1")?.unwrap_or(Color::splat(0.2));
-            for e in p.used.iter() {
-                e.set(true);
+        let c = match p.kind.as_str() {
+            "checkerboard" => {
+                let c0 = self.color(&p, "color0")?.unwrap_or(Color::splat(0.4));
+                let c1 = self.color(&p, "color1")?.unwrap_or(Color::splat(0.2));
+                (c0 + c1) * 0.5
             }
-            (c0 + c1) * 0.5
-        } else {
-            for e in p.used.iter() {
-                e.set(true);
-            }
-            Color::splat(0.5)
+            "bitmap" => match self.string(&p, "filename")? {
+                Some((file, fel)) => {
+                    let path = self.src(fel).base.join(&file);
+                    let raw = self.boolean(&p, "raw")? == Some(true);
+                    let image = crate::texture::image::load_image(&path, raw).map_err(|e| self.err(fel, e.to_string()))?;
+                    let t = crate::texture::Texture::Bitmap(crate::texture::Bitmap {
+                        image: std::sync::Arc::new(image),
+                        filter: crate::texture::Filter::Bilinear,
+                        wrap: crate::texture::Wrap::Repeat,
+                        to_uv: glam::Affine2::IDENTITY,
+                    });
+                    t.mean()
+                }
+                None => return Err(self.err(tex, "a bitmap texture needs <string name=\"filename\" .../>")),
+            },
+            _ => Color::splat(0.5),
         };
+        for e in p.used.iter() {
+            e.set(true);
+        }
         self.warn(
             at,
-            format!("textures are not supported: <texture type=\"{}\"> is replaced by its mean colour {c}", p.kind),
+            format!("a <texture type=\"{}\"> cannot vary over the surface here: its mean colour {c} is used", p.kind),
         )?;
         Ok(c)
     }

@@ -346,6 +346,17 @@ impl<'a> Cx<'a> {
                 let weight = self.float_param(&d.weight, 0.5, textures)?;
                 let first = self.named(names, &d.first, "first", &p.span)?;
                 let second = self.named(names, &d.second, "second", &p.span)?;
+                for (key, m) in [("first", first), ("second", second)] {
+                    if matches!(
+                        geometry.material(m).model,
+                        Model::TwoSided { .. } | Model::BumpMap { .. } | Model::NormalMap { .. } | Model::Mask { .. }
+                    ) {
+                        return Err(self.at(
+                            p.span.clone(),
+                            format!("a blend's `{key}` cannot be a twosided, bumpmap, normalmap or mask material (it would not be applied inside the blend): wrap the blend instead"),
+                        ));
+                    }
+                }
                 Material::two_sided(Model::Blend { weight, first, second })
             }
             _ => {
