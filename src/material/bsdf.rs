@@ -512,7 +512,23 @@ impl Bsdf {
         };
         let (s, p_lobe) = self.sample_any_lobe(&self.lobes.photon_weights, self.lobes.photon_total, wo, uc, u, mode)?;
         let pdf = if s.flags.is_specular() { 0.0 } else { s.pdf * p_lobe * self.opacity };
-        Some(BsdfSample { wi: s.wi, weight: s.weight / p_lobe, pdf, flags: s.flags })
+        let adjoint = if mode == Transport::Importance { self.shading_normal_correction(wo, s.wi) } else { 1.0 };
+        Some(BsdfSample { wi: s.wi, weight: s.weight * (adjoint / p_lobe), pdf, flags: s.flags })
+    }
+
+    /// Veach's correction (thesis sec. 5.3) for light carried against a shading normal that is
+    /// not the geometric one: importance leaving towards `wi` after arriving from `wo` is
+    /// scaled by |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|), so photons on smooth-shaded meshes carry the
+    /// power the path tracer sees. 1 where the two normals agree.
+    #[inline]
+    fn shading_normal_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let ns = self.frame.z;
+        if ns.dot(self.ng).abs() >= 1.0 - 1e-6 {
+            return 1.0;
+        }
+        let num = wo.dot(ns).abs() * wi.dot(self.ng).abs();
+        let den = wo.dot(self.ng).abs() * wi.dot(ns).abs();
+        if den > 0.0 { num / den } else { 0.0 }
     }
 }
 

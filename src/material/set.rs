@@ -203,7 +203,16 @@ impl Materials {
     /// Adds the lobes of blend `m` (blends nested in it included), each part's lobes scaled by
     /// `scale` times its weight.
     #[allow(clippy::too_many_arguments)]
-    fn add_blend_lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool, scale: f32, out: &mut Lobes, depth: usize) {
+    fn add_blend_lobes(
+        &self,
+        m: u32,
+        uv: Vec2,
+        front: bool,
+        as_front: bool,
+        scale: f32,
+        out: &mut Lobes,
+        depth: usize,
+    ) {
         if depth > MAX_NESTING || !(scale > 0.0) {
             return;
         }

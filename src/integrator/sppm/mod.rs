@@ -268,25 +268,7 @@ impl Sppm {
             state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
                 |((px, layers), vp)| {
                     let Some(v) = vp else { return };
-                    let r2 = px.r * px.r;
-                    // The flux in all, and the part that came only through mirrors and glass.
-                    let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
-                    // Photons from behind count only on a transmitting surface (rough glass).
-                    let both_sides = v.bsdf.flags().is_transmission();
-                    grid.for_each_near(v.p, px.r, |i| {
-                        let ph = &hits[i as usize];
-                        if (ph.p - v.p).length_squared() > r2 || (!both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0) {
-                            return;
-                        }
-                        let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
-                        if f != Color::ZERO {
-                            m += 1;
-                            phi += f * ph.flux;
-                            if ph.flags & trace::CAUSTIC != 0 {
-                                phi_caustic += f * ph.flux;
-                            }
-                        }
-                    });
+                    let (m, phi, phi_caustic) = gather(v, px.r, &grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
@@ -402,6 +384,36 @@ impl Sppm {
     }
 }
 
+/// The photons within radius `r` of visible point `v`: (M, their count, which sets the radius
+/// schedule; the flux the BSDF passes towards the camera; its part that came only through
+/// mirrors and glass).
+fn gather(v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
+    let r2 = r * r;
+    let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
+    // Photons from behind pass only through a transmitting surface (rough glass).
+    let both_sides = v.bsdf.flags().is_transmission();
+    grid.for_each_near(v.p, r, |i| {
+        let ph = &hits[i as usize];
+        if (ph.p - v.p).length_squared() > r2 {
+            return;
+        }
+        // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
+        // not the BSDF passes its light.
+        m += 1;
+        if !both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0 {
+            return;
+        }
+        let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
+        if f != Color::ZERO {
+            phi += f * ph.flux;
+            if ph.flags & trace::CAUSTIC != 0 {
+                phi_caustic += f * ph.flux;
+            }
+        }
+    });
+    (m, phi, phi_caustic)
+}
+
 /// The layers of each pixel, or `None` for every pixel when there are none.
 fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterator<Item = Option<&mut PixelLayers>> {
     if layers.is_empty() {
@@ -466,6 +478,27 @@ fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_photon_in_range_counts_in_m() {
+        use crate::material::bsdf::{Bsdf, Lobes};
+        use crate::material::bxdf::{Bxdf, Lambert};
+        let mut lobes = Lobes::default();
+        lobes.add(Bxdf::Lambert(Lambert { r: Color::splat(0.5) }));
+        let bsdf = Bsdf::new(crate::math::Frame::from_z(Vec3::Z), Vec3::Z, true, lobes);
+        let v = VisiblePoint { p: Vec3::ZERO, wo: Vec3::Z, bsdf, beta: Color::ONE, dist: 1.0, specular_prefix: false };
+        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, n: Vec3::Z };
+        let hits = [
+            hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
+            hit(Vec3::new(0.0, -0.2, 0.0), Vec3::Z), // in range, from below: no light, counted
+            hit(Vec3::new(0.0, 0.0, 0.0), Vec3::X),  // grazing: no light, counted
+            hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
+        ];
+        let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
+        let (m, phi, _) = gather(&v, 0.5, &grid, &hits);
+        assert_eq!(m, 3);
+        assert!((phi.x - 0.5 / PI).abs() < 1e-6, "{phi}");
+    }
 
     #[test]
     fn update_follows_hachisuka_formulas() {

@@ -244,3 +244,68 @@ fn classic_material(m: &Classic, wo: Vec3) -> Bsdf {
     let front = front_side(wo, hit.ng);
     Bsdf::new(hit.shading_frame(), hit.ng, front, m.lobes(front))
 }
+
+/// The seed report's `transparent` kind under total internal reflection: the share k_t that
+/// cannot leave the denser medium is reflected (as the Whitted integrator does), not lost.
+#[test]
+fn fixed_transmission_reflects_under_total_internal_reflection() {
+    use crate::material::bxdf::Transmission;
+    // Inside glass (eta = 1 / 1.5 seen from inside) at 60 degrees, beyond the critical angle.
+    let wo = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+    let s = Bxdf::Transmission(Transmission { t: 0.7, eta: 1.0 / 1.5 })
+        .sample(wo, 0.5, Vec2::splat(0.5), Transport::Radiance)
+        .expect("reflected");
+    assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6, "{}", s.wi);
+    assert_eq!(s.weight, Color::splat(0.7));
+    assert!(s.flags.is_specular() && !s.flags.is_transmission());
+    // Below the critical angle it refracts as before.
+    let wo = Vec3::new(20f32.to_radians().sin(), 0.0, 20f32.to_radians().cos());
+    let s = Bxdf::Transmission(Transmission { t: 0.7, eta: 1.0 / 1.5 })
+        .sample(wo, 0.5, Vec2::splat(0.5), Transport::Radiance)
+        .unwrap();
+    assert!(s.flags.is_transmission() && s.wi.z < 0.0);
+}
+
+/// Photons on a smooth-shaded surface (shading normal tilted from the geometric one) scatter
+/// with Veach's adjoint BSDF: on average a photon arriving from `wo` leaves a Lambertian surface
+/// with weight (rho / pi) |wo.ns| / |wo.ng| times the integral of |wi.ng| over the shading
+/// hemisphere above the geometric surface, which the path tracer's light transport implies; the
+/// plain BSDF gives rho times the share of that hemisphere above the surface.
+#[test]
+fn photons_scatter_with_the_adjoint_bsdf_under_shading_normals() {
+    use crate::material::bxdf::Lambert;
+    let ns = Vec3::new(0.35, 0.0, 1.0).normalize();
+    let mut lobes = Lobes::default();
+    lobes.add(Bxdf::Lambert(Lambert { r: Color::splat(0.6) }));
+    let bsdf = Bsdf::new(Frame::from_z(ns), Vec3::Z, true, lobes);
+    let wo = Vec3::new(-0.6, 0.2, 0.5).normalize();
+    let mut rng = crate::sampling::Rng32::new(17);
+    let n = 400_000;
+    let mut mean = 0.0f64;
+    for _ in 0..n {
+        if let Some(s) = bsdf.sample_lobe(wo, rng.uniform(), rng.uniform2(), Transport::Importance) {
+            mean += s.weight.x as f64;
+        }
+    }
+    mean /= n as f64;
+    // Integral of |wi.ng| over the hemisphere around ns, by the midpoint rule in spherical
+    // coordinates about ns.
+    let frame = Frame::from_z(ns);
+    let (nt, np) = (400, 800);
+    let mut integral = 0.0f64;
+    for i in 0..nt {
+        let t = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
+        for j in 0..np {
+            let p = (j as f64 + 0.5) / np as f64 * 2.0 * std::f64::consts::PI;
+            let local = Vec3::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
+            let wi = frame.to_world(local);
+            // Directions below the geometric surface are refused (light would leak through it).
+            integral += (wi.z as f64).max(0.0)
+                * t.sin()
+                * (std::f64::consts::FRAC_PI_2 / nt as f64)
+                * (2.0 * std::f64::consts::PI / np as f64);
+        }
+    }
+    let expected = 0.6 / std::f64::consts::PI * (wo.dot(ns) as f64).abs() / (wo.z as f64).abs() * integral;
+    assert!((mean - expected).abs() < 0.005 * expected, "mean weight {mean}, expected {expected}");
+}

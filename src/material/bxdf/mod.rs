@@ -380,16 +380,25 @@ impl Bxdf {
             Bxdf::Mirror(b) => {
                 Some(BxdfSample { wi: reflect_local(wo), weight: b.r, pdf: 1.0, flags: LobeFlags::SPECULAR_REFLECTION })
             }
-            Bxdf::Transmission(b) => {
-                let wi = refract_local(wo, b.eta)?;
-                let scale = if mode == Transport::Radiance { 1.0 / (b.eta * b.eta) } else { 1.0 };
-                Some(BxdfSample {
-                    wi,
-                    weight: Color::splat(b.t * scale),
+            Bxdf::Transmission(b) => match refract_local(wo, b.eta) {
+                Some(wi) => {
+                    let scale = if mode == Transport::Radiance { 1.0 / (b.eta * b.eta) } else { 1.0 };
+                    Some(BxdfSample {
+                        wi,
+                        weight: Color::splat(b.t * scale),
+                        pdf: 1.0,
+                        flags: LobeFlags::SPECULAR_TRANSMISSION,
+                    })
+                }
+                // Total internal reflection: the share k_t that cannot leave is reflected, as the
+                // Whitted integrator (and the seed report's fix for its image 5) does.
+                None => Some(BxdfSample {
+                    wi: reflect_local(wo),
+                    weight: Color::splat(b.t),
                     pdf: 1.0,
-                    flags: LobeFlags::SPECULAR_TRANSMISSION,
-                })
-            }
+                    flags: LobeFlags::SPECULAR_REFLECTION,
+                }),
+            },
             Bxdf::Dielectric(b) => {
                 let fr = fresnel_dielectric(wo.z, b.eta);
                 if uc < fr {

@@ -509,7 +509,8 @@ impl<'a> Cx<'a> {
                 Some((file, fel)) => {
                     let path = self.src(fel).base.join(&file);
                     let raw = self.boolean(&p, "raw")? == Some(true);
-                    let image = crate::texture::image::load_image(&path, raw).map_err(|e| self.err(fel, e.to_string()))?;
+                    let image =
+                        crate::texture::image::load_image(&path, raw).map_err(|e| self.err(fel, e.to_string()))?;
                     let t = crate::texture::Texture::Bitmap(crate::texture::Bitmap {
                         image: std::sync::Arc::new(image),
                         filter: crate::texture::Filter::Bilinear,
