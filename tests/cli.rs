@@ -144,6 +144,36 @@ fn photon_maps_beyond_max_memory_are_refused_before_tracing() {
     assert!(start.elapsed() < Duration::from_secs(5), "refusal took {:?}", start.elapsed());
 }
 
+/// A scene whose meshes would not fit is refused from the files' headers, before any is read:
+/// a 30 M-triangle PLY is declared in a header of a few hundred bytes.
+#[test]
+fn scenes_beyond_max_memory_are_refused_before_loading() {
+    let dir = common::scratch("cli-scene-mem");
+    let ply = dir.join("huge.ply");
+    // Only the header: the loader would fail on the missing data, the estimate never reads it.
+    std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 15000000\nproperty float x\nproperty float y\nproperty float z\nelement face 30000000\nproperty list uchar int vertex_indices\nend_header\n").unwrap();
+    let xml = dir.join("scan.xml");
+    std::fs::write(
+        &xml,
+        r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="huge.ply"/></shape></scene>"#,
+    )
+    .unwrap();
+    let out = caustic()
+        .arg("render")
+        .arg(&xml)
+        .args(["--max-memory", "1024", "-o"])
+        .arg(dir.join("scan.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("loading the scene would need about") && err.contains("huge.ply") && err.contains("1024 MiB"),
+        "{err}"
+    );
+    assert!(!dir.join("scan.png").exists());
+}
+
 #[test]
 fn layers_are_written_and_sum_to_the_image() {
     let dir = common::scratch("cli-layers");

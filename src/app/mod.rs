@@ -56,6 +56,11 @@ pub enum AppError {
          or raise --max-memory"
     )]
     Memory { need_mib: u64, limit_mib: u64 },
+    #[error(
+        "loading the scene would need about {need_mib} MiB ({detail}), more than the {limit_mib} MiB \
+         allowed; raise --max-memory if the machine has it"
+    )]
+    SceneMemory { need_mib: u64, limit_mib: u64, detail: String },
     #[error("interrupted: wrote `{path}` with {samples} samples per pixel")]
     Interrupted { path: String, samples: u32 },
     /// A shard stopped early: its finished samples are saved and a rerun continues from them.
@@ -197,6 +202,33 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     let pool =
         builder.build().map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
+        // The scene's big files, measured from their headers before any is read.
+        let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
+        let footprint = crate::scene::footprint::estimate(&opts.scene, &opts.load.defines);
+        if footprint.total() > 0 {
+            log(
+                opts.quiet,
+                format_args!(
+                    "scene files: about {} MiB (meshes {} MiB, textures {} MiB, instances {} MiB)",
+                    footprint.total().div_ceil(1 << 20),
+                    footprint.meshes.div_ceil(1 << 20),
+                    footprint.textures.div_ceil(1 << 20),
+                    footprint.instances.div_ceil(1 << 20)
+                ),
+            );
+        }
+        if footprint.total() > limit {
+            let largest = footprint.files.iter().max_by_key(|(_, b)| *b);
+            let detail = match largest {
+                Some((p, b)) => format!("the largest file, `{}`, about {} MiB", p.display(), b.div_ceil(1 << 20)),
+                None => "instances".to_string(),
+            };
+            return Err(AppError::SceneMemory {
+                need_mib: footprint.total().div_ceil(1 << 20),
+                limit_mib: limit >> 20,
+                detail,
+            });
+        }
         let loaded = load(&opts.scene, &opts.load, &opts.overrides)?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");

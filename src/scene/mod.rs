@@ -7,6 +7,7 @@ pub mod builder;
 mod de;
 pub mod desc;
 pub mod error;
+pub mod footprint;
 pub mod mitsuba;
 pub mod native;
 
