@@ -257,7 +257,8 @@ impl PhotonIntegrator {
         sum / (PI * r2 * norm)
     }
 
-    /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area light.
+    /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area or
+    /// environment light.
     fn direct(
         &self,
         scene: &Scene,
@@ -428,7 +429,9 @@ impl RayIntegrator for PhotonIntegrator {
             stats.rays += 1;
             let first = if prefix_specular { SPECULAR } else { DIRECT };
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                layers[first] += beta * scene.background;
+                if !lit_by_shadow_rays {
+                    layers[first] += beta * scene.environment(ray.d);
+                }
                 break;
             };
             let wo = -ray.d;
