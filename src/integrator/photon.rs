@@ -188,9 +188,11 @@ impl PhotonIntegrator {
         Some(PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats })
     }
 
-    /// Outgoing diffuse radiance at a final-gather hit from the nearest precomputed irradiance
-    /// record facing the same way (L = albedo / pi * E).
-    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, scratch: &mut Gathered) -> Color {
+    /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
+    /// precomputed irradiance record facing the same way (L = albedo / pi * E); where photons
+    /// are too sparse for a record to be near (far out on a floor plane, whose photons thin
+    /// out with distance), from the photons themselves.
+    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
         let r = self.config.max_radius;
         let n = by.normal();
         // Records lie a few photon spacings apart: the nearest few within half the estimate
@@ -202,7 +204,10 @@ impl PhotonIntegrator {
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some(&(_, i)) => by.diffuse_albedo() * self.irradiance.photon(i).power() * std::f32::consts::FRAC_1_PI,
-            None => Color::ZERO,
+            None => {
+                let c = &self.config;
+                Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
+            }
         }
     }
 
@@ -225,9 +230,10 @@ impl PhotonIntegrator {
         }
         let n = bsdf.normal();
         let (found, r2) = map.gather(hit.p, k, max_r * max_r, scratch);
-        if found.is_empty() || !(r2 > 0.0) {
+        if found.is_empty() {
             return Color::ZERO;
         }
+        let r2 = disc_radius2(found.len(), k, r2, max_r);
         let r = r2.sqrt();
         // Photons further than this from the tangent plane lie on other surfaces.
         let thickness = 0.25 * r;
@@ -294,7 +300,7 @@ impl PhotonIntegrator {
     /// a Lambertian surface, from a full estimate of the global map otherwise.
     fn radiance_at_gather_hit(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
         if by.lambert_albedo().is_some() {
-            return self.gathered_radiance(y, by, scratch);
+            return self.gathered_radiance(y, by, wo_y, scratch);
         }
         let c = &self.config;
         Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
@@ -361,6 +367,16 @@ impl PhotonIntegrator {
     }
 }
 
+/// Squared radius of the disc a density estimate divides by: the distance of the k-th nearest
+/// photon when `k` were found, the whole search radius when fewer were. Where photons are sparse
+/// (far out on a floor plane) the distance of the farthest of a few found photons would make
+/// the estimate far too large (with one photon its expectation is infinite); the photons within
+/// a fixed disc estimate its flux without bias.
+#[inline]
+fn disc_radius2(found: usize, k: usize, r2: f32, max_r: f32) -> f32 {
+    if found < k { max_r * max_r } else { r2 }
+}
+
 /// Irradiance at every `IRRADIANCE_STRIDE`-th global photon from its `k` nearest neighbours
 /// (facing the same way and near its tangent plane), stored as a map of its own; `None` when
 /// cancelled.
@@ -385,6 +401,7 @@ fn precompute_irradiance(
                 .step_by(IRRADIANCE_STRIDE)
                 .map(|h| {
                     let (found, r2) = map.gather(h.p, k, max_r * max_r, &mut g);
+                    let r2 = disc_radius2(found.len(), k, r2, max_r);
                     let mut e = Color::ZERO;
                     if r2 > 0.0 {
                         let thickness = 0.25 * r2.sqrt();

@@ -16,7 +16,7 @@ use crate::sampling::warp::concentric_disk;
 use std::f32::consts::PI;
 
 /// How far beyond the finite geometry photons cover infinite planes, in bounding radii.
-pub const PLANE_REACH: f32 = 16.0;
+pub const PLANE_REACH: f32 = 32.0;
 
 /// Share of the photons that enter through the core when the disk extends beyond it.
 const CORE_SHARE: f32 = 0.5;
