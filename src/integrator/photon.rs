@@ -13,9 +13,11 @@
 //!   transparent part) is then followed further, so mixed materials keep their reflections.
 //!
 //! Radiance estimate (Jensen 2001 eq. 4.6): L = sum over the k nearest photons within a maximum
-//! radius of f(wo, wi_p) Phi_p / (pi r^2), counting only photons arriving on the surface's side
-//! and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do not
-//! leak light into each other. Everything is in physical units; nothing is scaled by hand.
+//! radius of f(wo, wi_p) Phi_p / (pi r^2), r the k-th photon's distance, or the maximum radius
+//! where fewer than k lie within it (sparse photons, as far out on a floor plane: the distance
+//! of the farthest of a few would overestimate), counting only photons arriving on the surface's
+//! side and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do
+//! not leak light into each other. Everything is in physical units; nothing is scaled by hand.
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
