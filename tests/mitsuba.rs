@@ -371,7 +371,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     <shape type="sphere"><bsdf type="hair"/></shape>
     <shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf></shape>
     <shape type="sphere"><bsdf type="measured"/></shape>
-    <emitter type="envmap"/>
+    <emitter type="sunsky"/>
     <shape type="sphere"><float name="wobble" value="1"/></shape>"#,
     );
     let (s, warnings) = xml(&text);
@@ -380,7 +380,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
         (8, "BSDF `hair` is not supported"),
         (9, "texture `mesh_attribute` is not supported"),
         (10, "BSDF `measured` is not supported"),
-        (11, "emitter `envmap` is not supported"),
+        (11, "emitter `sunsky` is not supported"),
         (12, "property `wobble`"),
     ];
     for (line, what) in expect {
