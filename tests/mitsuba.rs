@@ -94,7 +94,7 @@ fn every_example_renders_bit_identically_to_its_native_twin() {
         assert_eq!(camera, t.scene.camera, "{name}: camera");
         assert_eq!(x.scene.lights, t.scene.lights, "{name}: lights");
         assert_eq!(x.scene.bvh.prims.len(), t.scene.bvh.prims.len(), "{name}: primitives");
-        assert_eq!(x.scene.background, t.scene.background, "{name}: background");
+        assert_eq!(x.scene.environment, t.scene.environment, "{name}: environment");
         assert_eq!(x.integrator, t.integrator, "{name}: integrator");
         assert_eq!(x.settings.spp, t.settings.spp);
         let (a, b) = (render_with(&x), render_with(&t));
@@ -371,7 +371,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     <shape type="sphere"><bsdf type="hair"/></shape>
     <shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf></shape>
     <shape type="sphere"><bsdf type="measured"/></shape>
-    <emitter type="envmap"/>
+    <emitter type="sunsky"/>
     <shape type="sphere"><float name="wobble" value="1"/></shape>"#,
     );
     let (s, warnings) = xml(&text);
@@ -380,7 +380,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
         (8, "BSDF `hair` is not supported"),
         (9, "texture `mesh_attribute` is not supported"),
         (10, "BSDF `measured` is not supported"),
-        (11, "emitter `envmap` is not supported"),
+        (11, "emitter `sunsky` is not supported"),
         (12, "property `wobble`"),
     ];
     for (line, what) in expect {
@@ -403,16 +403,20 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
 }
 
 #[test]
-fn constant_emitter_becomes_the_background() {
+fn constant_emitter_becomes_an_environment_light() {
     let (s, w) = xml(&wrap(r#"<emitter type="constant"><rgb name="radiance" value="0.1, 0.2, 0.3"/></emitter>"#));
-    assert_eq!(s.scene.background, Color::new(0.1, 0.2, 0.3));
+    let env = s.scene.environment.expect("an environment light") as usize;
+    assert!(matches!(s.scene.lights[env], caustic::light::Light::Environment(_)));
+    assert_eq!(s.scene.environment(Vec3::new(0.3, -0.2, 0.9).normalize()), Color::new(0.1, 0.2, 0.3));
     assert!(w.is_empty());
-    // Photon mapping and SPPM say they cannot light from the background.
+    // Photon mapping and SPPM light from it too: nothing to warn about.
     for kind in [IntegratorKind::Photon, IntegratorKind::Sppm] {
-        let (s, _) = xml(&wrap(r#"<emitter type="constant"/>"#));
-        let w = caustic::integrator::limitations(kind, &s.scene);
-        assert!(w.iter().any(|w| w.contains("photons")), "{w:?}");
+        assert!(caustic::integrator::limitations(kind, &s.scene).is_empty());
     }
+    // A scene has one environment, as in Mitsuba.
+    let two = wrap(r#"<emitter type="constant"/><emitter type="constant"/>"#);
+    let e = xml_opts(&two, &root(), &LoadOptions::default(), &Overrides::default()).err().expect("two environments");
+    assert!(e.message().contains("at most one environment"), "{e}");
 }
 
 #[test]

@@ -140,14 +140,16 @@ impl LoadedScene {
     }
 }
 
-/// Bytes the render of `loaded` with `settings` will allocate: the film (with its layers), the
-/// output image, and the integrator's own data (photon maps, SPPM state). Geometry is already
-/// loaded by then and is not counted.
+/// Bytes the render of `loaded` with `settings` needs: the film (with its layers), the output
+/// image, the integrator's own data (photon maps, SPPM state), and the environment map's texels
+/// and sampling distribution (loaded already, but as large as a photon map for a big image).
+/// Other geometry is already loaded by then and is not counted.
 pub fn estimate_render_bytes(loaded: &LoadedScene, settings: &RenderSettings) -> u64 {
     let image = 12;
     let per_pixel = BYTES_PER_PIXEL + image + if settings.layers { LAYER_BYTES_PER_PIXEL + 4 * image } else { 0 };
     let film = settings.pixels() * per_pixel;
     film.saturating_add(crate::integrator::estimated_bytes(&loaded.integrator, &loaded.scene, settings))
+        .saturating_add(loaded.scene.environment_bytes())
 }
 
 /// Total memory of the machine in bytes (from /proc/meminfo; 8 GiB when unknown).

@@ -107,15 +107,8 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
     }
 }
 
-/// What `kind` cannot render in `scene`, as warnings for the user.
-pub fn limitations(kind: IntegratorKind, scene: &Scene) -> Vec<String> {
-    let mut out = Vec::new();
-    if matches!(kind, IntegratorKind::Photon | IntegratorKind::Sppm) && scene.background != crate::math::Color::ZERO {
-        out.push(format!(
-            "the {} integrator emits no photons from the background (a constant environment): it lights only \
-             what the camera and specular paths see directly",
-            kind.name()
-        ));
-    }
-    out
+/// What `kind` cannot render in `scene`, as warnings for the user (nothing today: every light
+/// emits photons, and every integrator sees the environment).
+pub fn limitations(_kind: IntegratorKind, _scene: &Scene) -> Vec<String> {
+    Vec::new()
 }

@@ -2,7 +2,7 @@
 //!
 //! Next-event estimation at every non-specular vertex (a light chosen in proportion to power),
 //! combined with BSDF sampling by multiple importance sampling (power heuristic, Veach 1997) for
-//! area lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
+//! area and environment lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::Ray;
@@ -68,8 +68,19 @@ impl RayIntegrator for PathTracer {
         loop {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
-                layers[k] += beta * scene.background;
+                // The ray leaves the scene: the environment, weighted against its light samples.
+                if let Some(env) = scene.environment {
+                    let le = scene.lights[env as usize].environment_radiance(ray.d);
+                    let w = if specular_bounce {
+                        1.0
+                    } else {
+                        let light_pdf = scene.light_picker.prob(env as usize)
+                            * scene.lights[env as usize].pdf(prev_p, prev_p, ray.d, ray.d);
+                        power_heuristic(prev_pdf, light_pdf)
+                    };
+                    let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
+                    layers[k] += beta * le * w;
+                }
                 break;
             };
             let wo = -ray.d;

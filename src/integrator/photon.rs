@@ -13,9 +13,11 @@
 //!   transparent part) is then followed further, so mixed materials keep their reflections.
 //!
 //! Radiance estimate (Jensen 2001 eq. 4.6): L = sum over the k nearest photons within a maximum
-//! radius of f(wo, wi_p) Phi_p / (pi r^2), counting only photons arriving on the surface's side
-//! and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do not
-//! leak light into each other. Everything is in physical units; nothing is scaled by hand.
+//! radius of f(wo, wi_p) Phi_p / (pi r^2), r the k-th photon's distance, or the maximum radius
+//! where fewer than k lie within it (sparse photons, as far out on a floor plane: the distance
+//! of the farthest of a few would overestimate), counting only photons arriving on the surface's
+//! side and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do
+//! not leak light into each other. Everything is in physical units; nothing is scaled by hand.
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
@@ -188,9 +190,11 @@ impl PhotonIntegrator {
         Some(PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats })
     }
 
-    /// Outgoing diffuse radiance at a final-gather hit from the nearest precomputed irradiance
-    /// record facing the same way (L = albedo / pi * E).
-    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, scratch: &mut Gathered) -> Color {
+    /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
+    /// precomputed irradiance record facing the same way (L = albedo / pi * E); where photons
+    /// are too sparse for a record to be near (far out on a floor plane, whose photons thin
+    /// out with distance), from the photons themselves.
+    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
         let r = self.config.max_radius;
         let n = by.normal();
         // Records lie a few photon spacings apart: the nearest few within half the estimate
@@ -202,7 +206,10 @@ impl PhotonIntegrator {
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some(&(_, i)) => by.diffuse_albedo() * self.irradiance.photon(i).power() * std::f32::consts::FRAC_1_PI,
-            None => Color::ZERO,
+            None => {
+                let c = &self.config;
+                Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
+            }
         }
     }
 
@@ -225,9 +232,10 @@ impl PhotonIntegrator {
         }
         let n = bsdf.normal();
         let (found, r2) = map.gather(hit.p, k, max_r * max_r, scratch);
-        if found.is_empty() || !(r2 > 0.0) {
+        if found.is_empty() {
             return Color::ZERO;
         }
+        let r2 = disc_radius2(found.len(), k, r2, max_r);
         let r = r2.sqrt();
         // Photons further than this from the tangent plane lie on other surfaces.
         let thickness = 0.25 * r;
@@ -257,7 +265,8 @@ impl PhotonIntegrator {
         sum / (PI * r2 * norm)
     }
 
-    /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area light.
+    /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area or
+    /// environment light.
     fn direct(
         &self,
         scene: &Scene,
@@ -293,7 +302,7 @@ impl PhotonIntegrator {
     /// a Lambertian surface, from a full estimate of the global map otherwise.
     fn radiance_at_gather_hit(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
         if by.lambert_albedo().is_some() {
-            return self.gathered_radiance(y, by, scratch);
+            return self.gathered_radiance(y, by, wo_y, scratch);
         }
         let c = &self.config;
         Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
@@ -361,6 +370,16 @@ impl PhotonIntegrator {
     }
 }
 
+/// Squared radius of the disc a density estimate divides by: the distance of the k-th nearest
+/// photon when `k` were found, the whole search radius when fewer were. Where photons are sparse
+/// (far out on a floor plane) the distance of the farthest of a few found photons would make
+/// the estimate far too large (with one photon its expectation is infinite); the photons within
+/// a fixed disc estimate its flux without bias.
+#[inline]
+fn disc_radius2(found: usize, k: usize, r2: f32, max_r: f32) -> f32 {
+    if found < k { max_r * max_r } else { r2 }
+}
+
 /// Irradiance at every `IRRADIANCE_STRIDE`-th global photon from its `k` nearest neighbours
 /// (facing the same way and near its tangent plane), stored as a map of its own; `None` when
 /// cancelled.
@@ -385,6 +404,7 @@ fn precompute_irradiance(
                 .step_by(IRRADIANCE_STRIDE)
                 .map(|h| {
                     let (found, r2) = map.gather(h.p, k, max_r * max_r, &mut g);
+                    let r2 = disc_radius2(found.len(), k, r2, max_r);
                     let mut e = Color::ZERO;
                     if r2 > 0.0 {
                         let thickness = 0.25 * r2.sqrt();
@@ -429,7 +449,9 @@ impl RayIntegrator for PhotonIntegrator {
             stats.rays += 1;
             let first = if prefix_specular { SPECULAR } else { DIRECT };
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                layers[first] += beta * scene.background;
+                if !lit_by_shadow_rays {
+                    layers[first] += beta * scene.environment(ray.d);
+                }
                 break;
             };
             let wo = -ray.d;

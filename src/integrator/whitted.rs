@@ -10,6 +10,7 @@
 
 use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
+use crate::light::Light;
 use crate::material::ClassicKind;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::math::{Color, Vec3};
@@ -58,7 +59,7 @@ impl Whitted {
     ) -> (Color, Color) {
         stats.rays += 1;
         let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
-            return (scene.background, Color::ZERO);
+            return (scene.environment(ray.d), Color::ZERO);
         };
         let m = scene.classic(&hit);
         let front = hit.is_front(ray.d);
@@ -75,7 +76,9 @@ impl Whitted {
         }
         c += m.color * scene.ambient * m.ka;
         if m.kd > 0.0 || m.ks > 0.0 {
-            for light in &scene.lights {
+            // The seed report's model has no sky light (its ambient term stands for it), and its
+            // k_d has no 1/pi: an environment is what rays that leave the scene see, not a light.
+            for light in scene.lights.iter().filter(|l| !matches!(l, Light::Environment(_))) {
                 // Delta lights need one sample; area lights are averaged over several.
                 let n_samples = if light.is_delta() { 1 } else { self.area_samples.max(1) };
                 for _ in 0..n_samples {

@@ -1,19 +1,25 @@
 //! Light sources, in physical units. A closed set of `Copy` variants; each can be sampled from a
 //! shading point (for shadow rays and next-event estimation) and can emit photons. Area lights
 //! belong to an emitting primitive, which knows its light by index (`Primitive::light`), and
-//! sample through a copy of that primitive's shape (`area`).
+//! sample through a copy of that primitive's shape (`area`). Environment lights (`environment`:
+//! a map or a constant) surround the scene; they and directional lights send their photons in
+//! through a `PhotonDisk` covering the scene (`disk`).
 //!
 //! Units: point and spot intensity in W/sr, directional irradiance in W/m^2, area-light radiance
 //! in W/(m^2 sr); scene lengths count as metres. The classic Whitted integrator reads the same
 //! values as the seed report's "light intensity" (colour x intensity, falling off as 1/d^2).
 
 mod area;
+mod disk;
+mod environment;
 
 pub use area::{Emitter, SurfaceSample};
+pub use disk::{PLANE_REACH, PhotonDisk};
+pub use environment::{EnvMap, Environment};
 
 use crate::geometry::Ray;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
-use crate::sampling::warp::{concentric_disk, cosine_hemisphere, uniform_cone, uniform_sphere};
+use crate::sampling::warp::{cosine_hemisphere, uniform_cone, uniform_sphere};
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,11 +34,14 @@ pub enum Light {
     /// plane at distance 1 along its z axis) like a perspective camera in reverse.
     Projector(Projector),
     /// Light from infinitely far away; `direction` is the unit direction the light travels,
-    /// `irradiance` what a surface facing it receives. `scene_radius`/`scene_center` bound the
-    /// scene, for its power and photon emission.
-    Directional { direction: Vec3, irradiance: Color, scene_center: Vec3, scene_radius: f32 },
+    /// `irradiance` what a surface facing it receives. Its photons enter through `disk` (set when
+    /// the scene is built), which also gives its power.
+    Directional { direction: Vec3, irradiance: Color, disk: PhotonDisk },
     /// A shape emitting constant radiance from its front side.
     Area { emitter: Emitter, radiance: Color },
+    /// Light from every direction at infinity: an environment map or a constant radiance, seen
+    /// by rays that leave the scene.
+    Environment(Environment),
 }
 
 /// No texture: a spot light of uniform intensity.
@@ -172,7 +181,24 @@ impl Light {
     /// True for lights no ray can hit (points, spots, directional).
     #[inline]
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Area { .. })
+        !matches!(self, Light::Area { .. } | Light::Environment(_))
+    }
+
+    /// True for lights at infinity (directional, environment), whose photons enter through a
+    /// `PhotonDisk`.
+    #[inline]
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Directional { .. } | Light::Environment(_))
+    }
+
+    /// Radiance an environment light sends along `-wi` (towards a ray leaving the scene in
+    /// direction `wi`); zero for other lights.
+    #[inline]
+    pub fn environment_radiance(&self, wi: Vec3) -> Color {
+        match self {
+            Light::Environment(e) => e.radiance(wi),
+            _ => Color::ZERO,
+        }
     }
 
     /// Intensity (W/sr) a delta-position light sends in direction `d` (unit, leaving it),
@@ -223,8 +249,9 @@ impl Light {
             }
             // Untextured power times the texture's mean: the image plane's irradiance integral.
             Light::Projector(p) => p.intensity * p.plane_area() * p.mean,
-            Light::Directional { irradiance, scene_radius, .. } => irradiance * PI * scene_radius * scene_radius,
+            Light::Directional { irradiance, disk, .. } => irradiance * disk.area(),
             Light::Area { emitter, radiance } => radiance * PI * emitter.area(),
+            Light::Environment(e) => e.power(),
         }
     }
 
@@ -269,6 +296,10 @@ impl Light {
                 }
                 Some(LightSample { wi, dist, radiance, pdf, delta: false })
             }
+            Light::Environment(e) => {
+                let (wi, radiance, pdf) = e.sample(u)?;
+                Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false })
+            }
         }
     }
 
@@ -278,6 +309,7 @@ impl Light {
     pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match *self {
             Light::Area { emitter, .. } => emitter.pdf_towards(p, q, n, wi),
+            Light::Environment(e) => e.pdf(wi),
             _ => 0.0,
         }
     }
@@ -317,13 +349,9 @@ impl Light {
                 let d = p.frame.to_world(Vec3::new(x, y, 1.0).normalize());
                 Some(EmittedPhoton { ray: Ray::new(p.position, d), flux: p.intensity * p.plane_area(), n: d })
             }
-            Light::Directional { direction, irradiance, scene_center, scene_radius } => {
-                // A disk as wide as the scene, just outside it, facing along the light.
-                let frame = Frame::from_z(direction);
-                let disk = concentric_disk(u_pos) * scene_radius;
-                let o = scene_center - direction * scene_radius + frame.x * disk.x + frame.y * disk.y;
-                let area = PI * scene_radius * scene_radius;
-                Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance * area, n: direction })
+            Light::Directional { direction, irradiance, disk } => {
+                let (ray, inv_density) = disk.ray(direction, u_pos)?;
+                Some(EmittedPhoton { ray, flux: irradiance * inv_density, n: direction })
             }
             Light::Area { emitter, radiance } => {
                 let s = emitter.sample_area(u_pos);
@@ -332,12 +360,20 @@ impl Light {
                 let ray = Ray::spawn(s.p, s.p_error, s.n, d, 0.0);
                 Some(EmittedPhoton { ray, flux: radiance * (emitter.area() * PI), n: s.n })
             }
+            Light::Environment(e) => e.emit(u_pos, u_dir),
         }
     }
 
-    /// Weight for choosing this light among others (its power's luminance).
+    /// Weight for choosing this light among others: its power's luminance, counting for lights
+    /// at infinity only what enters through the core of their photon disk (the part planes add
+    /// would make them crowd out the lights inside the scene).
     pub fn selection_weight(&self) -> f32 {
-        luminance(self.power()).max(0.0)
+        let power = match *self {
+            Light::Directional { irradiance, disk, .. } => irradiance * disk.core_area(),
+            Light::Environment(e) => e.integral() * e.disk.core_area(),
+            _ => self.power(),
+        };
+        luminance(power).max(0.0)
     }
 }
 
@@ -366,8 +402,12 @@ mod tests {
             Light::Directional {
                 direction: -Vec3::Y,
                 irradiance: Color::splat(2.0),
-                scene_center: Vec3::ZERO,
-                scene_radius: 3.0,
+                disk: PhotonDisk::new(Vec3::ZERO, 3.0, false),
+            },
+            Light::Directional {
+                direction: Vec3::new(0.2, -1.0, 0.4).normalize(),
+                irradiance: Color::splat(2.0),
+                disk: PhotonDisk::new(Vec3::ONE, 0.5, true),
             },
             Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0) },
             Light::Area {

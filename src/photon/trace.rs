@@ -96,7 +96,11 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> Phot
         |i| {
             let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
             let (li, p) = scene.light_picker.pick(rng.uniform())?;
-            let e = scene.emit_photon(&scene.lights[li], rng.uniform2(), rng.uniform2())?;
+            let light = &scene.lights[li];
+            let mut e = scene.emit_photon(light, rng.uniform2(), rng.uniform2())?;
+            if light.is_infinite() {
+                e.ray = scene.photon_entry(e.ray);
+            }
             Some((e, p, rng))
         },
         scene,
@@ -127,6 +131,9 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
                 let light = &scene.lights[li];
                 let mut e = emit_towards(light, &scene.specular_targets, &mut rng)?;
                 e.flux *= scene.projected_texture(light, e.ray.d);
+                if light.is_infinite() {
+                    e.ray = scene.photon_entry(e.ray);
+                }
                 Some((e, p, rng))
             },
             scene,
@@ -267,33 +274,33 @@ fn cone(p: Vec3, (c, r): (Vec3, f32)) -> (Vec3, f32, f32) {
     (v / d, cos_max, 2.0 * PI * (1.0 - cos_max))
 }
 
-/// Emits a photon aimed at the specular targets. The direction (or, for a directional light,
+/// Emits a photon aimed at the specular targets. The direction (or, for a light at infinity,
 /// the position) is drawn from a mixture over the targets' cones (disks), and the flux divided
 /// by the mixture's density, so the caustic photons are an unbiased sample of the light's
 /// emission restricted to the directions that can reach a mirror or glass object.
 fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Option<EmittedPhoton> {
     let (u_pos, u_pick, u_dir) = (rng.uniform2(), rng.uniform(), rng.uniform2());
-    if let Light::Directional { direction, irradiance, scene_center, scene_radius } = *light {
-        // Disks of the targets' projections, perpendicular to the light.
-        let frame = Frame::from_z(direction);
-        let j = pick(targets.iter().map(|t| PI * t.1 * t.1), u_pick)?;
-        let total: f32 = targets.iter().map(|t| PI * t.1 * t.1).sum();
-        let (c, r) = targets[j];
-        let disk = concentric_disk(u_dir) * r;
-        let q = c + frame.x * disk.x + frame.y * disk.y;
-        let covering = targets
-            .iter()
-            .filter(|(tc, tr)| {
-                let v = q - *tc;
-                let off = v - direction * v.dot(direction);
-                off.length_squared() <= tr * tr
-            })
-            .count()
-            .max(1);
-        let pdf_area = covering as f32 / total;
-        let back = (scene_center - q).dot(-direction) + scene_radius;
-        let o = q - direction * back.max(r);
-        return Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction });
+    match *light {
+        Light::Directional { direction, irradiance, disk } => {
+            return towards_from_infinity(direction, irradiance, disk.center, disk.radius, targets, u_pick, u_dir);
+        }
+        Light::Environment(env) => {
+            // A direction by the environment's own sampling, then a point aimed at the targets.
+            let (wi, radiance, pdf) = env.sample(u_pos)?;
+            if !(pdf > 0.0) {
+                return None;
+            }
+            return towards_from_infinity(
+                -wi,
+                radiance / pdf,
+                env.disk.center,
+                env.disk.radius,
+                targets,
+                u_pick,
+                u_dir,
+            );
+        }
+        _ => {}
     }
     // Position (on area lights), then a direction towards one of the targets.
     let (p, p_error, n, pos_weight, radiance_like) = match *light {
@@ -306,7 +313,7 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
             let s = emitter.sample_area(u_pos);
             (s.p, s.p_error, s.n, emitter.area(), radiance)
         }
-        Light::Directional { .. } => unreachable!(),
+        Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
     // Cones are recomputed rather than stored: a photon allocates nothing.
     let cones = || targets.iter().map(|&t| cone(p, t));
@@ -326,10 +333,44 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
             }
             radiance_like * cos * pos_weight
         }
-        Light::Directional { .. } => unreachable!(),
+        Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
     let (ray, n_out) = if n == Vec3::ZERO { (Ray::new(p, d), d) } else { (Ray::spawn(p, p_error, n, d, 0.0), n) };
     Some(EmittedPhoton { ray, flux: emitted / pdf_dir, n: n_out })
+}
+
+/// A photon travelling along `direction` from infinity, through a point of the disks the targets
+/// project perpendicular to it (chosen in proportion to their areas), carrying `irradiance`
+/// over the density of that point; it starts outside the bounding sphere (`center`, `radius`)
+/// of the finite geometry.
+fn towards_from_infinity(
+    direction: Vec3,
+    irradiance: crate::math::Color,
+    center: Vec3,
+    radius: f32,
+    targets: &[(Vec3, f32)],
+    u_pick: f32,
+    u_dir: crate::math::Vec2,
+) -> Option<EmittedPhoton> {
+    let frame = Frame::from_z(direction);
+    let j = pick(targets.iter().map(|t| PI * t.1 * t.1), u_pick)?;
+    let total: f32 = targets.iter().map(|t| PI * t.1 * t.1).sum();
+    let (c, r) = targets[j];
+    let disk = concentric_disk(u_dir) * r;
+    let q = c + frame.x * disk.x + frame.y * disk.y;
+    let covering = targets
+        .iter()
+        .filter(|(tc, tr)| {
+            let v = q - *tc;
+            let off = v - direction * v.dot(direction);
+            off.length_squared() <= tr * tr
+        })
+        .count()
+        .max(1);
+    let pdf_area = covering as f32 / total;
+    let back = (center - q).dot(-direction) + radius;
+    let o = q - direction * back.max(r);
+    Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction })
 }
 
 /// Index chosen from `weights` in proportion to them, by the uniform number `u`.

@@ -5,6 +5,7 @@
 //! image (pbrt-v4 `StartPixelSample`).
 
 pub mod chi2;
+pub mod distribution;
 pub mod sampler;
 pub mod warp;
 

@@ -10,7 +10,7 @@ use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
 use crate::accel::Bvh;
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT};
-use crate::light::{Emitter, Light, LightPicker};
+use crate::light::{Emitter, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials};
 use crate::math::Vec3;
 use crate::shape::{Plane, Primitive, Shape, TriangleMesh};
@@ -27,6 +27,8 @@ pub struct SceneBuilder {
     planes: Vec<(Plane, u32)>,
     meshes: Vec<TriangleMesh>,
     lights: Vec<Light>,
+    /// The environment (map or constant), added after all other lights by `finish`.
+    environment: Option<Environment>,
     /// Primitives of area lights, placed after all other primitives by `finish`.
     area_prims: Vec<Primitive>,
     /// Bounding spheres of mirror and glass objects: where caustic photons are aimed.
@@ -112,6 +114,21 @@ impl SceneBuilder {
         self.lights.push(light);
     }
 
+    /// Sets the environment light (an environment map or a constant radiance); a scene has at
+    /// most one, as in Mitsuba.
+    pub fn set_environment(&mut self, env: Environment) -> Result<(), String> {
+        if self.environment.is_some() {
+            return Err("a scene has at most one environment light (envmap or constant)".into());
+        }
+        self.environment = Some(env);
+        Ok(())
+    }
+
+    /// The environment light set so far.
+    pub fn environment(&self) -> Option<&Environment> {
+        self.environment.as_ref()
+    }
+
     /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
     /// reflects with (a reflecting emitter); `None` makes it black.
     pub fn add_area_light(&mut self, emitter: Emitter, radiance: crate::math::Color, surface: Option<Material>) {
@@ -186,13 +203,18 @@ impl SceneBuilder {
         };
         let bounds = bvh.bounds();
         let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };
-        let (scene_center, scene_radius) = if bounds.is_empty() { (Vec3::ZERO, 1.0) } else { bounds.bounding_sphere() };
+        let disk = photon_disk(bounds, &self.planes, camera.eye);
+        // The environment comes last, so emitting primitives keep their light indices and a
+        // scene's lights are in the same order whichever format it was written in.
+        let environment = self.environment.map(|e| {
+            self.lights.push(Light::Environment(e));
+            (self.lights.len() - 1) as u32
+        });
         for l in &mut self.lights {
-            if let Light::Directional { scene_center: c, scene_radius: r, .. } = l {
-                // Planes are unbounded: the bounding sphere of the finite geometry is where
-                // photons from the sun are useful.
-                *c = scene_center;
-                *r = scene_radius.max(1e-3);
+            match l {
+                Light::Directional { disk: d, .. } => *d = disk,
+                Light::Environment(e) => e.disk = disk,
+                _ => {}
             }
         }
         let any_transmissive = (0..materials.len() as u32).any(|m| materials.classic_of(m).transmits());
@@ -204,7 +226,7 @@ impl SceneBuilder {
             light_picker: LightPicker::new(&self.lights),
             lights: self.lights,
             camera,
-            background: shading.background,
+            environment,
             ambient: shading.ambient,
             // Error-bound offsets already keep rays off their own surface; the seed's bias along
             // the direction is kept as a tiny margin relative to the scene size.
@@ -215,4 +237,20 @@ impl SceneBuilder {
         };
         Ok((scene, info))
     }
+}
+
+/// Where photons from lights at infinity enter: the bounding sphere of the finite geometry,
+/// extended over the planes when there are any (`PhotonDisk`). A scene of planes alone centres
+/// it under the camera, as wide as the camera is high.
+fn photon_disk(bounds: Aabb, planes: &[(Plane, u32)], eye: Vec3) -> PhotonDisk {
+    let (center, radius) = if !bounds.is_empty() && bounds.diagonal().is_finite() {
+        bounds.bounding_sphere()
+    } else if let Some((p, _)) = planes.first() {
+        let h = (eye - p.point).dot(p.normal);
+        (eye - p.normal * h, h.abs())
+    } else {
+        (eye, 1.0)
+    };
+    let radius = if radius > 0.0 && radius.is_finite() { radius } else { 1.0 };
+    PhotonDisk::new(center, radius, !planes.is_empty())
 }

@@ -173,7 +173,6 @@ pub struct Sampling {
 /// Settings that change how surfaces are shaded and rays spawned, not what is in the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShadingDesc {
-    pub background: Color,
     /// Ambient light I_a of seed eq. 1.
     pub ambient: Color,
     /// Extra offset of spawned rays along their direction; `None`: 1e-6 x the scene's diagonal.
@@ -183,7 +182,7 @@ pub struct ShadingDesc {
 
 impl Default for ShadingDesc {
     fn default() -> Self {
-        ShadingDesc { background: Color::ZERO, ambient: Color::ZERO, ray_bias: None, transparent_shadows: true }
+        ShadingDesc { ambient: Color::ZERO, ray_bias: None, transparent_shadows: true }
     }
 }
 

@@ -6,6 +6,7 @@
 pub mod builder;
 mod de;
 pub mod desc;
+pub mod environment;
 pub mod error;
 pub mod footprint;
 pub mod mitsuba;
@@ -57,7 +58,8 @@ pub struct Scene {
     /// Chooses a light in proportion to power (next-event estimation, photon emission).
     pub light_picker: LightPicker,
     pub camera: Camera,
-    pub background: Color,
+    /// Index in `lights` of the environment (map or constant) rays that leave the scene see.
+    pub environment: Option<u32>,
     /// Ambient light I_a of seed eq. 1.
     pub ambient: Color,
     /// Extra offset of spawned rays along their direction (seed report's bias), in scene units.
@@ -148,6 +150,50 @@ impl Scene {
         match self.lights.get(h.light as usize) {
             Some(light) => light.emitted(h.ng, w),
             None => Color::ZERO,
+        }
+    }
+
+    /// Radiance arriving along a ray that leaves the scene in direction `d` (from the
+    /// environment light; black without one).
+    #[inline]
+    pub fn environment(&self, d: crate::math::Vec3) -> Color {
+        match self.environment {
+            Some(i) => self.lights[i as usize].environment_radiance(d),
+            None => Color::ZERO,
+        }
+    }
+
+    /// Bytes the environment map holds (texels and sampling distribution); 0 without one.
+    pub fn environment_bytes(&self) -> u64 {
+        self.environment
+            .and_then(|i| match &self.lights[i as usize] {
+                Light::Environment(e) => e.map.map(|m| m.memory_bytes() as u64),
+                _ => None,
+            })
+            .unwrap_or(0)
+    }
+
+    /// The ray of a photon from a light at infinity, moved back along itself so that it starts
+    /// before every infinite plane it crosses: light from infinity meets a plane before
+    /// anything behind it, whatever the bounds of the finite geometry (`PhotonDisk`) say.
+    pub fn photon_entry(&self, ray: Ray) -> Ray {
+        let mut t0 = 0.0f32;
+        for (plane, _) in &self.planes {
+            let denom = plane.normal.dot(ray.d);
+            if denom != 0.0 {
+                let t = (plane.point - ray.o).dot(plane.normal) / denom;
+                if t.is_finite() && t < t0 {
+                    t0 = t;
+                }
+            }
+        }
+        if t0 < 0.0 {
+            // A margin well above the rounding of the origin: starting further back is always
+            // safe, as nothing lies behind the first crossing.
+            let margin = 1e-3 * -t0 + 1e-4 * (1.0 + ray.o.abs().max_element());
+            Ray::new(ray.o + ray.d * (t0 - margin), ray.d)
+        } else {
+            ray
         }
     }
 

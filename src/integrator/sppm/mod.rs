@@ -321,7 +321,9 @@ impl Sppm {
         for depth in 0.. {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                ld += beta * scene.background;
+                if !lit_by_light_sample {
+                    ld += beta * scene.environment(ray.d);
+                }
                 break;
             };
             dist += hit.t;

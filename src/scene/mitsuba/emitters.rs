@@ -1,13 +1,15 @@
-//! Mitsuba emitters outside shapes: point, spot (with its texture), projector, directional and
-//! constant.
+//! Mitsuba emitters outside shapes: point, spot (with its texture), projector, directional, and
+//! the environment lights constant and envmap.
 
 use super::Build;
 use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
-use crate::light::{Light, NO_TEXTURE, Projector, Spot};
+use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Projector, Spot};
 use crate::math::{Color, Frame, Vec3};
 use crate::scene::SceneError;
+use crate::scene::environment::environment_map;
+use crate::texture::image::load_image;
 
 impl<'a> Cx<'a> {
     /// Reads a top-level emitter.
@@ -116,15 +118,32 @@ impl<'a> Cx<'a> {
                 if direction == Vec3::ZERO {
                     return Err(self.err(el, "directional light needs a non-zero direction"));
                 }
-                b.geometry.add_light(Light::Directional {
-                    direction,
-                    irradiance,
-                    scene_center: Vec3::ZERO,
-                    scene_radius: 0.0,
-                });
+                b.geometry.add_light(Light::Directional { direction, irradiance, disk: PhotonDisk::default() });
             }
             "constant" => {
-                b.background += self.color(&p, "radiance")?.unwrap_or(Color::ONE);
+                let radiance = self.color(&p, "radiance")?.unwrap_or(Color::ONE);
+                b.geometry.set_environment(Environment::constant(radiance)).map_err(|e| self.err(el, e))?;
+            }
+            "envmap" => {
+                if self.prop(&p, "bitmap").is_some() {
+                    return Err(self.err(el, "an envmap needs `filename`; a `bitmap` object is not supported"));
+                }
+                let (file, fel) = self
+                    .string(&p, "filename")?
+                    .ok_or_else(|| self.err(el, "an envmap needs <string name=\"filename\" value=\"...\"/>"))?;
+                let scale = self.float(&p, "scale")?.unwrap_or(1.0);
+                if scale < 0.0 {
+                    return Err(self.err(el, format!("envmap `scale` must not be negative (got {scale})")));
+                }
+                if self.boolean(&p, "mis_compensation")?.unwrap_or(false) {
+                    self.warn(el, "`mis_compensation` is not supported: the envmap is sampled by luminance alone")?;
+                }
+                let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
+                let path = self.src(fel).base.join(&file);
+                let image = load_image(&path, false).map_err(|e| self.err(fel, e.to_string()))?;
+                b.geometry.note_file(&path);
+                let env = environment_map(&image, scale, &x).map_err(|e| self.err(el, e))?;
+                b.geometry.set_environment(env).map_err(|e| self.err(el, e))?;
             }
             "area" => return Err(self.err(el, "an area emitter must be nested inside a <shape>")),
             other => {

@@ -26,7 +26,6 @@ mod xml;
 use super::SceneError;
 use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, IntegratorKind, LoadOptions, SceneDescription, ShadingDesc};
-use crate::math::Color;
 use props::Cx;
 use std::collections::HashMap;
 use std::path::Path;
@@ -76,7 +75,6 @@ struct Build {
     /// Images read so far, by file and decoding (`raw`), shared between textures.
     images: HashMap<(std::path::PathBuf, bool), std::sync::Arc<crate::texture::image::TexImage>>,
     default_material: Option<u32>,
-    background: Color,
 }
 
 impl<'a> Cx<'a> {
@@ -89,7 +87,6 @@ impl<'a> Cx<'a> {
             texture_cache: HashMap::new(),
             images: HashMap::new(),
             default_material: None,
-            background: Color::ZERO,
         };
         let mut sensor: Option<&'a El> = None;
         let mut integrator: Option<&'a El> = None;
@@ -150,7 +147,7 @@ impl<'a> Cx<'a> {
             height: sensor.height,
             sampler: sensor.sampler,
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
-            shading: ShadingDesc { background: b.background, ..ShadingDesc::default() },
+            shading: ShadingDesc::default(),
             warnings: Vec::new(),
             files: Vec::new(),
         })

@@ -45,6 +45,13 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
     if let Some(v) = sections.remove("lights") {
         cx.lights(v, &mut geometry)?;
     }
+    // The old `background` colour is a constant environment light.
+    if let Some(b) = render.background.as_ref().filter(|b| b.get_ref().0 != Color::ZERO) {
+        let env = crate::light::Environment::constant(b.get_ref().0);
+        geometry.set_environment(env).map_err(|_| {
+            cx.at(b.span(), "`background` is a constant environment light and [[lights]] has one too: keep one of them")
+        })?;
+    }
     if let Some(v) = sections.remove("objects") {
         cx.objects(v, &materials, &mut geometry)?;
     }
@@ -69,7 +76,6 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             photon: render.photon,
         },
         shading: ShadingDesc {
-            background: render.background.map_or(Color::ZERO, |c| c.0),
             ambient: render.ambient.map_or(Color::ZERO, |c| c.0),
             ray_bias: render.ray_bias.map(|b| b.0),
             transparent_shadows: render.transparent_shadows.unwrap_or(true),

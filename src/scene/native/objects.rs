@@ -5,11 +5,13 @@ use super::Cx;
 use super::materials::MaterialNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
 use crate::geometry::Transform;
-use crate::light::{Emitter, Light, NO_TEXTURE, Spot};
+use crate::light::{Emitter, Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
+use crate::scene::environment::environment_map;
 use crate::shape::{Plane, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
+use crate::texture::image::load_image;
 use std::ops::Range;
 use toml::Spanned;
 use toml::de::DeValue;
@@ -101,9 +103,23 @@ impl<'a> Cx<'a> {
             "directional" => geometry.add_light(Light::Directional {
                 direction: d.direction.map_or(-Vec3::Y, |p| p.0),
                 irradiance: power,
-                scene_center: Vec3::ZERO,
-                scene_radius: 0.0,
+                disk: PhotonDisk::default(),
             }),
+            "constant" => {
+                geometry.set_environment(Environment::constant(power)).map_err(|e| self.at(span, e))?;
+            }
+            "envmap" => {
+                let Some(file) = &d.file else {
+                    return Err(self.at(span, "an envmap light needs `file`, the lat-long image (EXR, HDR, PNG...)"));
+                };
+                let path = self.base.join(file.get_ref());
+                let image = load_image(&path, false).map_err(|e| self.at(file.span(), e.to_string()))?;
+                geometry.note_file(&path);
+                let transform = self.transform(&d.transform, span.clone())?;
+                let env = environment_map(&image, d.scale.map_or(1.0, |s| s.0), &transform)
+                    .map_err(|e| self.at(span.clone(), e))?;
+                geometry.set_environment(env).map_err(|e| self.at(span, e))?;
+            }
             _ => {
                 let transform = self.transform(&d.transform, span.clone())?;
                 let emitter = match d.shape.as_deref().unwrap_or("quad") {

@@ -37,6 +37,8 @@ pub const LIGHT_KINDS: &[(&str, &[&str])] = &[
     ("spot", &["position", "direction", "look_at", "angle", "falloff", "color", "intensity"]),
     ("directional", &["direction", "color", "intensity"]),
     ("area", &["shape", "corner", "edge1", "edge2", "center", "radius", "transform", "color", "intensity"]),
+    ("envmap", &["file", "scale", "transform"]),
+    ("constant", &["color", "intensity"]),
 ];
 
 /// The keys only a quad or only a sphere area light takes.
@@ -64,7 +66,7 @@ pub struct RenderDesc {
     pub integrator: Option<IntegratorKind>,
     pub sampler: Option<SamplerKind>,
     pub antialias: Option<bool>,
-    pub background: Option<Rgb>,
+    pub background: Option<Spanned<Rgb>>,
     pub ambient: Option<Rgb>,
     pub ray_bias: Option<NonNegative>,
     pub transparent_shadows: Option<bool>,
@@ -151,6 +153,9 @@ pub struct LightDesc {
     pub center: Option<Point>,
     pub radius: Option<Positive>,
     pub transform: Option<Vec<TransformOp>>,
+    /// Environment map image.
+    pub file: Option<Spanned<PathBuf>>,
+    pub scale: Option<NonNegative>,
 }
 
 #[derive(Deserialize)]
