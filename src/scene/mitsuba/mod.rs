@@ -148,6 +148,7 @@ impl<'a> Cx<'a> {
             camera: sensor.camera,
             width: sensor.width,
             height: sensor.height,
+            film: sensor.film,
             sampler: sensor.sampler,
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
             shading: ShadingDesc { background: b.background, ..ShadingDesc::default() },
