@@ -135,7 +135,7 @@ impl Filter {
             Filter::Mitchell { b, c } if !(b.is_finite() && c.is_finite()) => {
                 return Err(format!("mitchell filter B and C must be finite numbers, found {b} and {c}"));
             }
-            Filter::Lanczos { lobes } if lobes == 0 => {
+            Filter::Lanczos { lobes: 0 } => {
                 return Err("lanczos filter lobes must be at least 1".into());
             }
             _ => {}
@@ -218,7 +218,7 @@ impl FilterTable {
     /// The bin holding offset `x`, if inside the support.
     fn bin(&self, x: f64) -> Option<usize> {
         let t = (x + self.radius) / self.step;
-        (t >= 0.0 && t < BINS as f64).then(|| t as usize)
+        (t >= 0.0 && t < BINS as f64).then_some(t as usize)
     }
 
     /// ∫f (with `abs`: ∫|f|) from -r to `x`, for x in [-r, r].
