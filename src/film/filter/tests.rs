@@ -207,3 +207,23 @@ fn bad_parameters_are_refused() {
     // B = 6 makes the centre negative: a pixel at an edge cannot be normalised.
     assert!(Filter::Mitchell { b: 6.0, c: 0.0 }.check().unwrap_err().contains("normalised"));
 }
+
+#[test]
+fn the_branch_free_search_finds_the_bin_partition_point_finds() {
+    let mut rng = Rng32::new(3);
+    for f in ALL.into_iter().skip(1) {
+        let t = FilterTable::new(f);
+        let r = f.radius();
+        for _ in 0..20_000 {
+            let u = rng.uniform();
+            let (lo, hi) = if rng.uniform() < 0.5 { (-r, r) } else { (-r * rng.uniform() as f64 - 0.5, r) };
+            let (x, _) = t.sample_1d(u, lo, hi);
+            // The reference: the same target, its bin by binary search.
+            let a = t.cumulative(lo.max(-r), true);
+            let target = if lo <= -r { u as f64 * t.cdf_abs[BINS] } else { a + u as f64 * (t.cdf_abs[BINS] - a) };
+            let j = t.cdf_abs.partition_point(|c| *c <= target).clamp(1, BINS) - 1;
+            let left = -r + j as f64 * t.step;
+            assert!(x >= left - 1e-12 && x <= left + t.step + 1e-12, "{f:?}: u {u} gave {x}, bin {j}");
+        }
+    }
+}
