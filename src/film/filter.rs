@@ -285,7 +285,8 @@ impl FilterTable {
         }
         let left = -self.radius + j as f64 * self.step;
         let x = left + (target - self.cdf_abs[j]) * self.inv_value[j];
-        let x = x.clamp(lo.max(left), hi.min(left + self.step));
+        // Rounding may put x a hair outside its bin or the window; the window wins.
+        let x = x.clamp(left, left + self.step).max(lo).min(hi);
         (x, if self.value[j] < 0.0 { -1.0 } else { 1.0 })
     }
 
