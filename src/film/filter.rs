@@ -13,8 +13,8 @@
 //! Mitsuba's CPU (scalar) variants evaluate a filter through a table of 32 values,
 //! f(i r / 31) for i = 0..31, looked up at ⌊|x| 31 / r⌋ (`MI_FILTER_RESOLUTION`); we use the
 //! same step function, so our images agree with theirs in expectation, and a step function is
-//! sampled exactly by inverting its piecewise-linear CDF (no allocation, a binary search over 63
-//! entries). The smooth functions differ from the steps by at most about 1% of an edge's
+//! sampled exactly by inverting its piecewise-linear CDF (no allocation; a branch-free search of 64
+//! edges). The smooth functions differ from the steps by at most about 1% of an edge's
 //! contrast after filtering (Gaussian, radius 2).
 //!
 //! Mitsuba takes samples only inside the rendered window (the crop, unless `sample_border`), so a
