@@ -84,6 +84,30 @@ fn merged_shards_are_the_single_render_bit_for_bit() {
     }
 }
 
+/// Filters with negative lobes weight samples by -1 or +1 (times a constant) and a crop renders a
+/// window of the film: the sums stay exact, so shards still merge into the one-machine image.
+#[test]
+fn merged_shards_of_a_filtered_crop_are_the_single_render_bit_for_bit() {
+    let dir = common::scratch("farm-filter");
+    let scene = dir.join("filtered.toml");
+    let text = std::fs::read_to_string(cornell()).unwrap().replacen(
+        "[render]",
+        "[render]\nfilter = { type = \"lanczos\", lobes = 2 }\ncrop = { x = 40, y = 30, width = 300, height = 250 }",
+        1,
+    );
+    std::fs::write(&scene, text).unwrap();
+    let kind = IntegratorKind::Path;
+    let single = dir.join("single.exr");
+    render_file(&options(&scene, kind, 7, single.clone(), None), &NEVER).unwrap();
+    let expected = bits(&single);
+    let img = read_exr(&single).unwrap();
+    assert!(img.width < 24 && img.height < 20, "the crop was not applied: {} x {}", img.width, img.height);
+    let parts = shards(&scene, kind, 7, 3, &dir);
+    let merged = dir.join("merged.exr");
+    merge_files(&parts, &merged, false, true).unwrap();
+    assert!(bits(&merged) == expected, "merged shards of a Lanczos-filtered crop differ");
+}
+
 #[test]
 fn merged_layers_are_the_single_renders_layers() {
     let dir = common::scratch("farm-layers");

@@ -108,6 +108,17 @@ fn check_loaded(loaded: &LoadedScene) -> Result<(), String> {
         }
         let _ = scene.occluded(&ray, f32::INFINITY);
     }
+    // Filtered camera samples at the image's corners (truncated at the window's edges): finite,
+    // non-zero weights.
+    let settings = &loaded.settings;
+    for (x, y) in [(0, 0), (settings.width - 1, settings.height - 1)] {
+        for index in 0..4 {
+            let (_, _, weight) = settings.camera_sample(scene, x, y, index);
+            if !(weight.is_finite() && weight != 0.0) {
+                known(format!("camera sample {index} of pixel ({x}, {y}) has weight {weight}"))?;
+            }
+        }
+    }
     Ok(())
 }
 
@@ -348,8 +359,45 @@ fn value_for(key: &'static str, noisy: bool) -> BoxedStrategy<String> {
         "shape" => (str_of(vec!["\"quad\"", "\"sphere\""]), str_of(vec!["\"disk\"", "1", "\"\""])),
         "integrator" => (str_of(vec!["\"whitted\"", "\"path\"", "\"photon\""]), str_of(vec!["\"bdpt\"", "0"])),
         "sampler" => (str_of(vec!["\"jittered\"", "\"sobol\""]), str_of(vec!["\"halton\"", "0"])),
-        "antialias" | "transparent_shadows" => (str_of(vec!["true", "false"]), str_of(vec!["1", "\"yes\""])),
-        "radius" | "fov" | "ior" | "tube" | "view_distance" | "focal_distance" | "max_radius" | "caustic_radius" => {
+        "antialias" | "transparent_shadows" | "sample_border" => {
+            (str_of(vec!["true", "false"]), str_of(vec!["1", "\"yes\""]))
+        }
+        "filter" => (
+            str_of(vec![
+                "\"box\"",
+                "\"gaussian\"",
+                "\"catmullrom\"",
+                "{ type = \"mitchell\", B = 0.5, C = 0.25 }",
+                "{ type = \"lanczos\", lobes = 5 }",
+                "{ type = \"tent\", radius = 0.01 }",
+                "{ type = \"gaussian\", stddev = 16 }",
+            ]),
+            str_of(vec![
+                "\"sinc\"",
+                "{ type = \"mitchell\", B = 9 }",
+                "{ type = \"tent\", radius = 1e30 }",
+                "{ type = \"gaussian\", stddev = 1e-40 }",
+                "{ type = \"lanczos\", lobes = 4294967295 }",
+                "{ lobes = 3 }",
+                "1",
+            ]),
+        ),
+        "crop" => (
+            str_of(vec!["{ width = 1, height = 1 }", "{ x = 1, y = 1, width = 2, height = 3 }"]),
+            str_of(vec![
+                "{ x = -1, width = 1, height = 1 }",
+                "{ width = 0, height = 1 }",
+                "{ x = 4294967295, y = 4294967295, width = 4294967295, height = 4294967295 }",
+                "[0, 0, 1, 1]",
+            ]),
+        ),
+        "projection" => (str_of(vec!["\"perspective\"", "\"orthographic\""]), str_of(vec!["\"fisheye\"", "2"])),
+        "principal_point_offset" => (
+            str_of(vec!["[0.1, -0.2]", "[0, 0]", "[-1e30, 1e30]", "[3e38, 0]"]),
+            str_of(vec!["[0.1]", "[\"a\", 1]", "0.5"]),
+        ),
+        "radius" | "fov" | "ior" | "tube" | "view_distance" | "focal_distance" | "max_radius" | "caustic_radius"
+        | "view_width" | "view_height" => {
             (valid_number(if key == "fov" { Range::Degrees } else { Range::Positive }), number())
         }
         "angle" | "falloff" => (valid_number(Range::Degrees), number()),
@@ -390,11 +438,26 @@ const RENDER_KEYS: &[&str] = &[
     "ray_bias",
     "transparent_shadows",
     "light_samples",
+    "filter",
+    "crop",
+    "sample_border",
 ];
 const PHOTON_KEYS: &[&str] =
     &["photons", "caustic_photons", "gather", "gather_k", "caustic_k", "max_radius", "caustic_radius"];
-const CAMERA_KEYS: &[&str] =
-    &["eye", "look_at", "up", "fov", "view_distance", "lens_radius", "focal_distance", "focus_on"];
+const CAMERA_KEYS: &[&str] = &[
+    "eye",
+    "look_at",
+    "up",
+    "fov",
+    "view_distance",
+    "lens_radius",
+    "focal_distance",
+    "focus_on",
+    "projection",
+    "view_width",
+    "view_height",
+    "principal_point_offset",
+];
 const MATERIAL_KEYS: &[&str] = &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"];
 const LIGHT_KEYS: &[&str] = &[
     "position",
@@ -496,11 +559,11 @@ fn scene_doc(noisy: bool) -> BoxedStrategy<String> {
     let noise = if noisy { 1 } else { 0 };
     let camera = prop_oneof![
         // Mostly a usable camera, so the rest of the document gets loaded.
-        20 => entries(&["fov", "up", "lens_radius", "focal_distance"], noisy).prop_map(|mut e| {
+        20 => entries(&["fov", "up", "lens_radius", "focal_distance", "principal_point_offset"], noisy).prop_map(|mut e| {
             e.insert(0, "eye = [0, 1, 5]\nlook_at = [0, 0, 0]".to_string());
             Some(e)
         }),
-        3 => (valid_vec3(Range::Any), valid_vec3(Range::Any), entries(&["fov", "view_distance", "up", "lens_radius", "focus_on"], noisy))
+        3 => (valid_vec3(Range::Any), valid_vec3(Range::Any), entries(&["fov", "view_distance", "up", "lens_radius", "focus_on", "projection", "view_width"], noisy))
             .prop_map(|(eye, at, mut e)| {
                 e.insert(0, format!("eye = {eye}\nlook_at = {at}"));
                 Some(e)

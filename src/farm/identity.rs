@@ -148,6 +148,9 @@ mod tests {
         RenderSettings::new(&Sampling {
             width: 8,
             height: 6,
+            crop: crate::film::Crop::full(8, 6),
+            filter: crate::film::filter::Filter::Box,
+            sample_border: false,
             spp: 16,
             strata: 4,
             seed: 3,

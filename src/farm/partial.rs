@@ -358,6 +358,9 @@ mod tests {
         let mut settings = crate::render::RenderSettings::new(&Sampling {
             width: 19,
             height: 17,
+            crop: crate::film::Crop::full(19, 17),
+            filter: crate::film::filter::Filter::Box,
+            sample_border: false,
             spp: 10,
             strata: 1,
             seed: 1,

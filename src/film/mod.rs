@@ -5,6 +5,7 @@
 //! machines a render farm spreads the samples over. The film is stored tile by tile so that each
 //! tile is owned by one worker while it renders.
 
+pub mod filter;
 pub mod fixed;
 pub mod output;
 
@@ -29,6 +30,45 @@ pub const TILE_SIZE: u32 = 16;
 /// Bytes the film keeps per pixel, without and with the four layers.
 pub const BYTES_PER_PIXEL: u64 = 48 + 4;
 pub const LAYER_BYTES_PER_PIXEL: u64 = 4 * 48;
+
+/// A window of the film, in pixels: what a cropped render computes (Mitsuba's `crop_offset_x/y`,
+/// `crop_width/height`). The image is the window; the camera still spans the whole film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Crop {
+    /// The whole of a `width` x `height` film.
+    pub fn full(width: u32, height: u32) -> Self {
+        Crop { x: 0, y: 0, width, height }
+    }
+
+    /// Whether the window lies inside a `width` x `height` film and is not empty.
+    pub fn fits(&self, width: u32, height: u32) -> bool {
+        self.width > 0
+            && self.height > 0
+            && self.x as u64 + self.width as u64 <= width as u64
+            && self.y as u64 + self.height as u64 <= height as u64
+    }
+
+    /// The same window of the film resized from `from` to `to` (width, height): the edges scale
+    /// and round outwards, so the window still covers what it covered.
+    pub fn rescaled(&self, from: (u32, u32), to: (u32, u32)) -> Self {
+        let axis = |x: u32, w: u32, from: u32, to: u32| {
+            let s = to as f64 / from as f64;
+            let x0 = ((x as f64 * s).floor() as u32).min(to.saturating_sub(1));
+            let x1 = (((x + w) as f64 * s).ceil() as u32).clamp(x0 + 1, to);
+            (x0, x1 - x0)
+        };
+        let (x, width) = axis(self.x, self.width, from.0, to.0);
+        let (y, height) = axis(self.y, self.height, from.1, to.1);
+        Crop { x, y, width, height }
+    }
+}
 
 /// A rectangle of pixels with its accumulated sums.
 #[derive(Clone, Debug, PartialEq)]

@@ -10,6 +10,7 @@ mod tiles;
 pub use driver::{Driver, PassOutcome};
 pub use tiles::{render_rays, render_rays_from};
 
+use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
 use crate::sampling::{Sampler, SamplerKind};
@@ -22,8 +23,17 @@ use std::time::Duration;
 /// and how long and how visibly to run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// The image: the film's crop window (the whole film without a crop).
     pub width: u32,
     pub height: u32,
+    /// The image's top-left pixel in the film: pixel (x, y) of the image is pixel
+    /// (x + origin.0, y + origin.1) of the film, and is sampled as that pixel, so a crop gives
+    /// the whole render's pixels.
+    pub origin: (u32, u32),
+    /// The pixel filter, ready to sample.
+    pub filter: FilterTable,
+    /// Where samples may fall, in film pixels: the crop, or unbounded with `sample_border`.
+    pub window: Window,
     /// Samples per pixel of the whole render (the cap when a time budget is also given).
     pub spp: u32,
     /// The first sample index this run takes: it renders indices `first_sample..spp` (a shard of
@@ -48,9 +58,18 @@ impl RenderSettings {
     /// Settings for a scene's resolved sampling, with no time limit, checkpoints, progress or
     /// layers.
     pub fn new(s: &Sampling) -> Self {
+        let c = s.crop;
+        let window = if s.sample_border {
+            Window::UNBOUNDED
+        } else {
+            Window { x0: c.x as f64, y0: c.y as f64, x1: (c.x + c.width) as f64, y1: (c.y + c.height) as f64 }
+        };
         RenderSettings {
-            width: s.width,
-            height: s.height,
+            width: c.width,
+            height: c.height,
+            origin: (c.x, c.y),
+            filter: FilterTable::new(s.filter),
+            window,
             spp: s.spp,
             first_sample: 0,
             strata: s.strata,
@@ -68,15 +87,23 @@ impl RenderSettings {
         self.width as u64 * self.height as u64
     }
 
-    /// The sampler of sample `index` of pixel (x, y), and the camera ray it makes.
+    /// The sampler of sample `index` of image pixel (x, y), the camera ray it makes and the
+    /// sample's filter weight (1, or ±(∫|f| / ∫f) for a filter with negative lobes): the
+    /// sample's value times the weight goes to this pixel. The film position is drawn from the
+    /// filter around the pixel's centre (filter importance sampling, `film::filter`).
     #[inline]
-    pub fn camera_sample(&self, scene: &Scene, x: u32, y: u32, index: u32) -> (Sampler, Ray) {
+    pub fn camera_sample(&self, scene: &Scene, x: u32, y: u32, index: u32) -> (Sampler, Ray, f32) {
+        let (x, y) = (x + self.origin.0, y + self.origin.1);
         let mut sampler = Sampler::new(self.sampler, self.seed, x, y, index, self.strata);
         let jitter = sampler.pixel();
-        let offset = if self.antialias { jitter } else { crate::math::Vec2::splat(0.5) };
+        let (offset, weight) = if self.antialias {
+            self.filter.sample(jitter, x, y, &self.window)
+        } else {
+            (crate::math::Vec2::splat(0.5), 1.0)
+        };
         let lens = sampler.lens();
         let ray = scene.camera.generate_ray(crate::math::Vec2::new(x as f32, y as f32) + offset, lens);
-        (sampler, ray)
+        (sampler, ray, weight)
     }
 }
 

@@ -85,8 +85,11 @@ fn render_tile<I: RayIntegrator>(
             let k = (j * tile.width + i) as usize;
             let next = settings.first_sample.saturating_add(tile.count[k]);
             for index in next..range.end {
-                let (mut sampler, ray) = settings.camera_sample(scene, x, y, index);
-                let layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
+                let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, index);
+                let mut layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
+                if weight != 1.0 {
+                    layers = layers.map(|c| c * weight);
+                }
                 if !tile.add(k, &layers) {
                     bad += 1;
                 }

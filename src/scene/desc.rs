@@ -10,6 +10,8 @@
 use super::builder::SceneBuilder;
 use super::{Scene, SceneError};
 use crate::camera::CameraDesc;
+use crate::film::Crop;
+use crate::film::filter::Filter;
 use crate::math::Color;
 use crate::sampling::SamplerKind;
 use std::time::Duration;
@@ -157,11 +159,29 @@ impl Default for SamplerDesc {
     }
 }
 
+/// The film as described: which window of it is rendered and how samples make pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct FilmDesc {
+    /// Render only this window of the film (`None`: all of it).
+    pub crop: Option<Crop>,
+    /// The pixel reconstruction filter (native scenes: box; Mitsuba scenes: Mitsuba's default,
+    /// a Gaussian, unless they name one).
+    pub filter: Filter,
+    /// Also take samples outside the window, up to the filter's radius (Mitsuba's
+    /// `sample_border`), so that the window's edge pixels are filtered as in the whole image.
+    pub sample_border: bool,
+}
+
 /// The image and its sampling, resolved: what the render loop needs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sampling {
+    /// The whole film (the camera's frame).
     pub width: u32,
     pub height: u32,
+    /// The window of the film that is rendered: the image.
+    pub crop: Crop,
+    pub filter: Filter,
+    pub sample_border: bool,
     pub spp: u32,
     /// Strata per axis of the jittered sampler (N of the N x N pattern).
     pub strata: u32,
@@ -216,8 +236,10 @@ pub struct SceneDescription {
     pub name: String,
     pub geometry: SceneBuilder,
     pub camera: CameraDesc,
+    /// The film's size (a crop renders a window of it).
     pub width: u32,
     pub height: u32,
+    pub film: FilmDesc,
     pub sampler: SamplerDesc,
     pub integrator: IntegratorDesc,
     pub shading: ShadingDesc,
@@ -266,11 +288,22 @@ impl SceneDescription {
 
     /// Applies command-line overrides: the one place where they meet the scene's values.
     pub fn apply(&mut self, o: &Overrides) {
+        let before = (self.width, self.height);
         if let Some(w) = o.width {
             self.width = w;
         }
         if let Some(h) = o.height {
             self.height = h;
+        }
+        // A new image size keeps the crop on the same part of the view.
+        let after = (self.width, self.height);
+        if let Some(c) = &mut self.film.crop
+            && after != before
+            && c.fits(before.0, before.1)
+            && after.0 > 0
+            && after.1 > 0
+        {
+            *c = c.rescaled(before, after);
         }
         // A sample count on the command line replaces both of the file's (`--spp-axis 2` means 4
         // samples even where the file says `spp = 16`).
@@ -324,7 +357,26 @@ impl SceneDescription {
                 "samples per pixel must be at least 1 (got spp {spp}, samples per axis {strata}; at most {MAX_STRATA} per axis)"
             )));
         }
-        Ok(Sampling { width, height, spp, strata, seed: s.seed, sampler: s.kind, antialias: s.antialias })
+        let crop = self.film.crop.unwrap_or(Crop::full(width, height));
+        if !crop.fits(width, height) {
+            return Err(self.error(format!(
+                "the crop window ({} x {} at {}, {}) does not fit in the {width} x {height} film",
+                crop.width, crop.height, crop.x, crop.y
+            )));
+        }
+        self.film.filter.check().map_err(|m| self.error(m))?;
+        Ok(Sampling {
+            width,
+            height,
+            crop,
+            filter: self.film.filter,
+            sample_border: self.film.sample_border,
+            spp,
+            strata,
+            seed: s.seed,
+            sampler: s.kind,
+            antialias: s.antialias,
+        })
     }
 
     /// Builds the runtime scene (BVH included) with the final image size.

@@ -311,8 +311,9 @@ impl Sppm {
         stats: &mut RayStats,
     ) -> CameraSample {
         let config = &self.config;
-        let (mut sampler, mut ray) = settings.camera_sample(scene, x, y, it);
-        let mut beta = Color::ONE;
+        let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
+        // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
+        let mut beta = Color::splat(weight);
         let mut dist = 0.0;
         let mut ld = Color::ZERO;
         let mut specular = false;
@@ -472,8 +473,7 @@ impl State {
 /// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
 /// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.
 fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
-    let cam = &scene.camera;
-    let footprint = dist * cam.pixel_size / cam.d;
+    let footprint = scene.camera.footprint(dist);
     (2.0 * footprint).clamp(5e-4 * diag, 0.02 * diag)
 }
 

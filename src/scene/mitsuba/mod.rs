@@ -145,6 +145,7 @@ impl<'a> Cx<'a> {
             camera: sensor.camera,
             width: sensor.width,
             height: sensor.height,
+            film: sensor.film,
             sampler: sensor.sampler,
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
             shading: ShadingDesc::default(),

@@ -1,19 +1,23 @@
-//! The Mitsuba sensor with its film and sampler: camera, image size and sample count.
+//! The Mitsuba sensor (perspective, thinlens, orthographic) with its film (size, crop window,
+//! reconstruction filter) and sampler: camera, image and sample count.
 
-use super::props::Cx;
+use super::props::{Cx, Props};
 use super::xml::El;
 use crate::camera::{CameraDesc, FieldOfView, FovAxis, Placement};
+use crate::film::Crop;
+use crate::film::filter::Filter;
 use crate::geometry::Transform;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneError;
-use crate::scene::desc::{MAX_SIDE, SamplerDesc};
+use crate::scene::desc::{FilmDesc, MAX_SIDE, SamplerDesc};
 
 /// What the sensor, its film and its sampler describe.
 pub(super) struct SensorOut {
     pub camera: CameraDesc,
     pub width: u32,
     pub height: u32,
+    pub film: FilmDesc,
     pub sampler: SamplerDesc,
 }
 
@@ -27,13 +31,15 @@ impl<'a> Cx<'a> {
         let thin = match p.kind.as_str() {
             "perspective" => false,
             "thinlens" => true,
+            "orthographic" => return self.orthographic(el, &p),
             other => {
-                return Err(
-                    self.err(el, format!("sensor `{other}` is not supported; expected perspective or thinlens"))
-                );
+                return Err(self.err(
+                    el,
+                    format!("sensor `{other}` is not supported; expected perspective, thinlens or orthographic"),
+                ));
             }
         };
-        let (width, height) = self.film(&p)?;
+        let (width, height, film) = self.film(&p)?;
         let sampler = self.sampler(&p)?;
 
         let fov = self.float(&p, "fov")?;
@@ -113,17 +119,61 @@ impl<'a> Cx<'a> {
                 Placement::Frame { origin, x, y, z }
             }
         };
+        // Mitsuba reads the offsets on perspective sensors only; a thin lens shifts the same way.
+        let principal_point = Vec2::new(
+            self.float(&p, "principal_point_offset_x")?.unwrap_or(0.0),
+            self.float(&p, "principal_point_offset_y")?.unwrap_or(0.0),
+        );
         self.finish(&p)?;
-        let camera =
-            CameraDesc { placement, fov: FieldOfView::Angle { degrees, axis }, lens_radius, focal_distance: focus };
-        Ok(SensorOut { camera, width, height, sampler })
+        let camera = CameraDesc {
+            placement,
+            fov: FieldOfView::Angle { degrees, axis },
+            lens_radius,
+            focal_distance: focus,
+            principal_point,
+        };
+        Ok(SensorOut { camera, width, height, film, sampler })
     }
 
-    /// The film's size (Mitsuba's default 768 x 576); its other settings do not change values.
-    fn film(&mut self, p: &super::props::Props<'a>) -> Result<(u32, u32), SceneError> {
+    /// Mitsuba's `orthographic` sensor: its view is [-1, 1] across the film's width in the
+    /// `to_world` frame, whose scale (allowed here, unlike for the other sensors) sets the
+    /// extent. Rays start on the camera's plane (Mitsuba: on the near-clip plane).
+    fn orthographic(&mut self, el: &'a El, p: &Props<'a>) -> Result<SensorOut, SceneError> {
+        let (width, height, film) = self.film(p)?;
+        let sampler = self.sampler(p)?;
+        for name in ["near_clip", "far_clip", "shutter_open", "shutter_close"] {
+            let _ = self.float(p, name)?;
+        }
+        let xform = self.transform(p, "to_world")?;
+        let placement = match xform.as_ref().and_then(|x| x.lookat) {
+            Some((eye, target, up)) => Placement::LookAt { eye, target, up },
+            None => {
+                let t = xform.as_ref().map_or(Transform::IDENTITY, |x| x.t);
+                let (x, y, z) = (t.vector(Vec3::X), t.vector(Vec3::Y), t.vector(Vec3::Z));
+                if !(z.length() > 0.0 && x.cross(y).length() > 0.0) {
+                    return Err(self.err(el, "the orthographic sensor's to_world flattens the view"));
+                }
+                Placement::Frame { origin: t.point(Vec3::ZERO), x, y, z }
+            }
+        };
+        self.finish(p)?;
+        let camera = CameraDesc {
+            placement,
+            fov: FieldOfView::Orthographic { size: 2.0, axis: FovAxis::X },
+            lens_radius: 0.0,
+            focal_distance: 1.0,
+            principal_point: Vec2::ZERO,
+        };
+        Ok(SensorOut { camera, width, height, film, sampler })
+    }
+
+    /// The film's size (Mitsuba's default 768 x 576), crop window and reconstruction filter
+    /// (Mitsuba's default: Gaussian); its output settings do not change values.
+    fn film(&mut self, p: &Props<'a>) -> Result<(u32, u32, FilmDesc), SceneError> {
         let (mut width, mut height) = (768u32, 576u32);
+        let mut film = FilmDesc { filter: Filter::MITSUBA_DEFAULT, ..FilmDesc::default() };
         let films = self.object(p, None, "film");
-        let Some(&(fel, _)) = films.first() else { return Ok((width, height)) };
+        let Some(&(fel, _)) = films.first() else { return Ok((width, height, film)) };
         let fp = self.props(fel)?;
         if fp.kind != "hdrfilm" && fp.kind != "specfilm" {
             self.warn(fel, format!("film `{}` is treated as hdrfilm", fp.kind))?;
@@ -136,35 +186,82 @@ impl<'a> Cx<'a> {
                 *v = x as u32;
             }
         }
-        // Output-format settings do not change the rendered values.
-        for name in [
-            "file_format",
-            "pixel_format",
-            "component_format",
-            "banner",
-            "high_quality_edges",
-            "sample_border",
-            "compensate",
-        ] {
-            let _ = self.prop(&fp, name);
-        }
-        for (rel, at) in self.object(&fp, None, "rfilter") {
-            let kind = self.attr(rel, "type")?.map_or(String::new(), |t| t.0);
-            if kind != "box" {
-                self.warn(
-                    at,
-                    format!(
-                        "reconstruction filter `{kind}` is not supported: pixels average their samples (a box filter)"
-                    ),
-                )?;
+        // The crop window, as Mitsuba reads it: the size defaults to the whole film (so an offset
+        // alone does not fit).
+        let mut crop = [0u32, 0, width, height];
+        let mut cropped = false;
+        for (k, name) in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"].iter().enumerate() {
+            if let Some((v, vel)) = self.integer(&fp, name)? {
+                if !(0..=MAX_SIDE as i64).contains(&v) {
+                    return Err(self.err(vel, format!("film {name} must be 0 to {MAX_SIDE}, found {v}")));
+                }
+                crop[k] = v as u32;
+                cropped = true;
             }
         }
+        if cropped {
+            let c = Crop { x: crop[0], y: crop[1], width: crop[2], height: crop[3] };
+            if !c.fits(width, height) {
+                return Err(self.err(
+                    fel,
+                    format!(
+                        "the crop window ({} x {} at {}, {}) must be non-empty and inside the {width} x {height} film",
+                        c.width, c.height, c.x, c.y
+                    ),
+                ));
+            }
+            film.crop = Some(c);
+        }
+        film.sample_border = self.boolean(&fp, "sample_border")?.unwrap_or(false);
+        // Output-format settings do not change the rendered values.
+        for name in ["file_format", "pixel_format", "component_format", "banner", "high_quality_edges", "compensate"] {
+            let _ = self.prop(&fp, name);
+        }
+        let filters = self.object(&fp, None, "rfilter");
+        if let Some(&(rel, _)) = filters.first() {
+            film.filter = self.rfilter(rel)?;
+        }
         self.finish(&fp)?;
-        Ok((width, height))
+        Ok((width, height, film))
+    }
+
+    /// A reconstruction filter with Mitsuba's parameters and defaults.
+    fn rfilter(&mut self, el: &'a El) -> Result<Filter, SceneError> {
+        let p = self.props(el)?;
+        let number = |cx: &Self, name: &str, default: f32| -> Result<f32, SceneError> {
+            Ok(cx.float(&p, name)?.unwrap_or(default))
+        };
+        let filter = match p.kind.as_str() {
+            "box" => Filter::Box,
+            "tent" => Filter::Tent { radius: number(self, "radius", 1.0)? },
+            "gaussian" => Filter::Gaussian { stddev: number(self, "stddev", 0.5)? },
+            "mitchell" => Filter::Mitchell { b: number(self, "B", 1.0 / 3.0)?, c: number(self, "C", 1.0 / 3.0)? },
+            "catmullrom" => Filter::Mitchell { b: 0.0, c: 0.5 },
+            "lanczos" => match self.integer(&p, "lobes")? {
+                None => Filter::Lanczos { lobes: 3 },
+                Some((n, _)) if (1..=crate::film::filter::MAX_RADIUS as i64).contains(&n) => {
+                    Filter::Lanczos { lobes: n as u32 }
+                }
+                Some((n, nel)) => return Err(self.err(nel, format!("lanczos lobes must be 1 to 64, found {n}"))),
+            },
+            other => {
+                self.warn(
+                    el,
+                    format!("reconstruction filter `{other}` is not supported; Mitsuba's default (gaussian) is used"),
+                )?;
+                for u in &p.used {
+                    u.set(true);
+                }
+                Filter::MITSUBA_DEFAULT
+            }
+        };
+        filter.check().map_err(|m| self.err(el, m))?;
+        self.finish(&p)?;
+        Ok(filter)
     }
 
     /// The sampler's kind, sample count (Mitsuba's default 4) and seed.
-    fn sampler(&mut self, p: &super::props::Props<'a>) -> Result<SamplerDesc, SceneError> {
+    fn sampler(&mut self, p: &Props<'a>) -> Result<SamplerDesc, SceneError> {
         let mut desc = SamplerDesc { spp: Some(4), ..SamplerDesc::default() };
         let Some(&(sel, _)) = self.object(p, None, "sampler").first() else { return Ok(desc) };
         let sp = self.props(sel)?;

@@ -7,6 +7,7 @@
 //! Loading runs in named steps, one per section: render settings, camera, materials, lights,
 //! objects.
 
+mod camera;
 mod materials;
 mod objects;
 mod schema;
@@ -14,11 +15,10 @@ mod schema;
 use super::SceneError;
 use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
-use crate::camera::{CameraDesc, FieldOfView, FovAxis, Placement};
 use crate::material::Material;
-use crate::math::{Color, Vec3};
+use crate::math::Color;
 use materials::MaterialNames;
-use schema::{CameraTable, RenderDesc};
+use schema::RenderDesc;
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -56,12 +56,15 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
         cx.objects(v, &materials, &mut geometry)?;
     }
     let geometry_files = geometry.files().to_vec();
+    let (width, height) = (render.width.unwrap_or(DEFAULT_SIZE.0), render.height.unwrap_or(DEFAULT_SIZE.1));
+    let film = cx.film(&render, width, height)?;
     Ok(SceneDescription {
         name: name.to_string(),
         geometry,
         camera,
-        width: render.width.unwrap_or(DEFAULT_SIZE.0),
-        height: render.height.unwrap_or(DEFAULT_SIZE.1),
+        width,
+        height,
+        film,
         sampler: SamplerDesc {
             kind: render.sampler.unwrap_or_default(),
             spp: render.spp,
@@ -178,50 +181,6 @@ impl<'a> Cx<'a> {
             }
         }
         Ok((kind, Spanned::new(span, DeValue::Table(table))))
-    }
-
-    /// Step 2: the camera (present: `sections` checked it).
-    fn camera(&self, value: Option<Spanned<DeValue<'a>>>) -> Result<CameraDesc, SceneError> {
-        let Some(value) = value else { return Err(self.at(0..0, "missing [camera] section")) };
-        let span = value.span();
-        let c: CameraTable = self.de(value)?;
-        let (eye, look_at) = (c.eye.0, c.look_at.0);
-        let up = c.up.map_or(Vec3::Y, |u| u.0);
-        let w = (eye - look_at).normalize_or_zero();
-        if w == Vec3::ZERO {
-            return Err(self.at(span, "camera `eye` and `look_at` are the same point"));
-        }
-        if up.cross(w).length() < 1e-6 {
-            return Err(self.at(span, "camera `up` is parallel to the viewing direction"));
-        }
-        let fov = match (c.fov, c.view_distance) {
-            (Some(_), Some(_)) => return Err(self.at(span, "give either `fov` or `view_distance`, not both")),
-            (Some(f), None) if f.0 >= 180.0 => {
-                return Err(self.at(span, format!("fov must be below 180 degrees, got {}", f.0)));
-            }
-            (Some(f), None) => FieldOfView::Angle { degrees: f.0 as f64, axis: FovAxis::Y },
-            (None, Some(d)) => FieldOfView::ViewDistance(d.0),
-            (None, None) => FieldOfView::Angle { degrees: 45.0, axis: FovAxis::Y },
-        };
-        let focal_distance = match (c.focal_distance, c.focus_on) {
-            (Some(_), Some(_)) => return Err(self.at(span, "give either `focal_distance` or `focus_on`, not both")),
-            (Some(f), None) => f.0,
-            (None, Some(p)) => {
-                // Distance of the point from the lens along the viewing axis.
-                let f = (p.0 - eye).dot(-w);
-                if !(f > 0.0) {
-                    return Err(self.at(span, "`focus_on` is not in front of the camera"));
-                }
-                f
-            }
-            (None, None) => (look_at - eye).length(),
-        };
-        Ok(CameraDesc {
-            placement: Placement::LookAt { eye, target: look_at, up },
-            fov,
-            lens_radius: c.lens_radius.map_or(0.0, |r| r.0),
-            focal_distance,
-        })
     }
 
     /// The material an object names (or the default one), with an error listing the names.

@@ -1,6 +1,7 @@
 //! The shapes of the TOML scene format's tables (see `docs/scene-format.md`): serde types with
 //! validating values, and the keys each `type` of material, light and object accepts.
 
+use super::camera::{CropSpec, FilterSpec};
 use crate::sampling::SamplerKind;
 use crate::scene::de::{
     ColorOrTexture, Direction, Finite, NonNegative, NumberOrTexture, Pair, Point, Positive, Rgb, Scale, Unit,
@@ -71,6 +72,10 @@ pub struct RenderDesc {
     pub ray_bias: Option<NonNegative>,
     pub transparent_shadows: Option<bool>,
     pub light_samples: Option<u32>,
+    /// The film: a window to render, the pixel filter, sampling past the window's edge.
+    pub crop: Option<Spanned<CropSpec>>,
+    pub filter: Option<FilterSpec>,
+    pub sample_border: Option<bool>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -87,6 +92,10 @@ pub struct CameraTable {
     pub lens_radius: Option<NonNegative>,
     pub focal_distance: Option<Positive>,
     pub focus_on: Option<Point>,
+    pub projection: Option<Spanned<String>>,
+    pub view_width: Option<Positive>,
+    pub view_height: Option<Positive>,
+    pub principal_point_offset: Option<Pair>,
 }
 
 #[derive(Deserialize)]
