@@ -138,7 +138,11 @@ static REFERENCE_NOISE: LazyLock<HashMap<String, f64>> = LazyLock::new(|| {
     let mut noise = HashMap::new();
     for line in text.lines().filter(|l| l.starts_with("| `")) {
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        // | case | size | spp | s | mean R, G, B | mean lum. | noise |
+        // | case | size | spp | s | mean R, G, B | mean lum. | noise | (the table of results
+        // further down has fewer columns)
+        if cells.len() < 9 {
+            continue;
+        }
         noise.insert(cells[1].trim_matches('`').to_string(), cells[7].parse::<f64>().expect("noise column"));
     }
     noise

@@ -112,7 +112,7 @@ fn nested_blends_keep_every_part() {
         <integrator type="path"><integer name="max_depth" value="2"/></integrator>
         <sensor type="perspective"><float name="fov" value="20"/>
             <transform name="to_world"><lookat origin="0, 0, 8" target="0, 0, 0" up="0, 1, 0"/></transform>
-            <sampler type="independent"><integer name="sample_count" value="256"/></sampler>
+            <sampler type="independent"><integer name="sample_count" value="4096"/></sampler>
             <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
         </sensor>
         <bsdf type="diffuse" id="d"><rgb name="reflectance" value="0.8"/></bsdf>

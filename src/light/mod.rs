@@ -217,6 +217,15 @@ impl Light {
         }
     }
 
+    /// The texture a spot or projector casts, if any.
+    pub fn projection_texture(&self) -> Option<u32> {
+        match *self {
+            Light::Spot(s) if s.texture != NO_TEXTURE => Some(s.texture),
+            Light::Projector(p) if p.texture != NO_TEXTURE => Some(p.texture),
+            _ => None,
+        }
+    }
+
     /// The texture a spot or projector casts and where direction `d` (leaving the light) reads
     /// it: (texture index, uv).
     #[inline]

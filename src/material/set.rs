@@ -285,7 +285,7 @@ impl Materials {
     }
 
     /// What the Whitted integrator shades hit `h` with (the classic model, textures applied).
-    #[inline]
+    #[inline(always)]
     pub fn classic(&self, h: &Hit) -> Classic {
         let c = self.classic[h.material as usize];
         match c.color_texture {

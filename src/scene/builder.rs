@@ -218,6 +218,7 @@ impl SceneBuilder {
             }
         }
         let any_transmissive = (0..materials.len() as u32).any(|m| materials.classic_of(m).transmits());
+        let any_projection = self.lights.iter().any(|l| l.projection_texture().is_some());
         let scene = Scene {
             bvh,
             planes: self.planes,
@@ -233,6 +234,7 @@ impl SceneBuilder {
             ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
             transparent_shadows: shading.transparent_shadows,
             any_transmissive,
+            any_projection,
             specular_targets: self.specular_targets,
         };
         Ok((scene, info))

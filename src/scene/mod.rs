@@ -68,6 +68,8 @@ pub struct Scene {
     pub transparent_shadows: bool,
     /// Some material transmits light (so shadow rays must look for transparent surfaces).
     pub any_transmissive: bool,
+    /// Some spot light or projector casts a texture (so light samples look it up).
+    pub any_projection: bool,
     /// Bounding spheres (centre, radius) of objects with mirror or glass materials: where caustic
     /// photons are aimed.
     pub specular_targets: Vec<(crate::math::Vec3, f32)>,
@@ -79,7 +81,7 @@ impl Scene {
     #[inline]
     pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
         let mut s = light.sample(p, u)?;
-        if light.is_delta() {
+        if self.any_projection && light.is_delta() {
             s.radiance *= self.projected_texture(light, -s.wi);
         }
         Some(s)
@@ -281,7 +283,7 @@ impl Scene {
     }
 
     /// The classic (seed report) material the Whitted integrator shades hit `h` with.
-    #[inline]
+    #[inline(always)]
     pub fn classic(&self, h: &Hit) -> Classic {
         self.materials.classic(h)
     }
