@@ -35,8 +35,8 @@ impl Disk {
     }
 
     /// The disk of `radius` around `center` facing `normal`, its local x axis that of
-    /// `Frame::from_z(normal)` (where v = 0).
-    pub fn facing(center: Vec3, normal: Vec3, radius: f32) -> Option<Self> {
+    /// `Frame::from_z(normal)` (where v = 0), then moved by `to_world`.
+    pub fn facing(center: Vec3, normal: Vec3, radius: f32, to_world: &Transform) -> Option<Self> {
         let f = crate::math::Frame::from_z(normal.try_normalize()?);
         let m = glam::Mat4::from_cols(
             (f.x * radius).extend(0.0),
@@ -44,7 +44,7 @@ impl Disk {
             f.z.extend(0.0),
             center.extend(1.0),
         );
-        Self::from_transform(&Transform::from_mat4(m), false)
+        Self::from_transform(&Transform::from_mat4(m).then(*to_world), false)
     }
 
     /// The ellipse's box: along each axis it reaches sqrt(a_i^2 + b_i^2) from the centre.
@@ -166,7 +166,7 @@ mod tests {
 
     #[test]
     fn misses_outside_the_rim_behind_and_parallel() {
-        let d = Disk::facing(Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 2.0).unwrap();
+        let d = Disk::facing(Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 2.0, &Transform::IDENTITY).unwrap();
         assert!(hit(&d, Vec3::new(1.9, 5.0, 0.0), -Vec3::Y).is_some());
         assert!(hit(&d, Vec3::new(1.5, 5.0, 1.5), -Vec3::Y).is_none());
         assert!(hit(&d, Vec3::new(0.0, 5.0, 0.0), Vec3::Y).is_none());

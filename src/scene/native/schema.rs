@@ -50,6 +50,9 @@ pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("box", &["material", "transform", "min", "max"]),
     ("mesh", &["material", "transform", "file", "face_normals"]),
     ("torus_knot", &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"]),
+    ("cylinder", &["material", "transform", "p0", "p1", "radius"]),
+    ("disk", &["material", "transform", "center", "normal", "radius"]),
+    ("instance", &["group", "transform"]),
 ];
 
 #[derive(Deserialize, Default)]
@@ -189,4 +192,7 @@ pub struct ObjectDesc {
     pub tube: Option<Positive>,
     pub segments: Option<u32>,
     pub sides: Option<u32>,
+    pub p0: Option<Point>,
+    pub p1: Option<Point>,
+    pub group: Option<Spanned<String>>,
 }

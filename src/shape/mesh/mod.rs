@@ -2,8 +2,10 @@
 //! one reader both scene formats use) or generated procedurally.
 
 mod ply;
+mod serialized;
 
 pub use ply::load_ply;
+pub use serialized::{Serialized, load_serialized, parse_serialized};
 
 use super::Triangle;
 use crate::geometry::Transform;
