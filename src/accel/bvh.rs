@@ -58,6 +58,7 @@ pub(super) fn build_nodes(prims: &mut [BuildPrim]) -> Vec<Node> {
         let root = build(prims, 0, 0);
         nodes.reserve(2 * prims.len() / MAX_LEAF + 1);
         flatten(&root, &mut nodes);
+        nodes.shrink_to_fit();
     }
     nodes
 }

@@ -56,14 +56,23 @@ impl Instance {
 
     /// A surface point of the group moved to world space. The error bound adds the rounding
     /// of the transform to the transformed bound of the point (pbrt-v4's transform of an
-    /// interval point); normals go by the inverse transpose, tangents by the matrix itself.
+    /// interval point), and also the rounding that moving a ray spawned there back into the
+    /// group's space will add (`object_ray`), carried to world space: so that round trip cannot
+    /// put the origin of a ray leaving the surface behind it. (Pushing the origin along the ray,
+    /// as `object_ray` does, covers that rounding along the ray only, not across a grazing
+    /// ray far from the world's origin.) Normals go by the inverse transpose, tangents by the
+    /// matrix itself.
     #[inline]
     fn surface_to_world(&self, sp: &SurfacePoint) -> SurfacePoint {
         let (m, t) = (self.to_world.matrix3, self.to_world.translation);
         let am = m.abs();
         let p = m * sp.p + t;
-        let p_error = (1.0 + gamma(3)) * (am * sp.p_error) + gamma(3) * (am * sp.p.abs() + t.abs());
-        let n = self.to_object.matrix3.transpose();
+        let inv = &self.to_object;
+        let back = gamma(4) * (inv.matrix3.abs() * p.abs() + inv.translation.abs());
+        let p_error = (1.0 + gamma(3)) * (am * sp.p_error)
+            + gamma(3) * (am * sp.p.abs() + t.abs())
+            + (1.0 + gamma(3)) * (am * back);
+        let n = inv.matrix3.transpose();
         let ng = (n * sp.ng).normalize_or_zero();
         let ns = (n * sp.ns).normalize_or_zero();
         let param = SurfaceParam::Known { uv: sp.param.uv(), dpdu: m * sp.param.dpdu(), dpdv: m * sp.param.dpdv() };
@@ -111,6 +120,7 @@ impl Instances {
         let groups: Vec<Bvh> = groups.into_iter().map(Bvh::build).collect();
         let group_bounds: Vec<Aabb> = groups.iter().map(Bvh::bounds).collect();
         instances.retain(|i| !group_bounds[i.group as usize].is_empty());
+        instances.shrink_to_fit();
         let mut build: Vec<BuildPrim> = instances
             .iter()
             .enumerate()

@@ -108,14 +108,19 @@ impl Cylinder {
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
         let w = ray.at(h.t) - self.p0;
         let l2 = self.axis.length_squared();
-        let z = (w.dot(self.axis) / l2).clamp(0.0, 1.0);
+        let z = w.dot(self.axis) / l2;
+        // The part across the axis, from the unclamped height: clamping first would leave some
+        // of the axis in it (a hit computed far from its ray's origin can be that far off).
+        let radial = w - self.axis * z;
+        let z = z.clamp(0.0, 1.0);
         let along = self.axis * z;
-        let radial = w - along;
         let rl = radial.length();
         // Re-project onto the surface (pbrt-v4 sec. 6.8.5): what is left is rounding.
         let radial = if rl > 0.0 { radial * (self.radius / rl) } else { self.x * self.radius };
         let p = self.p0 + along + radial;
-        let p_error = gamma(8) * (self.p0.abs() + along.abs() + radial.abs());
+        // The rounding of p itself, and that of the test's distance from the axis, which it
+        // works out from the offset to p0 (up to the tube's length, however thin the tube).
+        let p_error = gamma(8) * (self.p0.abs() + along.abs() + radial.abs()) + Vec3::splat(gamma(8) * w.length());
         let n = radial / self.radius;
         let y = self.y();
         let (lx, ly) = (radial.dot(self.x), radial.dot(y));
@@ -137,7 +142,8 @@ impl Cylinder {
         let (along, radial) = (self.axis * u.x, n * self.radius);
         AreaSample {
             p: self.p0 + along + radial,
-            p_error: gamma(8) * (self.p0.abs() + along.abs() + radial.abs()),
+            p_error: gamma(8) * (self.p0.abs() + along.abs() + radial.abs())
+                + Vec3::splat(gamma(8) * (along + radial).length()),
             n: n * self.normal_sign(),
         }
     }

@@ -16,8 +16,9 @@ pub struct Disk {
     /// dp/dx and dp/dy of the local unit disk.
     pub a: Vec3,
     pub b: Vec3,
-    /// Unit normal: the local +z transformed as a normal (so a mirroring transform turns it
-    /// over, as in Mitsuba), negated by `flip_normals`.
+    /// Unit normal: a x b normalised (the plane the test uses), on the side of the local +z
+    /// transformed as a normal (so a mirroring transform turns it over, as in Mitsuba), and
+    /// negated by `flip_normals`.
     pub n: Vec3,
 }
 
@@ -26,12 +27,14 @@ impl Disk {
     pub fn from_transform(t: &Transform, flip_normals: bool) -> Option<Self> {
         let (center, a, b) = (t.point(Vec3::ZERO), t.vector(Vec3::X), t.vector(Vec3::Y));
         let m = a.cross(b);
-        let n = t.normal(Vec3::Z).normalize_or_zero();
+        let side = t.normal(Vec3::Z);
         let area2 = m.length_squared();
-        if !(area2 > 0.0 && area2.is_finite() && center.is_finite()) || n == Vec3::ZERO {
+        if !(area2 > 0.0 && area2.is_finite() && center.is_finite()) || !side.is_finite() {
             return None;
         }
-        Some(Disk { center, a, b, n: if flip_normals { -n } else { n } })
+        let n = m / area2.sqrt();
+        let n = if (m.dot(side) < 0.0) != flip_normals { -n } else { n };
+        Some(Disk { center, a, b, n })
     }
 
     /// The disk of `radius` around `center` facing `normal`, its local x axis that of
@@ -67,8 +70,11 @@ impl Disk {
     pub fn surface(&self, h: &PrimHit) -> SurfacePoint {
         let (x, y) = (h.u, h.v);
         let (ax, by) = (self.a * x, self.b * y);
+        // Onto the plane the test uses (through the centre, normal a x b): however thin or
+        // skewed the ellipse, what is left is the rounding of this projection (as for `Plane`).
         let p = self.center + ax + by;
-        let p_error = gamma(6) * (self.center.abs() + ax.abs() + by.abs());
+        let p = p - self.n * self.n.dot(p - self.center);
+        let p_error = gamma(6) * (self.center.abs() + p.abs());
         let r = (x * x + y * y).sqrt();
         let mut phi = y.atan2(x);
         if phi < 0.0 {
@@ -85,12 +91,9 @@ impl Disk {
     /// Jacobian is constant).
     pub fn sample_area(&self, u: Vec2) -> AreaSample {
         let d = concentric_disk(u);
-        let (ax, by) = (self.a * d.x, self.b * d.y);
-        AreaSample {
-            p: self.center + ax + by,
-            p_error: gamma(6) * (self.center.abs() + ax.abs() + by.abs()),
-            n: self.n,
-        }
+        let p = self.center + self.a * d.x + self.b * d.y;
+        let p = p - self.n * self.n.dot(p - self.center);
+        AreaSample { p, p_error: gamma(6) * (self.center.abs() + p.abs()), n: self.n }
     }
 }
 

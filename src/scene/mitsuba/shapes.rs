@@ -129,7 +129,6 @@ impl<'a> Cx<'a> {
                     })?;
                     let path = self.resolve_file(fel, &file);
                     name = file.clone();
-                    let mut file_face_normals = false;
                     let loaded = match kind.as_str() {
                         "obj" => TriangleMesh::load_obj(&path),
                         "ply" => crate::shape::mesh::load_ply(&path),
@@ -140,16 +139,14 @@ impl<'a> Cx<'a> {
                                     self.err(iel, format!("shape_index must be a whole number from 0, found {i}"))
                                 })?,
                             };
-                            crate::shape::mesh::load_serialized(&path, index).map(|s| {
-                                file_face_normals = s.face_normals;
-                                s.mesh
-                            })
+                            // The file's own face-normals flag (0x0010) is not used: Mitsuba
+                            // 3.9.1 ignores it too, whatever its format description says.
+                            crate::shape::mesh::load_serialized(&path, index).map(|s| s.mesh)
                         }
                     };
                     let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
                     b.geometry.note_file(&path);
-                    // The file's own flat-shading flag (serialized) or the shape's parameter.
-                    face_normals = self.boolean(&p, "face_normals")?.unwrap_or(false) || file_face_normals;
+                    face_normals = self.boolean(&p, "face_normals")? == Some(true);
                     if face_normals {
                         mesh.normals = None;
                     }

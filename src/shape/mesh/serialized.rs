@@ -33,7 +33,8 @@ const MAX_COUNT: u64 = 1 << 31;
 #[derive(Debug)]
 pub struct Serialized {
     pub mesh: TriangleMesh,
-    /// The file asks for flat shading (flag 0x0010).
+    /// The file asks for flat shading (flag 0x0010). Mitsuba 3.9.1 ignores this flag (only the
+    /// shape's `face_normals` parameter flattens a mesh), and so does our Mitsuba loader.
     pub face_normals: bool,
     /// The mesh's name (version 4 files; empty otherwise).
     pub name: String,
