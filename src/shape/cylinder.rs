@@ -194,6 +194,7 @@ pub fn intersect_cylinder(p0: Vec3, axis: Vec3, radius: f32, ray: &Ray, t_max: f
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f32::consts::{FRAC_PI_2, PI};
 
     fn cyl(p0: Vec3, p1: Vec3, r: f32, t: &Transform, flip: bool) -> Cylinder {
         Cylinder::from_mitsuba(p0, p1, r, t, flip).unwrap().0
@@ -226,12 +227,12 @@ mod tests {
         assert!(close(p, Vec3::new(0.866026, 0.5, 0.25)));
         assert!(uv.abs_diff_eq(Vec2::new(0.0833334, 0.25), 1e-5), "{uv}");
         assert!(close(n, Vec3::new(0.866025, 0.5, 0.0)));
-        assert!(close(dpdu, Vec3::new(-3.14159, 5.4414, 0.0)), "{dpdu}");
+        assert!(close(dpdu, Vec3::new(-PI, 5.4414, 0.0)), "{dpdu}");
         assert!(close(dpdv, Vec3::Z));
         // From inside the tube: the far wall, normal still outward.
         let (t, _, uv, n, dpdu, _) = hit(&unit(&id, false), Vec3::new(0.0, 0.0, 0.5), Vec3::X).unwrap();
         assert!((t - 1.0).abs() < 1e-5 && uv.abs_diff_eq(Vec2::new(0.0, 0.5), 1e-5) && close(n, Vec3::X));
-        assert!(close(dpdu, Vec3::new(0.0, 6.28319, 0.0)));
+        assert!(close(dpdu, Vec3::new(0.0, TAU, 0.0)));
         // p0, p1 and radius given.
         let c = cyl(Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 3.0, 3.0), 0.5, &id, false);
         let (t, _, uv, n, dpdu, dpdv) = hit(&c, Vec3::new(1.5, 2.5, 6.0), -Vec3::Z).unwrap();
@@ -245,27 +246,27 @@ mod tests {
         // flip_normals turns the normal only.
         let (_, _, uv, n, dpdu, _) = hit(&unit(&id, true), Vec3::new(3.0, 0.5, 0.25), -Vec3::X).unwrap();
         assert!(uv.abs_diff_eq(Vec2::new(0.0833334, 0.25), 1e-5) && close(n, Vec3::new(-0.866025, -0.5, 0.0)));
-        assert!(close(dpdu, Vec3::new(-3.14159, 5.4414, 0.0)));
+        assert!(close(dpdu, Vec3::new(-PI, 5.4414, 0.0)));
         // A mirror mirrors u; the normal stays outward.
         let m = unit(&Transform::scale(Vec3::new(-1.0, 1.0, 1.0)), false);
         let (_, _, uv, n, dpdu, _) = hit(&m, Vec3::new(3.0, 0.5, 0.25), -Vec3::X).unwrap();
         assert!(uv.abs_diff_eq(Vec2::new(0.416667, 0.25), 1e-5) && close(n, Vec3::new(0.866025, 0.5, 0.0)), "{uv}");
-        assert!(close(dpdu, Vec3::new(3.14159, -5.4414, 0.0)));
+        assert!(close(dpdu, Vec3::new(PI, -5.4414, 0.0)));
         // Scaled (2, 2, 3).
         let s = unit(&Transform::scale(Vec3::new(2.0, 2.0, 3.0)), false);
         let (t, _, uv, n, dpdu, dpdv) = hit(&s, Vec3::new(5.0, 0.5, 1.0), -Vec3::X).unwrap();
         assert!((t - 3.063_508).abs() < 1e-5 && uv.abs_diff_eq(Vec2::new(0.0402153, 0.333333), 1e-5));
-        assert!(close(n, Vec3::new(0.968246, 0.25, 0.0)) && close(dpdu, Vec3::new(-3.14159, 12.1673, 0.0)));
+        assert!(close(n, Vec3::new(0.968246, 0.25, 0.0)) && close(dpdu, Vec3::new(-PI, 12.1673, 0.0)));
         assert!(close(dpdv, Vec3::new(0.0, 0.0, 3.0)));
         // Axis along +y and along -z: the local frame comes from the axis.
         let y = cyl(Vec3::ZERO, Vec3::Y, 1.0, &id, false);
         let (_, _, uv, n, dpdu, dpdv) = hit(&y, Vec3::new(3.0, 0.5, 0.25), -Vec3::X).unwrap();
         assert!(uv.abs_diff_eq(Vec2::new(0.959785, 0.5), 1e-5) && close(n, Vec3::new(0.968246, 0.0, 0.25)), "{uv}");
-        assert!(close(dpdu, Vec3::new(1.5708, 0.0, -6.08367)) && close(dpdv, Vec3::Y));
+        assert!(close(dpdu, Vec3::new(FRAC_PI_2, 0.0, -6.08367)) && close(dpdv, Vec3::Y));
         let z = cyl(Vec3::ZERO, -Vec3::Z, 1.0, &id, false);
         let (_, _, uv, _, dpdu, dpdv) = hit(&z, Vec3::new(3.0, 0.5, -0.25), -Vec3::X).unwrap();
         assert!(uv.abs_diff_eq(Vec2::new(0.916667, 0.25), 1e-5), "{uv}");
-        assert!(close(dpdu, Vec3::new(3.14159, -5.4414, 0.0)) && close(dpdv, -Vec3::Z));
+        assert!(close(dpdu, Vec3::new(PI, -5.4414, 0.0)) && close(dpdv, -Vec3::Z));
     }
 
     #[test]

@@ -327,7 +327,7 @@ impl<'a> Cx<'a> {
                     let file = d
                         .file
                         .as_ref()
-                        .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ or PLY file)"))?;
+                        .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ, PLY or serialized file)"))?;
                     let path = self.base.join(file.get_ref());
                     let mesh = TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?;
                     geometry.note_file(&path);

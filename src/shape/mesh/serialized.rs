@@ -95,8 +95,8 @@ fn table(b: &[u8], version: u16) -> Result<(Vec<usize>, usize), String> {
         let off = if version == 4 { u64_at(b, at) } else { u32_at(b, at).map(u64::from) }.ok_or(damaged)?;
         let off = usize::try_from(off).map_err(|_| damaged)?;
         // Offsets start at zero and increase, each leaving room for a header before the table.
-        let prev = offsets.last().map_or(None, |&p: &usize| Some(p + 4));
-        if (k == 0 && off != 0) || prev.is_some_and(|p| off < p) || off + 4 > start {
+        let prev = offsets.last().map(|&p: &usize| p + 4);
+        if (k == 0 && off != 0) || prev.is_some_and(|p| off < p) || off.checked_add(4).is_none_or(|e| e > start) {
             return Err(damaged.into());
         }
         offsets.push(off);
