@@ -20,6 +20,86 @@ pub const CORNELL_POINT: &str = include_str!("../scenes/12-cornell-point.toml");
 /// spheres, two point lights.
 pub const WHITTED_SCENE: &str = include_str!("../benches/scenes/whitted.toml");
 
+/// Segments and sides of the knot the instancing benchmark copies: 2 x 320 x 16 = 10,240
+/// triangles.
+const INSTANCED_KNOT: (u32, u32) = (320, 16);
+
+/// The instancing benchmark scene: `side` x `side` copies of a 10,240-triangle torus knot on a
+/// grid (3 units apart), each turned about y and scaled by 0.8 to 1.2, on a floor plane, seen
+/// from above at 1024 x 1024 with a point light and the path tracer. `flat` writes every copy
+/// out as its own knot instead of as an instance of one group (the same geometry).
+pub fn instances_scene(side: u32, flat: bool) -> String {
+    let extent = 3.0 * side as f32;
+    let (segments, sides) = INSTANCED_KNOT;
+    let mut s = format!(
+        r#"# Benchmark: {n} copies of a 10,240-triangle torus knot ({how}), written by caustic::bench::instances_scene.
+[render]
+width = 1024
+height = 1024
+spp = 4
+integrator = "path"
+max_depth = 3
+
+[camera]
+eye = [{cx}, {ey}, {ez}]
+look_at = [{cx}, 0, {cz}]
+fov = 50
+
+[materials.knot]
+type = "diffuse"
+color = [0.8, 0.55, 0.25]
+[materials.floor]
+type = "diffuse"
+color = [0.5, 0.5, 0.5]
+
+[[lights]]
+type = "point"
+position = [{cx}, {ly}, {cz}]
+intensity = {li}
+
+[[objects]]
+type = "plane"
+point = [0, -0.6, 0]
+material = "floor"
+"#,
+        n = side * side,
+        how = if flat { "each its own mesh" } else { "instances of one group" },
+        cx = extent / 2.0 - 1.5,
+        cz = extent / 2.0 - 1.5,
+        ey = 0.75 * extent + 2.0,
+        ez = extent * 1.25 + 2.0,
+        ly = extent + 5.0,
+        li = extent * extent * 2.0 + 50.0,
+    );
+    let knot =
+        format!("type = \"torus_knot\"\nsegments = {segments}\nsides = {sides}\ntube = 0.3\nmaterial = \"knot\"\n");
+    if !flat {
+        s += &format!("\n[[groups.knot.objects]]\n{knot}");
+    }
+    for i in 0..side * side {
+        let (x, z) = ((i % side) as f32 * 3.0, (i / side) as f32 * 3.0);
+        let (angle, scale) = ((i * 37) % 360, 0.8 + 0.4 * ((i * 7) % 11) as f32 / 10.0);
+        let t = format!(
+            "transform = [{{ scale = {scale} }}, {{ rotate = {{ axis = [0, 1, 0], degrees = {angle} }} }}, {{ translate = [{x}, 0, {z}] }}]"
+        );
+        s += &if flat {
+            format!("\n[[objects]]\n{knot}{t}\n")
+        } else {
+            format!("\n[[objects]]\ntype = \"instance\"\ngroup = \"knot\"\n{t}\n")
+        };
+    }
+    s
+}
+
+/// The generated benchmark scenes, by file name, for `caustic bench --write-scenes`.
+pub fn generated_scenes() -> Vec<(&'static str, String)> {
+    vec![
+        ("instances-10000.toml", instances_scene(100, false)),
+        ("instances-100.toml", instances_scene(10, false)),
+        ("flat-100.toml", instances_scene(10, true)),
+    ]
+}
+
 pub fn load(text: &str, name: &str) -> LoadedScene {
     load_sized(text, name, &Overrides::default())
 }
@@ -114,6 +194,8 @@ pub fn run_all(repeats: u32) {
         best.0.as_secs_f64()
     );
 
+    instancing(repeats);
+
     let whitted = load(WHITTED_SCENE, "bench:whitted");
     let best = (0..repeats).map(|_| whitted_render(&whitted)).min_by_key(|r| r.wall).unwrap_or_default();
     say!(
@@ -123,4 +205,71 @@ pub fn run_all(repeats: u32) {
         best.rays.shadow_rays,
         best.mrays_per_second()
     );
+}
+
+/// Instancing: 10,000 copies of a 10,240-triangle knot (load, build, memory, primary rays), and
+/// primary rays through 100 copies as instances against the same geometry flattened into one
+/// BVH, alternating the two so both see the same machine load.
+fn instancing(repeats: u32) {
+    let t0 = Instant::now();
+    let many = load(&instances_scene(100, false), "bench:instances-10000");
+    say!(
+        "instances: {} copies of a {}-triangle knot, load + build {:.3} s, instances and BVHs {:.1} MB, {} BVH nodes",
+        many.info.instances,
+        many.info.triangles,
+        t0.elapsed().as_secs_f64(),
+        many.scene.instances.memory_bytes() as f64 / 1e6,
+        many.info.bvh_nodes
+    );
+    let best = (0..repeats).map(|_| primary_rays(&many)).min_by_key(|r| r.2).unwrap_or_default();
+    say!(
+        "primary rays (10,000 instances, 1024x1024, {:.0}% of rays on a knot): {:.2} Mrays/s",
+        100.0 * knot_share(&many),
+        best.0 as f64 / best.2.as_secs_f64() / 1e6,
+    );
+    drop(many);
+    let inst = load(&instances_scene(10, false), "bench:instances-100");
+    let t0 = Instant::now();
+    let flat = load(&instances_scene(10, true), "bench:flat-100");
+    say!(
+        "flattened: 100 knots, {} triangles in one BVH, load + build {:.3} s",
+        flat.info.triangles,
+        t0.elapsed().as_secs_f64()
+    );
+    let (mut bi, mut bf) = (Duration::MAX, Duration::MAX);
+    let mut hits = (0, 0);
+    for _ in 0..repeats.max(3) {
+        let (_, h, t) = primary_rays(&inst);
+        bi = bi.min(t);
+        let (_, g, u) = primary_rays(&flat);
+        bf = bf.min(u);
+        hits = (h, g);
+    }
+    let rays = inst.scene.camera.width as f64 * inst.scene.camera.height as f64;
+    say!(
+        "primary rays, 100 knots (1024x1024, {:.0}% of rays on a knot): instanced {:.2} Mrays/s, flattened {:.2} Mrays/s, instanced/flattened time {:.3} (hits {} / {})",
+        100.0 * knot_share(&inst),
+        rays / bi.as_secs_f64() / 1e6,
+        rays / bf.as_secs_f64() / 1e6,
+        bi.as_secs_f64() / bf.as_secs_f64(),
+        hits.0,
+        hits.1
+    );
+}
+
+/// The share of camera rays (through pixel centres) whose closest hit is on an instance.
+fn knot_share(s: &LoadedScene) -> f64 {
+    let cam = &s.scene.camera;
+    let on: u64 = (0..cam.height)
+        .into_par_iter()
+        .map(|y| {
+            (0..cam.width)
+                .filter(|&x| {
+                    let ray = cam.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), Vec2::splat(0.5));
+                    s.scene.intersect(&ray, f32::INFINITY).is_some_and(|h| h.prim < u32::MAX / 2)
+                })
+                .count() as u64
+        })
+        .sum();
+    on as f64 / (cam.width as f64 * cam.height as f64)
 }

@@ -1,6 +1,6 @@
 //! The `caustic` command line: parses arguments and hands them to the library.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use caustic::app::{AppError, RenderOptions, SlurmOptions, farm_slurm, merge_files, render_file};
 use caustic::farm::shard::ShardSpec;
 use caustic::sampling::SamplerKind;
@@ -89,6 +89,10 @@ struct BenchArgs {
     /// Runs of each benchmark; the best is reported.
     #[arg(long, default_value_t = 3, value_name = "N")]
     repeats: u32,
+    /// Write the generated benchmark scenes (10,000 instances of a knot, 100 instanced and
+    /// flattened) into this folder and exit, to render them with `caustic render`.
+    #[arg(long, value_name = "DIR")]
+    write_scenes: Option<PathBuf>,
 }
 
 #[derive(clap::Args, Clone, Debug, PartialEq)]
@@ -342,6 +346,15 @@ fn farm(command: FarmCommand, cancel: &'static AtomicBool) -> Result<()> {
 }
 
 fn bench(args: BenchArgs) -> Result<()> {
+    if let Some(dir) = &args.write_scenes {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        for (name, text) in caustic::bench::generated_scenes() {
+            let path = dir.join(name);
+            std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+            println!("{}", path.display());
+        }
+        return Ok(());
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = args.threads {
         anyhow::ensure!(n > 0, "--threads must be at least 1");

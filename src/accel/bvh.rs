@@ -21,12 +21,12 @@ const MEDIAN_DEPTH: usize = 32;
 /// (`offset` = index of the second child, `axis` = split axis).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
-struct Node {
-    min: Vec3,
-    offset: u32,
-    max: Vec3,
-    count: u16,
-    axis: u16,
+pub(super) struct Node {
+    pub(super) min: Vec3,
+    pub(super) offset: u32,
+    pub(super) max: Vec3,
+    pub(super) count: u16,
+    pub(super) axis: u16,
 }
 
 pub struct Bvh {
@@ -38,10 +38,29 @@ pub struct Bvh {
 }
 
 #[derive(Clone, Copy)]
-struct BuildPrim {
-    bounds: Aabb,
-    centroid: Vec3,
-    index: u32,
+pub(super) struct BuildPrim {
+    pub(super) bounds: Aabb,
+    pub(super) centroid: Vec3,
+    pub(super) index: u32,
+}
+
+impl BuildPrim {
+    pub(super) fn new(bounds: Aabb, index: usize) -> Self {
+        BuildPrim { bounds, centroid: bounds.centroid(), index: index as u32 }
+    }
+}
+
+/// The flattened tree over `prims`, which are reordered into leaf order (each leaf's `offset`
+/// indexes them).
+pub(super) fn build_nodes(prims: &mut [BuildPrim]) -> Vec<Node> {
+    let mut nodes = Vec::new();
+    if !prims.is_empty() {
+        let root = build(prims, 0, 0);
+        nodes.reserve(2 * prims.len() / MAX_LEAF + 1);
+        flatten(&root, &mut nodes);
+        nodes.shrink_to_fit();
+    }
+    nodes
 }
 
 enum BuildNode {
@@ -175,15 +194,15 @@ fn flatten(node: &BuildNode, nodes: &mut Vec<Node>) {
 }
 
 /// Ray constants for box tests.
-struct BoxRay {
+pub(super) struct BoxRay {
     o: Vec3A,
     inv_d: Vec3A,
-    neg: [bool; 3],
+    pub(super) neg: [bool; 3],
 }
 
 impl BoxRay {
     #[inline]
-    fn new(ray: &Ray) -> Self {
+    pub(super) fn new(ray: &Ray) -> Self {
         let d = Vec3A::from(ray.d);
         BoxRay { o: Vec3A::from(ray.o), inv_d: d.recip(), neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0] }
     }
@@ -191,7 +210,7 @@ impl BoxRay {
     /// Slab test; the far distance is widened by 2 gamma(3) so rounding never drops a box the
     /// ray grazes (pbrt-v4 Bounds3::IntersectP).
     #[inline(always)]
-    fn hits(&self, n: &Node, t_max: f32) -> bool {
+    pub(super) fn hits(&self, n: &Node, t_max: f32) -> bool {
         let t0 = (Vec3A::from(n.min) - self.o) * self.inv_d;
         let t1 = (Vec3A::from(n.max) - self.o) * self.inv_d;
         let near = t0.min(t1).max_element().max(0.0);
@@ -202,20 +221,9 @@ impl BoxRay {
 
 impl Bvh {
     pub fn build(prims: Vec<Primitive>) -> Self {
-        let mut build_prims: Vec<BuildPrim> = prims
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let bounds = p.shape.bounds();
-                BuildPrim { bounds, centroid: bounds.centroid(), index: i as u32 }
-            })
-            .collect();
-        let mut nodes = Vec::new();
-        if !build_prims.is_empty() {
-            let root = build(&mut build_prims, 0, 0);
-            nodes.reserve(2 * build_prims.len() / MAX_LEAF + 1);
-            flatten(&root, &mut nodes);
-        }
+        let mut build_prims: Vec<BuildPrim> =
+            prims.iter().enumerate().map(|(i, p)| BuildPrim::new(p.shape.bounds(), i)).collect();
+        let nodes = build_nodes(&mut build_prims);
         let ordered: Vec<Primitive> = build_prims.iter().map(|b| prims[b.index as usize]).collect();
         let shapes = ordered.iter().map(|p| p.shape.compact()).collect();
         Bvh { nodes, shapes, prims: ordered }
@@ -227,6 +235,13 @@ impl Bvh {
 
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Bytes held by the tree, its leaf shapes and its primitives.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node>()
+            + self.shapes.capacity() * std::mem::size_of::<CompactShape>()
+            + self.prims.capacity() * std::mem::size_of::<Primitive>()
     }
 
     /// Closest hit in (0, t_max): the primitive index (into `prims`) and its hit.

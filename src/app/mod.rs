@@ -253,12 +253,17 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         log(
             opts.quiet,
             format_args!(
-                "scene {}: {} primitives ({} triangles{}), {} planes, {} lights; BVH {} nodes in {:.1} ms",
+                "scene {}: {} primitives ({} triangles{}){}, {} planes, {} lights; BVH {} nodes in {:.1} ms",
                 opts.scene.display(),
                 info.primitives,
                 info.triangles,
                 if info.degenerate_triangles > 0 {
                     format!(", {} degenerate skipped", info.degenerate_triangles)
+                } else {
+                    String::new()
+                },
+                if info.instances > 0 {
+                    format!(", {} instances of {} groups", info.instances, info.instance_groups)
                 } else {
                     String::new()
                 },

@@ -5,7 +5,7 @@
 use crate::math::float::gamma;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::warp::{uniform_cone, uniform_sphere};
-use crate::shape::{Quad, Shape, Sphere, Triangle};
+use crate::shape::{Cylinder, Disk, Quad, Shape, Sphere, Triangle};
 use std::f32::consts::PI;
 
 /// The surface of an area light.
@@ -17,6 +17,10 @@ pub enum Emitter {
     Sphere(Sphere),
     /// Emits from the side (p1 - p0) x (p2 - p0) points to.
     Triangle([Vec3; 3]),
+    /// Emits from the side its normal points to.
+    Disk(Disk),
+    /// Emits from the side its normals point to (outwards unless flipped).
+    Cylinder(Cylinder),
 }
 
 /// A point sampled on an emitter's surface.
@@ -36,6 +40,8 @@ impl Emitter {
             Emitter::Quad(q) => Shape::Quad(q),
             Emitter::Sphere(s) => Shape::Sphere(s),
             Emitter::Triangle([p0, p1, p2]) => Shape::Triangle(Triangle::new(p0, p1, p2)),
+            Emitter::Disk(d) => Shape::Disk(d),
+            Emitter::Cylinder(c) => Shape::Cylinder(c),
         }
     }
 
@@ -44,6 +50,8 @@ impl Emitter {
             Emitter::Quad(q) => q.area(),
             Emitter::Sphere(s) => 4.0 * PI * s.radius * s.radius,
             Emitter::Triangle([p0, p1, p2]) => 0.5 * (*p1 - *p0).cross(*p2 - *p0).length(),
+            Emitter::Disk(d) => d.area(),
+            Emitter::Cylinder(c) => c.area(),
         }
     }
 
@@ -69,6 +77,14 @@ impl Emitter {
                 let p_error = gamma(7) * ((*p0 * b0).abs() + (*p1 * b1).abs() + (*p2 * b2).abs());
                 SurfaceSample { p, p_error, n: (*p1 - *p0).cross(*p2 - *p0).normalize_or_zero() }
             }
+            Emitter::Disk(d) => {
+                let s = d.sample_area(u);
+                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n }
+            }
+            Emitter::Cylinder(c) => {
+                let s = c.sample_area(u);
+                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n }
+            }
         }
     }
 
@@ -77,7 +93,7 @@ impl Emitter {
     #[inline]
     pub fn sample_towards(&self, p: Vec3, u: Vec2) -> Option<(SurfaceSample, f32)> {
         match self {
-            Emitter::Quad(_) | Emitter::Triangle(_) => {
+            Emitter::Quad(_) | Emitter::Triangle(_) | Emitter::Disk(_) | Emitter::Cylinder(_) => {
                 let s = self.sample_area(u);
                 let v = s.p - p;
                 let d2 = v.length_squared();
@@ -115,7 +131,7 @@ impl Emitter {
     #[inline]
     pub fn pdf_towards(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match self {
-            Emitter::Quad(_) | Emitter::Triangle(_) => {
+            Emitter::Quad(_) | Emitter::Triangle(_) | Emitter::Disk(_) | Emitter::Cylinder(_) => {
                 let cos = n.dot(-wi);
                 if cos <= 0.0 {
                     return 0.0;

@@ -7,9 +7,9 @@
 
 use super::Scene;
 use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
-use crate::accel::Bvh;
+use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
-use crate::geometry::{Aabb, NO_LIGHT};
+use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{Emitter, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials};
 use crate::math::Vec3;
@@ -38,7 +38,18 @@ pub struct SceneBuilder {
     /// Files read for the geometry (meshes), for the render's identity.
     files: Vec<std::path::PathBuf>,
     mesh_info: Vec<MeshInfo>,
+    /// Primitives of each group of instanced geometry, in the group's own space.
+    groups: Vec<Vec<Primitive>>,
+    /// Whether each group holds a mirror, metal or glass object.
+    group_specular: Vec<bool>,
+    /// The group objects and meshes go to (between `begin_group` and `end_group`).
+    open_group: Option<usize>,
+    instances: Vec<Instance>,
 }
+
+/// Most caustic-photon targets made from instances: beyond it, the instances of each group
+/// share one bounding sphere (a photon looks at every target when it is emitted).
+const MAX_INSTANCE_TARGETS: usize = 64;
 
 impl SceneBuilder {
     pub fn new() -> Self {
@@ -80,17 +91,62 @@ impl SceneBuilder {
         self.materials.len()
     }
 
+    /// Starts a group of instanced geometry: objects and meshes added until `end_group` belong
+    /// to it, in its own space, and appear only where `add_instance` places it. Groups do not
+    /// nest. Returns the group's index.
+    pub fn begin_group(&mut self) -> Result<u32, String> {
+        if self.open_group.is_some() {
+            return Err("groups of instanced shapes cannot be nested".into());
+        }
+        self.groups.push(Vec::new());
+        self.group_specular.push(false);
+        self.open_group = Some(self.groups.len() - 1);
+        Ok((self.groups.len() - 1) as u32)
+    }
+
+    pub fn end_group(&mut self) {
+        self.open_group = None;
+    }
+
+    /// True between `begin_group` and `end_group`.
+    pub fn in_group(&self) -> bool {
+        self.open_group.is_some()
+    }
+
+    /// Number of primitives in group `group`.
+    pub fn group_len(&self, group: u32) -> usize {
+        self.groups.get(group as usize).map_or(0, Vec::len)
+    }
+
+    /// Places group `group` in the scene, moved by `t`.
+    pub fn add_instance(&mut self, group: u32, t: &Transform) -> Result<(), String> {
+        if group as usize >= self.groups.len() {
+            return Err(format!("no group {group}"));
+        }
+        let inst = Instance::new(group, t).ok_or("an instance's transform is singular or not finite")?;
+        self.instances.push(inst);
+        Ok(())
+    }
+
+    /// Where objects go now: the open group or the scene.
+    fn target(&mut self) -> &mut Vec<Primitive> {
+        match self.open_group {
+            Some(g) => &mut self.groups[g],
+            None => &mut self.prims,
+        }
+    }
+
     /// Adds one object made of `shapes` (a sphere, a quad, the six faces of a box).
     pub fn add_object(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
-        let first = self.prims.len();
-        self.prims.extend(shapes.into_iter().map(|shape| Primitive { shape, material, light: NO_LIGHT }));
+        let first = self.target().len();
+        self.target().extend(shapes.into_iter().map(|shape| Primitive { shape, material, light: NO_LIGHT }));
         self.note_specular(first, material);
     }
 
     /// Adds a triangle mesh (zero-area triangles are skipped and counted); `name` says where it
     /// came from, for the log.
     pub fn add_mesh(&mut self, mesh: TriangleMesh, material: u32, name: &str) {
-        let first = self.prims.len();
+        let first = self.target().len();
         let id = self.meshes.len() as u32;
         let (tris, skipped) = mesh.triangles(id);
         self.mesh_info.push(MeshInfo {
@@ -100,7 +156,11 @@ impl SceneBuilder {
         });
         self.triangles += tris.len();
         self.degenerate_triangles += skipped;
-        self.prims.extend(tris.into_iter().map(|t| Primitive { shape: Shape::Triangle(t), material, light: NO_LIGHT }));
+        self.target().extend(tris.into_iter().map(|t| Primitive {
+            shape: Shape::Triangle(t),
+            material,
+            light: NO_LIGHT,
+        }));
         self.meshes.push(mesh);
         self.note_specular(first, material);
     }
@@ -144,6 +204,7 @@ impl SceneBuilder {
         radiance: crate::math::Color,
         surface: Option<Material>,
     ) {
+        debug_assert!(self.open_group.is_none(), "loaders refuse emitters in instanced groups");
         let first = self.lights.len();
         let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
         for emitter in emitters {
@@ -175,7 +236,12 @@ impl SceneBuilder {
     /// Records the bounding sphere of the object whose primitives start at `first`, when its
     /// material is a mirror, metal or glass.
     fn note_specular(&mut self, first: usize, material: u32) {
-        if !self.casts_caustics(material) || self.prims.len() <= first {
+        if !self.casts_caustics(material) || self.target().len() <= first {
+            return;
+        }
+        if let Some(g) = self.open_group {
+            // Instances of the group become targets when the scene is finished.
+            self.group_specular[g] = true;
             return;
         }
         let target = match self.prims[first].shape {
@@ -185,23 +251,43 @@ impl SceneBuilder {
         self.specular_targets.push(target);
     }
 
+    /// Caustic-photon targets for the instances of groups holding mirrors, metals or glass:
+    /// each instance's bounding sphere, or (when there would be too many) one sphere around all
+    /// the instances of each such group.
+    fn instance_targets(group_specular: &[bool], instances: &Instances) -> Vec<(Vec3, f32)> {
+        let boxes: Vec<(u32, Aabb)> =
+            instances.instance_bounds().filter(|(g, _)| group_specular[*g as usize]).collect();
+        if boxes.len() <= MAX_INSTANCE_TARGETS {
+            return boxes.iter().map(|(_, b)| b.bounding_sphere()).collect();
+        }
+        let mut per_group = vec![Aabb::EMPTY; group_specular.len()];
+        for (g, b) in &boxes {
+            per_group[*g as usize] = per_group[*g as usize].union(*b);
+        }
+        per_group.into_iter().filter(|b| !b.is_empty()).map(|b| b.bounding_sphere()).collect()
+    }
+
     /// Builds the BVH and the scene seen through `camera`; fails when materials refer to each
     /// other or to textures wrongly.
     pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> Result<(Scene, LoadInfo), String> {
         let materials = Materials::new(self.materials, self.material_names, self.textures)?;
         self.prims.append(&mut self.area_prims);
         let t0 = Instant::now();
-        let bvh = Bvh::build(self.prims);
+        let bvh = Bvh::build(std::mem::take(&mut self.prims));
+        let instances = Instances::build(std::mem::take(&mut self.groups), std::mem::take(&mut self.instances));
+        self.specular_targets.extend(Self::instance_targets(&self.group_specular, &instances));
         let info = LoadInfo {
             meshes: self.mesh_info,
             primitives: bvh.prims.len(),
             triangles: self.triangles,
             degenerate_triangles: self.degenerate_triangles,
-            bvh_nodes: bvh.node_count(),
+            bvh_nodes: bvh.node_count() + instances.node_count(),
             bvh_build: t0.elapsed(),
             files: self.files,
+            instances: instances.len(),
+            instance_groups: instances.group_count(),
         };
-        let bounds = bvh.bounds();
+        let bounds = bvh.bounds().union(instances.bounds());
         let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };
         let disk = photon_disk(bounds, &self.planes, camera.eye);
         // The environment comes last, so emitting primitives keep their light indices and a
@@ -221,6 +307,7 @@ impl SceneBuilder {
         let any_projection = self.lights.iter().any(|l| l.projection_texture().is_some());
         let scene = Scene {
             bvh,
+            instances,
             planes: self.planes,
             meshes: self.meshes,
             materials,

@@ -271,6 +271,10 @@ pub struct LoadInfo {
     pub bvh_build: Duration,
     /// Every file the scene was read from (see `SceneDescription::files`).
     pub files: Vec<std::path::PathBuf>,
+    /// Instances placed and the groups of shapes they place (primitives and triangles of a
+    /// group are counted once).
+    pub instances: usize,
+    pub instance_groups: usize,
 }
 
 /// A built scene with its resolved sampling and the integrator it asks for.

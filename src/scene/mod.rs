@@ -15,7 +15,7 @@ pub mod native;
 pub use desc::{BuiltScene, LoadOptions, Overrides, SceneDescription};
 pub use error::SceneError;
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
 use crate::light::{EmittedPhoton, Light, LightPicker, LightSample};
@@ -49,6 +49,8 @@ const MAX_MASK_CROSSINGS: usize = 64;
 
 pub struct Scene {
     pub bvh: Bvh,
+    /// Instanced groups of shapes and the top-level BVH over their instances.
+    pub instances: Instances,
     /// Unbounded planes, tested after the BVH, with their material index.
     pub planes: Vec<(Plane, u32)>,
     pub meshes: Vec<TriangleMesh>,
@@ -111,7 +113,7 @@ impl Scene {
 
     /// Bounds of all bounded geometry (planes excluded).
     pub fn bounds(&self) -> Aabb {
-        self.bvh.bounds()
+        self.bvh.bounds().union(self.instances.bounds())
     }
 
     /// Closest hit in (0, t_max).
@@ -122,6 +124,13 @@ impl Scene {
         if let Some((i, h)) = self.bvh.intersect(ray, t_max) {
             closest = h.t;
             best = Some((i, h));
+        }
+        let mut instanced = None;
+        if !self.instances.is_empty()
+            && let Some(h) = self.instances.intersect(ray, closest)
+        {
+            closest = h.t;
+            instanced = Some(h);
         }
         let mut best_plane = None;
         for (k, (plane, _)) in self.planes.iter().enumerate() {
@@ -134,6 +143,10 @@ impl Scene {
             let (plane, material) = &self.planes[k];
             let sp = plane.surface(ray, &h);
             return Some(Self::hit(h.t, &sp, *material, NO_LIGHT, u32::MAX - k as u32));
+        }
+        if let Some(h) = instanced {
+            let (prim, sp) = self.instances.surface(&h, &self.meshes);
+            return Some(Self::hit(h.t, &sp, prim.material, prim.light, h.prim));
         }
         let (i, h) = best?;
         let prim = &self.bvh.prims[i as usize];
@@ -202,7 +215,9 @@ impl Scene {
     /// True when anything blocks the ray in (0, t_max).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.planes.iter().any(|(p, _)| p.intersect(ray, t_max).is_some()) || self.bvh.occluded(ray, t_max)
+        self.planes.iter().any(|(p, _)| p.intersect(ray, t_max).is_some())
+            || self.bvh.occluded(ray, t_max)
+            || (!self.instances.is_empty() && self.instances.occluded(ray, t_max))
     }
 
     /// True when nothing blocks the way from hit `h` to a light sample `dist` away along `wi`

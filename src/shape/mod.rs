@@ -1,12 +1,16 @@
 //! Geometric primitives. `Shape` is a closed set of small `Copy` structs: the BVH stores them
 //! inline and intersection `match`es and forwards, with nothing allocated per ray.
 
+mod cylinder;
+mod disk;
 pub mod mesh;
 mod plane;
 mod quad;
 mod sphere;
 mod triangle;
 
+pub use cylinder::{Cylinder, intersect_cylinder};
+pub use disk::{Disk, intersect_disk};
 pub use mesh::TriangleMesh;
 pub use plane::Plane;
 pub use quad::{Quad, box_faces, intersect_quad, transformed_quad};
@@ -36,11 +40,23 @@ pub struct SurfacePoint {
     pub param: SurfaceParam,
 }
 
+/// A point sampled uniformly by area on a shape (for emitting shapes).
+#[derive(Clone, Copy, Debug)]
+pub struct AreaSample {
+    pub p: Vec3,
+    /// Conservative error bound of `p` (see `math::float`).
+    pub p_error: Vec3,
+    /// Unit normal there, on the side the shape's normals point to.
+    pub n: Vec3,
+}
+
 #[derive(Clone, Copy, Debug)]
 pub enum Shape {
     Sphere(Sphere),
     Triangle(Triangle),
     Quad(Quad),
+    Disk(Disk),
+    Cylinder(Cylinder),
 }
 
 /// Only what intersection needs, 40 bytes: the BVH keeps these in leaf order so a leaf of four
@@ -51,6 +67,13 @@ pub enum CompactShape {
     Triangle([Vec3; 3]),
     /// Corner and two edges.
     Quad([Vec3; 3]),
+    /// Centre and the two axes.
+    Disk([Vec3; 3]),
+    Cylinder {
+        p0: Vec3,
+        axis: Vec3,
+        radius: f32,
+    },
 }
 
 impl CompactShape {
@@ -60,6 +83,8 @@ impl CompactShape {
             CompactShape::Sphere(s) => s.intersect(ray, t_max),
             CompactShape::Triangle(p) => intersect_triangle(p, ray, shear, t_max),
             CompactShape::Quad([p0, e1, e2]) => intersect_quad(*p0, *e1, *e2, ray, t_max),
+            CompactShape::Disk([c, a, b]) => intersect_disk(*c, *a, *b, ray, t_max),
+            CompactShape::Cylinder { p0, axis, radius } => intersect_cylinder(*p0, *axis, *radius, ray, t_max),
         }
     }
 }
@@ -80,6 +105,8 @@ impl Shape {
             Shape::Sphere(s) => CompactShape::Sphere(*s),
             Shape::Triangle(t) => CompactShape::Triangle(t.p),
             Shape::Quad(q) => CompactShape::Quad([q.p0, q.e1, q.e2]),
+            Shape::Disk(d) => CompactShape::Disk([d.center, d.a, d.b]),
+            Shape::Cylinder(c) => CompactShape::Cylinder { p0: c.p0, axis: c.axis, radius: c.radius },
         }
     }
 
@@ -89,6 +116,8 @@ impl Shape {
             Shape::Sphere(s) => s.bounds(),
             Shape::Triangle(t) => t.bounds(),
             Shape::Quad(q) => q.bounds(),
+            Shape::Disk(d) => d.bounds(),
+            Shape::Cylinder(c) => c.bounds(),
         }
     }
 
@@ -98,6 +127,8 @@ impl Shape {
             Shape::Sphere(s) => s.intersect(ray, t_max),
             Shape::Triangle(t) => t.intersect(ray, shear, t_max),
             Shape::Quad(q) => q.intersect(ray, t_max),
+            Shape::Disk(d) => d.intersect(ray, t_max),
+            Shape::Cylinder(c) => c.intersect(ray, t_max),
         }
     }
 
@@ -108,6 +139,8 @@ impl Shape {
             Shape::Sphere(s) => s.surface(ray, h),
             Shape::Triangle(t) => t.surface(h, meshes),
             Shape::Quad(q) => q.surface(h),
+            Shape::Disk(d) => d.surface(h),
+            Shape::Cylinder(c) => c.surface(ray, h),
         }
     }
 
@@ -117,6 +150,21 @@ impl Shape {
             Shape::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
             Shape::Triangle(t) => t.area(),
             Shape::Quad(q) => q.area(),
+            Shape::Disk(d) => d.area(),
+            Shape::Cylinder(c) => c.area(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Disks and cylinders fit in the space quads and triangles took: no primitive got bigger.
+    #[test]
+    fn shapes_stay_small() {
+        assert!(std::mem::size_of::<Shape>() <= 52, "{}", std::mem::size_of::<Shape>());
+        assert!(std::mem::size_of::<CompactShape>() <= 40, "{}", std::mem::size_of::<CompactShape>());
+        assert!(std::mem::size_of::<Primitive>() <= 60, "{}", std::mem::size_of::<Primitive>());
     }
 }

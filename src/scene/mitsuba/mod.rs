@@ -51,8 +51,14 @@ pub fn load_mitsuba_str(
 ) -> Result<SceneDescription, SceneError> {
     let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf(), path: None }];
     let root = xml::parse_source(&mut srcs, 0, 0)?;
-    let mut cx =
-        Cx { srcs: &srcs, defines: HashMap::new(), ids: HashMap::new(), warnings: Vec::new(), strict: options.strict };
+    let mut cx = Cx {
+        srcs: &srcs,
+        defines: HashMap::new(),
+        ids: HashMap::new(),
+        warnings: Vec::new(),
+        strict: options.strict,
+        search_paths: Vec::new(),
+    };
     for (k, v) in &options.defines {
         cx.defines.insert(k.clone(), v.clone());
     }
@@ -75,6 +81,8 @@ struct Build {
     /// Images read so far, by file and decoding (`raw`), shared between textures.
     images: HashMap<(std::path::PathBuf, bool), std::sync::Arc<crate::texture::image::TexImage>>,
     default_material: Option<u32>,
+    /// Group index of each `shapegroup` element already built (by address).
+    group_cache: HashMap<usize, u32>,
 }
 
 impl<'a> Cx<'a> {
@@ -87,12 +95,14 @@ impl<'a> Cx<'a> {
             texture_cache: HashMap::new(),
             images: HashMap::new(),
             default_material: None,
+            group_cache: HashMap::new(),
         };
         let mut sensor: Option<&'a El> = None;
         let mut integrator: Option<&'a El> = None;
         for child in &root.children {
             match child.tag.as_str() {
                 "default" => {}
+                "path" => self.search_path(child)?,
                 "shape" => self.shape(child, &mut b)?,
                 "emitter" => self.emitter(child, &mut b)?,
                 "sensor" => {
@@ -128,7 +138,7 @@ impl<'a> Cx<'a> {
                 other => {
                     return Err(self.err(
                         child,
-                        format!("unknown element <{other}> in <scene>; expected shape, bsdf, emitter, sensor, integrator, texture, default or include"),
+                        format!("unknown element <{other}> in <scene>; expected shape, bsdf, emitter, sensor, integrator, texture, default, path or include"),
                     ));
                 }
             }

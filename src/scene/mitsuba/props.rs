@@ -65,6 +65,8 @@ pub(super) struct Cx<'a> {
     pub ids: HashMap<String, &'a El>,
     pub warnings: Vec<String>,
     pub strict: bool,
+    /// Folders added by `<path value="..."/>`, in the order given (searched newest first).
+    pub search_paths: Vec<std::path::PathBuf>,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).
@@ -157,6 +159,41 @@ impl<'a> Cx<'a> {
         }
         out.push_str(rest);
         Ok(out)
+    }
+
+    /// A `<path value="..."/>`: a folder searched for the files named after it (meshes,
+    /// textures), before the folder of the scene file. A relative folder is taken from the
+    /// folder of the file the element is in, as Mitsuba does.
+    pub(super) fn search_path(&mut self, el: &El) -> Result<(), SceneError> {
+        let (value, span) = self.required_attr(el, "value")?;
+        if let Some(a) = el.attrs.iter().find(|a| a.name != "value") {
+            return Err(self.err_span(el, a.span.clone(), format!("<path> takes only `value`, found `{}`", a.name)));
+        }
+        if value.trim().is_empty() {
+            return Err(self.err_span(el, span, "<path> needs a folder in `value`"));
+        }
+        let dir = self.src(el).base.join(&value);
+        if !dir.is_dir() {
+            self.warn(el, format!("<path> folder `{}` does not exist", dir.display()))?;
+        }
+        self.search_paths.push(dir);
+        Ok(())
+    }
+
+    /// The file a relative name in element `el` refers to: the first folder of `<path>`
+    /// elements read so far (newest first) that holds it, else the folder of the file `el` is
+    /// in (which is where a missing file is reported).
+    pub(super) fn resolve_file(&self, el: &El, name: &str) -> std::path::PathBuf {
+        let rel = std::path::Path::new(name);
+        if rel.is_absolute() {
+            return rel.to_path_buf();
+        }
+        self.search_paths
+            .iter()
+            .rev()
+            .map(|dir| dir.join(rel))
+            .find(|p| p.is_file())
+            .unwrap_or_else(|| self.src(el).base.join(rel))
     }
 
     /// Collects `<default>`s (command-line values win) and object ids of the whole tree.

@@ -1,5 +1,5 @@
-//! Mitsuba shapes: rectangles, cubes, spheres, disks and OBJ/PLY meshes, with their nested area
-//! emitters and BSDFs.
+//! Mitsuba shapes: rectangles, cubes, spheres, disks, cylinders and OBJ/PLY/serialized meshes,
+//! with their nested area emitters and BSDFs; shape groups and their instances.
 
 use super::Build;
 use super::props::Cx;
@@ -9,15 +9,17 @@ use crate::light::Emitter;
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
-use crate::shape::{Quad, Sphere, TriangleMesh, box_faces, transformed_quad};
-
-/// Triangles in the fan that stands in for a `disk`.
-const DISK_SEGMENTS: u32 = 128;
+use crate::shape::{Cylinder, Disk, Quad, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
 
 impl<'a> Cx<'a> {
     /// Reads a shape and adds its geometry (or, for an emitting shape, its area lights).
     pub(super) fn shape(&mut self, el: &'a El, b: &mut Build) -> Result<(), SceneError> {
         let p = self.props(el)?;
+        match p.kind.as_str() {
+            "shapegroup" => return self.shapegroup(el, b).map(|_| ()),
+            "instance" => return self.instance(el, b),
+            _ => {}
+        }
         let to_world = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
         let flip = self.boolean(&p, "flip_normals")?.unwrap_or(false);
 
@@ -33,6 +35,12 @@ impl<'a> Cx<'a> {
             }
             if radiance.is_some() {
                 return Err(self.err(at, "a shape can have only one area emitter"));
+            }
+            if b.geometry.in_group() {
+                return Err(self.err(
+                    at,
+                    "emitters inside a shapegroup are not supported (Mitsuba refuses them too: instancing of emitters)",
+                ));
             }
             radiance = Some(self.color(&ep, "radiance")?.unwrap_or(Color::ONE));
             self.finish(&ep)?;
@@ -57,6 +65,8 @@ impl<'a> Cx<'a> {
 
         let kind = p.kind.clone();
         let mut emitters_out: Vec<Emitter> = Vec::new();
+        // Shapes that cannot emit yet.
+        let mut plain_out: Vec<Shape> = Vec::new();
         let mut mesh_out = None;
         match kind.as_str() {
             "rectangle" => {
@@ -96,19 +106,53 @@ impl<'a> Cx<'a> {
                 }
                 emitters_out.push(Emitter::Sphere(Sphere::new(c, r)));
             }
-            "obj" | "ply" | "disk" => {
-                let mut face_normals = false;
-                let mut name = kind.clone();
-                let mesh = if kind == "disk" {
-                    disk_mesh(DISK_SEGMENTS)
+            "disk" => {
+                let d = Disk::from_transform(&to_world, flip)
+                    .ok_or_else(|| self.err(el, "disk has no area after its to_world transform"))?;
+                if radiance.is_some() {
+                    emitters_out.push(Emitter::Disk(d));
                 } else {
+                    plain_out.push(Shape::Disk(d));
+                }
+            }
+            "cylinder" => {
+                let p0 = self.point(&p, "p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = self.point(&p, "p1")?.unwrap_or(Vec3::Z);
+                let radius = self.float(&p, "radius")?.unwrap_or(1.0);
+                let (c, uneven) =
+                    Cylinder::from_mitsuba(p0, p1, radius, &to_world, flip).map_err(|e| self.err(el, e))?;
+                if let Some(w) = uneven {
+                    self.warn(el, w)?;
+                }
+                if radiance.is_some() {
+                    emitters_out.push(Emitter::Cylinder(c));
+                } else {
+                    plain_out.push(Shape::Cylinder(c));
+                }
+            }
+            "obj" | "ply" | "serialized" => {
+                let (name, face_normals);
+                let mesh = {
                     let (file, fel) = self.string(&p, "filename")?.ok_or_else(|| {
                         self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
                     })?;
-                    let path = self.src(fel).base.join(&file);
+                    let path = self.resolve_file(fel, &file);
                     name = file.clone();
-                    let loaded =
-                        if kind == "obj" { TriangleMesh::load_obj(&path) } else { crate::shape::mesh::load_ply(&path) };
+                    let loaded = match kind.as_str() {
+                        "obj" => TriangleMesh::load_obj(&path),
+                        "ply" => crate::shape::mesh::load_ply(&path),
+                        _ => {
+                            let index = match self.integer(&p, "shape_index")? {
+                                None => 0,
+                                Some((i, iel)) => u32::try_from(i).map_err(|_| {
+                                    self.err(iel, format!("shape_index must be a whole number from 0, found {i}"))
+                                })?,
+                            };
+                            // The file's own face-normals flag (0x0010) is not used: Mitsuba
+                            // 3.9.1 ignores it too, whatever its format description says.
+                            crate::shape::mesh::load_serialized(&path, index).map(|s| s.mesh)
+                        }
+                    };
                     let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
                     b.geometry.note_file(&path);
                     face_normals = self.boolean(&p, "face_normals")? == Some(true);
@@ -170,6 +214,10 @@ impl<'a> Cx<'a> {
             }
         }
 
+        if !plain_out.is_empty() && radiance.is_some() {
+            self.warn(el, format!("area emitters on `{kind}` shapes are not supported yet: this shape does not emit"))?;
+            radiance = None;
+        }
         let Some(material) = material else {
             // A `null` BSDF: nothing to see, only the emission (if any).
             if let Some(radiance) = radiance {
@@ -192,23 +240,57 @@ impl<'a> Cx<'a> {
         if !emitters_out.is_empty() {
             b.geometry.add_object(emitters_out.iter().map(Emitter::shape), material);
         }
+        if !plain_out.is_empty() {
+            b.geometry.add_object(plain_out, material);
+        }
         self.finish(&p)
     }
-}
 
-/// The unit disk at z = 0 facing +z as a fan of `n` triangles, its radius enlarged so the
-/// polygon has the disk's area (pi).
-fn disk_mesh(n: u32) -> TriangleMesh {
-    let step = std::f32::consts::TAU / n as f32;
-    let r = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
-    let mut positions = vec![Vec3::ZERO];
-    positions.extend((0..n).map(|i| {
-        let a = i as f32 * step;
-        Vec3::new(r * a.cos(), r * a.sin(), 0.0)
-    }));
-    let indices = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
-    let normals = Some(vec![Vec3::Z; positions.len()]);
-    TriangleMesh { positions, normals, uvs: None, indices }
+    /// Builds a `shapegroup` (once, however many instances refer to it) and returns its group
+    /// index. Its shapes keep their own BSDFs; it is not rendered by itself.
+    fn shapegroup(&mut self, el: &'a El, b: &mut Build) -> Result<u32, SceneError> {
+        let key = el as *const El as usize;
+        if let Some(&g) = b.group_cache.get(&key) {
+            return Ok(g);
+        }
+        if b.geometry.in_group() {
+            return Err(self.err(el, "a shapegroup cannot be inside another shapegroup (Mitsuba refuses that too)"));
+        }
+        let p = self.props(el)?;
+        let group = b.geometry.begin_group().map_err(|e| self.err(el, e))?;
+        for (child, _) in self.object(&p, None, "shape") {
+            self.shape(child, b)?;
+        }
+        b.geometry.end_group();
+        self.finish(&p)?;
+        if b.geometry.group_len(group) == 0 {
+            self.warn(el, "this shapegroup holds no shape caustic renders: its instances show nothing")?;
+        }
+        b.group_cache.insert(key, group);
+        Ok(group)
+    }
+
+    /// An `instance`: a referenced `shapegroup` placed by `to_world`.
+    fn instance(&mut self, el: &'a El, b: &mut Build) -> Result<(), SceneError> {
+        if b.geometry.in_group() {
+            return Err(self.err(el, "an instance cannot be inside a shapegroup (Mitsuba does not nest instancing)"));
+        }
+        let p = self.props(el)?;
+        let to_world = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
+        let groups = self.object(&p, None, "shape");
+        let [(group_el, at)] = groups.as_slice() else {
+            return Err(self.err(
+                el,
+                "an instance needs exactly one shapegroup: <ref id=\"...\"/> naming a <shape type=\"shapegroup\">",
+            ));
+        };
+        if self.attr(group_el, "type")?.is_none_or(|t| t.0 != "shapegroup") {
+            return Err(self.err(at, "an instance must refer to a <shape type=\"shapegroup\">"));
+        }
+        let group = self.shapegroup(group_el, b)?;
+        b.geometry.add_instance(group, &to_world).map_err(|e| self.err(el, e))?;
+        self.finish(&p)
+    }
 }
 
 /// A mesh of two triangles that form a planar parallelogram, as a quad facing the triangles'

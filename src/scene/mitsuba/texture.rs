@@ -125,7 +125,7 @@ impl<'a> Cx<'a> {
             let _ = self.prop(p, name);
         }
         let to_uv = self.to_uv(p)?;
-        let path = self.src(fel).base.join(&file);
+        let path = self.resolve_file(fel, &file);
         let key = (path.clone(), raw);
         let image = match b.images.get(&key) {
             Some(img) => img.clone(),

@@ -52,8 +52,12 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             cx.at(b.span(), "`background` is a constant environment light and [[lights]] has one too: keep one of them")
         })?;
     }
+    let groups = match sections.remove("groups") {
+        Some(v) => cx.groups(v, &materials, &mut geometry)?,
+        None => Default::default(),
+    };
     if let Some(v) = sections.remove("objects") {
-        cx.objects(v, &materials, &mut geometry)?;
+        cx.objects(v, &materials, &groups, &mut geometry)?;
     }
     let geometry_files = geometry.files().to_vec();
     let (width, height) = (render.width.unwrap_or(DEFAULT_SIZE.0), render.height.unwrap_or(DEFAULT_SIZE.1));
@@ -128,13 +132,14 @@ impl<'a> Cx<'a> {
         let mut sections = HashMap::new();
         for (key, value) in doc.into_inner() {
             let k: &str = key.get_ref();
-            let known =
-                ["render", "camera", "textures", "materials", "lights", "objects"].into_iter().find(|s| *s == k);
+            let known = ["render", "camera", "textures", "materials", "lights", "groups", "objects"]
+                .into_iter()
+                .find(|s| *s == k);
             let Some(section) = known else {
                 return Err(self.at(
                     key.span(),
                     format!(
-                        "unknown section `{k}`; expected one of render, camera, textures, materials, lights, objects"
+                        "unknown section `{k}`; expected one of render, camera, textures, materials, lights, groups, objects"
                     ),
                 ));
             };

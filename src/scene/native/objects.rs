@@ -10,8 +10,9 @@ use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
 use crate::scene::environment::environment_map;
-use crate::shape::{Plane, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
+use crate::shape::{Cylinder, Disk, Plane, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
 use crate::texture::image::load_image;
+use std::collections::HashMap;
 use std::ops::Range;
 use toml::Spanned;
 use toml::de::DeValue;
@@ -155,22 +156,111 @@ impl<'a> Cx<'a> {
         Ok(())
     }
 
-    /// Step 5: objects, each with its material.
-    pub(super) fn objects(
+    /// Step 5a: groups of objects placed by instances (`[groups.NAME]` with `objects`), each
+    /// built once in its own space. Returns their indices by name.
+    pub(super) fn groups(
         &self,
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
         geometry: &mut SceneBuilder,
+    ) -> Result<HashMap<String, u32>, SceneError> {
+        let span = value.span();
+        let DeValue::Table(table) = value.into_inner() else {
+            return Err(self.at(span, "`groups` must be a table of named groups ([groups.NAME] with `objects`)"));
+        };
+        let mut out = HashMap::new();
+        for (name, value) in table {
+            let name_span = name.span();
+            let name = name.get_ref().to_string();
+            let span = value.span();
+            let DeValue::Table(mut group) = value.into_inner() else {
+                return Err(self.at(span, format!("group `{name}` must be a table holding `objects`")));
+            };
+            if let Some(key) = group.keys().find(|k| k.get_ref() != "objects") {
+                return Err(self.at(
+                    key.span(),
+                    format!("unknown key `{}` in group `{name}`; a group holds only `objects`", key.get_ref()),
+                ));
+            }
+            let Some(objects) = group.remove("objects") else {
+                return Err(self.at(name_span, format!("group `{name}` has no `objects` ([[groups.{name}.objects]])")));
+            };
+            let index = geometry.begin_group().map_err(|e| self.at(span.clone(), e))?;
+            for value in self.array(objects, "objects")? {
+                self.object_entry(value, names, None, geometry)?;
+            }
+            geometry.end_group();
+            if geometry.group_len(index) == 0 {
+                return Err(self.at(name_span, format!("group `{name}` has no objects")));
+            }
+            out.insert(name, index);
+        }
+        Ok(out)
+    }
+
+    /// Step 5b: objects, each with its material, and instances of groups.
+    pub(super) fn objects(
+        &self,
+        value: Spanned<DeValue<'a>>,
+        names: &MaterialNames,
+        groups: &HashMap<String, u32>,
+        geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
         for value in self.array(value, "objects")? {
-            let span = value.span();
-            let (kind, value) = self.tagged(value, "object", schema::OBJECT_KINDS)?;
-            let d: ObjectDesc = self.de(value)?;
-            let material = self.material_of(d.material.as_ref(), names, geometry)?;
-            let transform = self.transform(&d.transform, span.clone())?;
-            self.object(kind, &d, &transform, span, material, geometry)?;
+            self.object_entry(value, names, Some(groups), geometry)?;
         }
         Ok(())
+    }
+
+    /// One `[[objects]]` entry; `groups` is `None` inside a group, where instances and planes
+    /// are refused.
+    fn object_entry(
+        &self,
+        value: Spanned<DeValue<'a>>,
+        names: &MaterialNames,
+        groups: Option<&HashMap<String, u32>>,
+        geometry: &mut SceneBuilder,
+    ) -> Result<(), SceneError> {
+        let span = value.span();
+        let (kind, value) = self.tagged(value, "object", schema::OBJECT_KINDS)?;
+        let d: ObjectDesc = self.de(value)?;
+        let transform = self.transform(&d.transform, span.clone())?;
+        match (kind, groups) {
+            ("instance", Some(groups)) => return self.instance(&d, &transform, span, groups, geometry),
+            ("instance", None) => return Err(self.at(span, "a group cannot hold instances (groups do not nest)")),
+            ("plane", None) => {
+                return Err(self.at(span, "a plane is unbounded and cannot be in a group; put it in [[objects]]"));
+            }
+            _ => {}
+        }
+        let material = self.material_of(d.material.as_ref(), names, geometry)?;
+        self.object(kind, &d, &transform, span, material, geometry)
+    }
+
+    fn instance(
+        &self,
+        d: &ObjectDesc,
+        transform: &Transform,
+        span: Range<usize>,
+        groups: &HashMap<String, u32>,
+        geometry: &mut SceneBuilder,
+    ) -> Result<(), SceneError> {
+        let Some(name) = &d.group else {
+            return Err(self.at(span, "an instance needs `group`, the name of a [groups.NAME] table"));
+        };
+        let Some(&g) = groups.get(name.get_ref().as_str()) else {
+            let mut known: Vec<&str> = groups.keys().map(String::as_str).collect();
+            known.sort();
+            return Err(self.at(
+                name.span(),
+                format!(
+                    "no group named `{}` (defined: {})",
+                    name.get_ref(),
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            ));
+        };
+        geometry.add_instance(g, transform).map_err(|e| self.at(span, e))
     }
 
     fn object(
@@ -227,12 +317,32 @@ impl<'a> Cx<'a> {
                 }
                 add_shapes(geometry, faces, material, d);
             }
+            "cylinder" => {
+                let p0 = d.p0.map_or(Vec3::ZERO, |p| p.0);
+                let p1 = d.p1.map_or(Vec3::Y, |p| p.0);
+                let (c, uneven) = Cylinder::from_mitsuba(p0, p1, d.radius.map_or(1.0, |r| r.0), transform, false)
+                    .map_err(|e| self.at(span.clone(), e))?;
+                if uneven.is_some() {
+                    return Err(self.at(
+                        span,
+                        "a cylinder can only be translated, rotated and scaled uniformly across its axis; use a mesh for an elliptic one",
+                    ));
+                }
+                add_shapes(geometry, vec![Shape::Cylinder(c)], material, d);
+            }
+            "disk" => {
+                let center = d.center.map_or(Vec3::ZERO, |p| p.0);
+                let normal = d.normal.map_or(Vec3::Y, |n| n.0);
+                let disk = Disk::facing(center, normal, d.radius.map_or(1.0, |r| r.0), transform)
+                    .ok_or_else(|| self.at(span, "disk is degenerate after its transform"))?;
+                add_shapes(geometry, vec![Shape::Disk(disk)], material, d);
+            }
             "mesh" | "torus_knot" => {
                 let mesh = if kind == "mesh" {
                     let file = d
                         .file
                         .as_ref()
-                        .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ or PLY file)"))?;
+                        .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ, PLY or serialized file)"))?;
                     let path = self.base.join(file.get_ref());
                     let mesh = TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?;
                     geometry.note_file(&path);
@@ -317,10 +427,12 @@ fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d:
     };
     let emitters: Vec<Emitter> = shapes
         .into_iter()
-        .map(|s| match s {
-            Shape::Sphere(s) => Emitter::Sphere(s),
-            Shape::Quad(q) => Emitter::Quad(q),
-            Shape::Triangle(t) => Emitter::Triangle(t.p),
+        .filter_map(|s| match s {
+            Shape::Sphere(s) => Some(Emitter::Sphere(s)),
+            Shape::Quad(q) => Some(Emitter::Quad(q)),
+            Shape::Triangle(t) => Some(Emitter::Triangle(t.p)),
+            Shape::Disk(d) => Some(Emitter::Disk(d)),
+            Shape::Cylinder(c) => Some(Emitter::Cylinder(c)),
         })
         .collect();
     let surface = d.material.as_ref().map(|_| *geometry.material(material));

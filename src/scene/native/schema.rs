@@ -53,6 +53,9 @@ pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("box", &["material", "transform", "emission", "min", "max"]),
     ("mesh", &["material", "transform", "emission", "file", "face_normals"]),
     ("torus_knot", &["material", "transform", "emission", "p", "q", "radius", "tube", "segments", "sides"]),
+    ("cylinder", &["material", "transform", "emission", "p0", "p1", "radius"]),
+    ("disk", &["material", "transform", "emission", "center", "normal", "radius"]),
+    ("instance", &["group", "transform"]),
 ];
 
 #[derive(Deserialize, Default)]
@@ -206,4 +209,7 @@ pub struct ObjectDesc {
     pub tube: Option<Positive>,
     pub segments: Option<u32>,
     pub sides: Option<u32>,
+    pub p0: Option<Point>,
+    pub p1: Option<Point>,
+    pub group: Option<Spanned<String>>,
 }

@@ -1,9 +1,11 @@
-//! Triangle meshes: indexed vertex arrays, read from OBJ or PLY files (`TriangleMesh::load`, the
-//! one reader both scene formats use) or generated procedurally.
+//! Triangle meshes: indexed vertex arrays, read from OBJ, PLY or Mitsuba `serialized` files
+//! (`TriangleMesh::load`, the one reader both scene formats use) or generated procedurally.
 
 mod ply;
+mod serialized;
 
 pub use ply::load_ply;
+pub use serialized::{Serialized, load_serialized, parse_serialized};
 
 use super::Triangle;
 use crate::geometry::Transform;
@@ -29,7 +31,7 @@ pub enum MeshError {
     Read { path: String, format: &'static str, message: String },
     #[error("{format} mesh `{path}`: {message}")]
     Invalid { path: String, format: &'static str, message: String },
-    #[error("mesh `{path}`: unknown format (expected a .obj or .ply file)")]
+    #[error("mesh `{path}`: unknown format (expected a .obj, .ply or .serialized file)")]
     Format { path: String },
 }
 
@@ -38,6 +40,8 @@ pub enum MeshError {
 pub enum MeshFormat {
     Obj,
     Ply,
+    /// Mitsuba's `serialized` (its first mesh).
+    Serialized,
 }
 
 impl MeshFormat {
@@ -46,6 +50,7 @@ impl MeshFormat {
         match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
             "obj" => Some(MeshFormat::Obj),
             "ply" => Some(MeshFormat::Ply),
+            "serialized" => Some(MeshFormat::Serialized),
             _ => None,
         }
     }
@@ -54,6 +59,7 @@ impl MeshFormat {
         match self {
             MeshFormat::Obj => "OBJ",
             MeshFormat::Ply => "PLY",
+            MeshFormat::Serialized => "serialized",
         }
     }
 }
@@ -77,11 +83,12 @@ fn obj_error(e: &tobj::LoadError) -> &'static str {
 }
 
 impl TriangleMesh {
-    /// Reads an OBJ or PLY file, chosen by its extension.
+    /// Reads an OBJ, PLY or `serialized` file (its first mesh), chosen by its extension.
     pub fn load(path: &Path) -> Result<Self, MeshError> {
         match MeshFormat::of(path) {
             Some(MeshFormat::Obj) => Self::load_obj(path),
             Some(MeshFormat::Ply) => load_ply(path),
+            Some(MeshFormat::Serialized) => load_serialized(path, 0).map(|s| s.mesh),
             None => Err(MeshError::Format { path: path.display().to_string() }),
         }
     }
