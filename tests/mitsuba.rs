@@ -369,7 +369,7 @@ fn materials_map_to_our_model() {
 #[test]
 fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     let text = wrap(
-        r#"<shape type="cylinder"/>
+        r#"<shape type="sdfgrid"/>
     <shape type="sphere"><bsdf type="hair"/></shape>
     <shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf></shape>
     <shape type="sphere"><bsdf type="measured"/></shape>
@@ -378,7 +378,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     );
     let (s, warnings) = xml(&text);
     let expect = [
-        (7, "shape `cylinder` is not supported"),
+        (7, "shape `sdfgrid` is not supported"),
         (8, "BSDF `hair` is not supported"),
         (9, "texture `mesh_attribute` is not supported"),
         (10, "BSDF `measured` is not supported"),

@@ -48,9 +48,11 @@ fn issue16_toml_meshes_read_ply_and_errors_name_format_and_cause() {
         .unwrap();
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
     std::fs::write(dir.join("mesh.stl"), "solid x\n").unwrap();
-    for (file, words) in
-        [("bad.ply", ["PLY", "bad.ply"]), ("bad.obj", ["OBJ", "vertex"]), ("mesh.stl", [".obj or .ply", "mesh.stl"])]
-    {
+    for (file, words) in [
+        ("bad.ply", ["PLY", "bad.ply"]),
+        ("bad.obj", ["OBJ", "vertex"]),
+        ("mesh.stl", [".obj, .ply or .serialized", "mesh.stl"]),
+    ] {
         let e = caustic::app::load_toml_str(&mesh_scene(file, ""), "m.toml", &dir, &Default::default())
             .err()
             .unwrap()

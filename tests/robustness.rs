@@ -334,7 +334,7 @@ fn value_for(key: &'static str, noisy: bool) -> BoxedStrategy<String> {
     let (valid, wrong): (BoxedStrategy<String>, BoxedStrategy<String>) = match key {
         "up" | "direction" | "normal" => (valid_direction(), prop_oneof![vec3(), valid_vec3(Range::Any)].boxed()),
         "eye" | "look_at" | "focus_on" | "position" | "center" | "point" | "corner" | "edge1" | "edge2" | "min"
-        | "max" => (valid_vec3(Range::Any), vec3()),
+        | "max" | "p0" | "p1" => (valid_vec3(Range::Any), vec3()),
         "color" | "background" | "ambient" => {
             (prop_oneof![3 => valid_vec3(Range::NonNegative), 1 => valid_number(Range::NonNegative)].boxed(), vec3())
         }
@@ -357,6 +357,7 @@ fn value_for(key: &'static str, noisy: bool) -> BoxedStrategy<String> {
             any_value(),
         ),
         "shape" => (str_of(vec!["\"quad\"", "\"sphere\""]), str_of(vec!["\"disk\"", "1", "\"\""])),
+        "group" => (str_of(vec!["\"g\""]), str_of(vec!["\"h\"", "1", "\"\""])),
         "integrator" => (str_of(vec!["\"whitted\"", "\"path\"", "\"photon\""]), str_of(vec!["\"bdpt\"", "0"])),
         "sampler" => (str_of(vec!["\"jittered\"", "\"sobol\""]), str_of(vec!["\"halton\"", "0"])),
         "antialias" | "transparent_shadows" | "sample_border" => {
@@ -493,6 +494,9 @@ const OBJECT_KEYS: &[&str] = &[
     "tube",
     "segments",
     "sides",
+    "p0",
+    "p1",
+    "group",
 ];
 
 /// Keys each tagged kind accepts (so most generated tables get past the key check).
@@ -512,6 +516,9 @@ fn kind_keys(kind: &str) -> &'static [&'static str] {
         "box" => &["material", "transform", "min", "max"],
         "mesh" => &["material", "transform", "file"],
         "torus_knot" => &["material", "transform", "p", "q", "radius", "tube", "segments", "sides"],
+        "cylinder" => &["material", "transform", "p0", "p1", "radius"],
+        "disk" => &["material", "transform", "center", "normal", "radius"],
+        "instance" => &["group", "transform"],
         _ => &[],
     }
 }
@@ -586,11 +593,23 @@ fn scene_doc(noisy: bool) -> BoxedStrategy<String> {
         });
     let lights = prop::collection::vec(tagged(&["point", "spot", "directional", "area"], LIGHT_KEYS, noisy), 0..4);
     let objects = prop::collection::vec(
-        tagged(&["sphere", "plane", "quad", "box", "mesh", "torus_knot"], OBJECT_KEYS, noisy),
+        tagged(
+            &["sphere", "plane", "quad", "box", "mesh", "torus_knot", "cylinder", "disk", "instance"],
+            OBJECT_KEYS,
+            noisy,
+        ),
         0..6,
     );
-    (render, photon, camera, materials, lights, objects, maybe(if noisy { 0.02 } else { 0.0 }, "[a-z]{1,8}"))
-        .prop_map(|(render, photon, camera, materials, lights, objects, extra)| {
+    // Objects of group `g`, which instances name (planes and instances only when noisy).
+    let group_kinds: &'static [&'static str] = if noisy {
+        &["sphere", "plane", "quad", "box", "mesh", "torus_knot", "cylinder", "disk", "instance"]
+    } else {
+        &["sphere", "quad", "box", "mesh", "torus_knot", "cylinder", "disk"]
+    };
+    let groups = prop::collection::vec(tagged(group_kinds, OBJECT_KEYS, noisy), 0..3);
+    let extra = maybe(if noisy { 0.02 } else { 0.0 }, "[a-z]{1,8}");
+    (render, photon, camera, materials, lights, (groups, objects), extra)
+        .prop_map(|(render, photon, camera, materials, lights, (groups, objects), extra)| {
             let mut s = String::new();
             if let Some(r) = render {
                 s += &format!("[render]\n{}\n", r.join("\n"));
@@ -606,6 +625,9 @@ fn scene_doc(noisy: bool) -> BoxedStrategy<String> {
             }
             for l in lights {
                 s += &format!("[[lights]]\n{l}\n");
+            }
+            for g in groups {
+                s += &format!("[[groups.g.objects]]\n{g}\n");
             }
             for o in objects {
                 s += &format!("[[objects]]\n{o}\n");
