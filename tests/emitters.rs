@@ -178,8 +178,10 @@ fn photon_mapping_and_sppm_carry_mesh_lights_projectors_and_reflecting_emitters(
 fn emitting_disks_and_cylinders_give_the_irradiance_of_the_formula() {
     // A disk of radius R facing a point on its axis at distance d: E = pi L R^2 / (R^2 + d^2).
     // Mitsuba's disk faces +z; this one is turned to face -z, towards the probe below it.
-    let s = xml(r#"<shape type="disk"><transform name="to_world"><scale value="0.8"/><rotate x="1" angle="180"/><translate z="2"/></transform>
-        <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#);
+    let s = xml(
+        r#"<shape type="disk"><transform name="to_world"><scale value="0.8"/><rotate x="1" angle="180"/><translate z="2"/></transform>
+        <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#,
+    );
     let e = irradiance(&s, Vec3::ZERO, Vec3::Z, 200_000);
     let exact = PI * 3.0 * 0.64 / (0.64 + 4.0);
     assert!((e - exact).abs() < 0.005 * exact, "disk: {e} vs {exact}");
@@ -187,8 +189,10 @@ fn emitting_disks_and_cylinders_give_the_irradiance_of_the_formula() {
     assert!(irradiance(&s, Vec3::new(0.0, 0.0, 4.0), -Vec3::Z, 10_000) == 0.0);
     // A cylinder emits from its outer side: its power is pi L x its area 2 pi r h, and a probe
     // on its axis outside it sees none of its outer surface.
-    let s = xml(r#"<shape type="cylinder"><float name="radius" value="0.5"/><point name="p0" x="0" y="0" z="0"/><point name="p1" x="0" y="0" z="2"/>
-        <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#);
+    let s = xml(
+        r#"<shape type="cylinder"><float name="radius" value="0.5"/><point name="p0" x="0" y="0" z="0"/><point name="p1" x="0" y="0" z="2"/>
+        <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#,
+    );
     let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
     let exact_power = PI * 2.0 * (2.0 * PI * 0.5 * 2.0);
     assert!((power - exact_power).abs() < 1e-4 * exact_power, "{power} vs {exact_power}");
