@@ -245,7 +245,7 @@ impl Bvh {
     }
 
     /// Closest hit in (0, t_max): the primitive index (into `prims`) and its hit.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
         if self.nodes.is_empty() {
             return None;

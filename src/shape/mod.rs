@@ -133,7 +133,7 @@ impl Shape {
     }
 
     /// Surface data at a hit found by `intersect`. `meshes` supplies vertex normals and uv.
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
         match self {
             Shape::Sphere(s) => s.surface(ray, h),
