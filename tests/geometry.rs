@@ -479,6 +479,7 @@ fn million_instances(n: usize) -> (caustic::scene::Scene, caustic::scene::desc::
         fov: caustic::camera::FieldOfView::Angle { degrees: 45.0, axis: caustic::camera::FovAxis::Y },
         lens_radius: 0.0,
         focal_distance: 1.0,
+        principal_point: caustic::math::Vec2::ZERO,
     }
     .build(4, 4);
     b.finish(cam, &Default::default()).unwrap()
