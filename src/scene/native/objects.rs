@@ -427,12 +427,12 @@ fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d:
     };
     let emitters: Vec<Emitter> = shapes
         .into_iter()
-        .filter_map(|s| match s {
-            Shape::Sphere(s) => Some(Emitter::Sphere(s)),
-            Shape::Quad(q) => Some(Emitter::Quad(q)),
-            Shape::Triangle(t) => Some(Emitter::Triangle(t.p)),
-            Shape::Disk(d) => Some(Emitter::Disk(d)),
-            Shape::Cylinder(c) => Some(Emitter::Cylinder(c)),
+        .map(|s| match s {
+            Shape::Sphere(s) => Emitter::Sphere(s),
+            Shape::Quad(q) => Emitter::Quad(q),
+            Shape::Triangle(t) => Emitter::Triangle(t.p),
+            Shape::Disk(d) => Emitter::Disk(d),
+            Shape::Cylinder(c) => Emitter::Cylinder(c),
         })
         .collect();
     let surface = d.material.as_ref().map(|_| *geometry.material(material));
