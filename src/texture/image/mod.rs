@@ -30,6 +30,8 @@ mod radiance;
 mod tga;
 
 #[cfg(test)]
+mod test_writers;
+#[cfg(test)]
 mod tests;
 
 use std::fmt;
