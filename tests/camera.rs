@@ -6,34 +6,23 @@
 
 mod common;
 
+use common::mitsuba_refs::{References, mean_luminance};
+
 use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::film::filter::Filter;
-use caustic::film::output::read_exr;
 use caustic::integrator::Integrator;
-use caustic::math::luminance;
 use caustic::render::RenderControl;
 use caustic::scene::mitsuba::load_mitsuba_str;
 use caustic::scene::{LoadOptions, Overrides};
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::LazyLock;
+
+static REFS: LazyLock<References> = LazyLock::new(|| References::new("camera"));
 
 fn dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/camera")
 }
-
-/// Mitsuba's noise per case (the RMS per-pixel standard deviation of its image), from MANIFEST.md.
-static REFERENCE_NOISE: LazyLock<HashMap<String, f64>> = LazyLock::new(|| {
-    let text = std::fs::read_to_string(dir().join("MANIFEST.md")).expect("MANIFEST.md");
-    let mut noise = HashMap::new();
-    for line in text.lines().filter(|l| l.starts_with("| `")) {
-        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        // | case | size | spp | s | mean R, G, B | mean lum. | noise |
-        noise.insert(cells[1].trim_matches('`').to_string(), cells[7].parse::<f64>().expect("noise column"));
-    }
-    noise
-});
 
 /// The XML text of a case.
 fn case_text(case: &str) -> String {
@@ -50,16 +39,6 @@ fn render_xml(text: &str, spp: u32, seed: u64) -> Image {
     load_xml(text, spp, &Overrides { seed: Some(seed), ..Default::default() }).render().image
 }
 
-fn mean_luminance(img: &Image) -> f64 {
-    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
-}
-
-fn rmse(a: &Image, b: &Image) -> f64 {
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    let s: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() as f64 / 3.0).sum();
-    (s / a.pixels.len() as f64).sqrt()
-}
-
 /// Our path tracer's samples per pixel against the 4096 of the references.
 const SPP: u32 = 512;
 
@@ -70,21 +49,7 @@ fn compare(case: &str, text: &str) -> (f64, f64, String) {
 }
 
 fn compare_at(case: &str, text: &str, spp: u32) -> (f64, f64, String) {
-    let reference = read_exr(&dir().join(format!("{case}.exr"))).unwrap_or_else(|e| panic!("{case}: {e}"));
-    let (a, b) = (render_xml(text, spp, 1), render_xml(text, spp, 2));
-    let noise = rmse(&a, &b) / 2f64.sqrt();
-    let ref_noise = REFERENCE_NOISE[case];
-    let expected = (noise * noise + ref_noise * ref_noise).sqrt();
-    let (ours, theirs) = ((mean_luminance(&a) + mean_luminance(&b)) / 2.0, mean_luminance(&reference));
-    let rel = ours / theirs - 1.0;
-    let err = rmse(&a, &reference);
-    let line = format!(
-        "{case:12} mean {ours:.5} vs {theirs:.5} ({:+.2}%), rmse {err:.5} vs {expected:.5} from noise ({:.2}x)",
-        rel * 100.0,
-        err / expected
-    );
-    eprintln!("{line}");
-    (rel, err / expected, line)
+    REFS.judge(case, &render_xml(text, spp, 1), &render_xml(text, spp, 2))
 }
 
 #[test]

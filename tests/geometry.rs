@@ -9,18 +9,19 @@
 
 mod common;
 
+use common::mitsuba_refs::{References, mean_luminance, rmse};
+
 use caustic::app::LoadedScene;
-use caustic::film::Image;
-use caustic::film::output::read_exr;
 use caustic::geometry::{Hit, Ray, Transform};
-use caustic::math::{Vec2, Vec3, luminance};
+use caustic::math::{Vec2, Vec3};
 use caustic::scene::builder::SceneBuilder;
 use caustic::scene::desc::IntegratorKind;
 use caustic::scene::{LoadOptions, Overrides};
 use caustic::shape::TriangleMesh;
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::LazyLock;
+
+static REFS: LazyLock<References> = LazyLock::new(|| References::new("geometry"));
 
 fn dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/geometry")
@@ -162,16 +163,6 @@ material = "floor"
     (instanced, flat)
 }
 
-fn mean_luminance(img: &Image) -> f64 {
-    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
-}
-
-fn rmse(a: &Image, b: &Image) -> f64 {
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    let s: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() as f64 / 3.0).sum();
-    (s / a.pixels.len() as f64).sqrt()
-}
-
 /// Instanced and flattened renders with the same seed follow the same random numbers, so they
 /// differ only where rounding changes a path: far less than the noise of one seed against
 /// another. Returns (mean relative difference, rmse between them, the noise).
@@ -234,18 +225,6 @@ fn mitsuba_instances_render_as_the_flattened_scene() {
 
 // --- Mitsuba references ----------------------------------------------------------------------
 
-/// Mitsuba's noise per case, from MANIFEST.md.
-static REFERENCE_NOISE: LazyLock<HashMap<String, f64>> = LazyLock::new(|| {
-    let text = std::fs::read_to_string(dir().join("MANIFEST.md")).expect("MANIFEST.md");
-    let mut noise = HashMap::new();
-    for line in text.lines().filter(|l| l.starts_with("| `")) {
-        // | case | size | spp | s | mean R, G, B | mean lum. | noise |
-        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        noise.insert(cells[1].trim_matches('`').to_string(), cells[7].parse::<f64>().expect("noise column"));
-    }
-    noise
-});
-
 fn load_xml(case: &str, res: u32, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("res".to_string(), res.to_string()), ("spp".to_string(), spp.to_string())];
     let o = Overrides { seed: Some(seed), ..Default::default() };
@@ -255,21 +234,9 @@ fn load_xml(case: &str, res: u32, spp: u32, seed: u64) -> LoadedScene {
 
 /// Renders `case` with two seeds and compares with Mitsuba's image; returns a failure or None.
 fn compare_with_mitsuba(case: &str, spp: u32) -> Option<String> {
-    let reference = read_exr(&dir().join(format!("{case}.exr"))).unwrap_or_else(|e| panic!("{case}: {e}"));
     let (a, b) = (load_xml(case, 64, spp, 1).render().image, load_xml(case, 64, spp, 2).render().image);
-    let noise = rmse(&a, &b) / 2f64.sqrt();
-    let ref_noise = REFERENCE_NOISE[case];
-    let expected = (noise * noise + ref_noise * ref_noise).sqrt();
-    let (ours, theirs) = ((mean_luminance(&a) + mean_luminance(&b)) / 2.0, mean_luminance(&reference));
-    let rel = ours / theirs - 1.0;
-    let err = rmse(&a, &reference);
-    let line = format!(
-        "{case:16} mean {ours:.5} vs {theirs:.5} ({:+.2}%), rmse {err:.5} vs {expected:.5} from noise ({:.2}x)",
-        rel * 100.0,
-        err / expected
-    );
-    eprintln!("{line}");
-    (rel.abs() >= 0.01 || err >= 1.25 * expected).then_some(line)
+    let (rel, ratio, line) = REFS.judge(case, &a, &b);
+    (rel.abs() >= 0.01 || ratio >= 1.25).then_some(line)
 }
 
 #[test]

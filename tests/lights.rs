@@ -6,18 +6,20 @@
 
 mod common;
 
+use common::mitsuba_refs::{References, mean_luminance, rmse};
+
 use caustic::app::LoadedScene;
-use caustic::film::output::read_exr;
-use caustic::film::{INDIRECT, Image};
+use caustic::film::INDIRECT;
 use caustic::integrator::Integrator;
 use caustic::light::Light;
 use caustic::math::{Color, Vec3, luminance};
 use caustic::render::{RenderControl, RenderOutput};
 use caustic::scene::desc::IntegratorKind;
 use caustic::scene::{LoadOptions, Overrides};
-use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::LazyLock;
+
+static REFS: LazyLock<References> = LazyLock::new(|| References::new("lights"));
 
 fn dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lights")
@@ -33,16 +35,6 @@ fn render(s: &LoadedScene, kind: IntegratorKind, spp: u32) -> RenderOutput {
     let control = RenderControl::uncancelled();
     let integrator = Integrator::new(&desc, &s.scene, &settings, control.cancel).expect("not cancelled");
     integrator.render(&s.scene, &settings, &control)
-}
-
-fn mean_luminance(img: &Image) -> f64 {
-    img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
-}
-
-fn rmse(a: &Image, b: &Image) -> f64 {
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    let s: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() as f64 / 3.0).sum();
-    (s / a.pixels.len() as f64).sqrt()
 }
 
 // ------------------------------------------------------------------------------------------
@@ -132,22 +124,6 @@ fn furnace_white_sphere_reads_the_environment_radiance() {
 // Against Mitsuba 3
 // ------------------------------------------------------------------------------------------
 
-/// Mitsuba's noise per case, from MANIFEST.md.
-static REFERENCE_NOISE: LazyLock<HashMap<String, f64>> = LazyLock::new(|| {
-    let text = std::fs::read_to_string(dir().join("MANIFEST.md")).expect("MANIFEST.md");
-    let mut noise = HashMap::new();
-    for line in text.lines().filter(|l| l.starts_with("| `")) {
-        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        // | case | size | spp | s | mean R, G, B | mean lum. | noise | (the table of results
-        // further down has fewer columns)
-        if cells.len() < 9 {
-            continue;
-        }
-        noise.insert(cells[1].trim_matches('`').to_string(), cells[7].parse::<f64>().expect("noise column"));
-    }
-    noise
-});
-
 fn load(case: &str, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("spp".to_string(), spp.to_string())];
     let o = Overrides { seed: Some(seed), ..Default::default() };
@@ -155,28 +131,12 @@ fn load(case: &str, spp: u32, seed: u64) -> LoadedScene {
         .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
 
-fn reference(case: &str) -> Image {
-    read_exr(&dir().join(format!("{case}.exr"))).unwrap_or_else(|e| panic!("{case}: reference: {e}"))
-}
-
 /// The path tracer against Mitsuba: mean luminance within 1%, RMSE within 1.25 times what the
 /// noise of both images predicts. Returns a failure message or None.
 fn compare_with_mitsuba(case: &str, spp: u32) -> Option<String> {
-    let reference = reference(case);
     let (a, b) = (load(case, spp, 1).render().image, load(case, spp, 2).render().image);
-    let noise = rmse(&a, &b) / 2f64.sqrt();
-    let ref_noise = REFERENCE_NOISE[case];
-    let expected = (noise * noise + ref_noise * ref_noise).sqrt();
-    let (ours, theirs) = ((mean_luminance(&a) + mean_luminance(&b)) / 2.0, mean_luminance(&reference));
-    let rel = ours / theirs - 1.0;
-    let err = rmse(&a, &reference);
-    let line = format!(
-        "{case:18} mean {ours:.5} vs {theirs:.5} ({:+.2}%), rmse {err:.5} vs {expected:.5} from noise ({:.2}x)",
-        rel * 100.0,
-        err / expected
-    );
-    eprintln!("{line}");
-    (rel.abs() >= 0.01 || err >= 1.25 * expected).then_some(line)
+    let (rel, ratio, line) = REFS.judge(case, &a, &b);
+    (rel.abs() >= 0.01 || ratio >= 1.25).then_some(line)
 }
 
 #[test]
