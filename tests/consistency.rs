@@ -2,9 +2,11 @@
 //! sphere of the material on a grey floor), rendered by the path tracer, photon mapping and SPPM.
 //! Photon mapping and SPPM must carry all the light the path tracer carries: their mean
 //! luminance agrees with the path tracer's within 2% (3% for glass, whose caustics make every
-//! integrator noisier), or within the noise the renders measure if that is larger. Caustics of
-//! point, spot and directional lights through smooth mirrors and glass cannot be rendered by the
-//! path tracer: there photon mapping and SPPM are compared with each other.
+//! integrator noisier), or within the noise the renders measure if that is larger, and so does
+//! each `--layers` layer (the layers follow the same rule in every integrator:
+//! `integrator::layers`). Caustics of point, spot and directional lights through smooth mirrors
+//! and glass cannot be rendered by the path tracer: there photon mapping and SPPM are compared
+//! with each other.
 
 mod common;
 
@@ -163,18 +165,25 @@ intensity = 1"#,
     ),
 ];
 
-/// Cells whose disagreement is a known open defect of issue 13, measured at these sample counts
-/// and reported by the test (the table it prints) without failing it, until they are fixed:
-/// photon mapping +4.4% on the Phong lobe under a spot light; photon mapping +5.8% and SPPM
-/// +4.9% on the floor lit through a mirror sphere by a quad light; photon mapping +2.0% on the
-/// textured sphere under a small sphere light; SPPM +4.9..9.5% through rough glass under a quad
-/// light. Renders are deterministic, so the other cells pass or fail the same way everywhere.
-const KNOWN_OPEN: &[(&str, &str, &str)] = &[
-    ("spot", "phong", "photon"),
-    ("quad", "mirror", "photon"),
-    ("quad", "mirror", "sppm"),
-    ("sphere", "textured", "photon"),
-    ("quad", "roughdielectric", "sppm"),
+/// Comparisons that disagree at these sample counts, each an open item of issue 13 with what
+/// was measured; the test prints them in its table (marked "known") without failing, and fails
+/// on every other cell. (light, material, comparison, layer)
+/// - quad x glass, both images +7% against the path tracer, whose caustics of the small light
+///   through glass are found by chance at 48 samples: at 120 x 100 and 2048 samples the three
+///   integrators agree within 1% in every layer. The matrix needs a better noise measure here.
+/// - sphere x roughdielectric (SPPM): the radius bias of a caustic seen through frosted glass;
+///   at 120 x 100 it falls from +9.5% to +6.8% in the sphere's region from 256 to 1024
+///   iterations. spot x roughconductor (SPPM indirect +16%) is likely the same.
+/// - mesh x diffuse_mirror (photon specular -24%) and mesh x roughdielectric (photon -3%):
+///   under the emitting mesh, not yet diagnosed.
+const KNOWN_OPEN: &[(&str, &str, &str, &str)] = &[
+    ("quad", "glass", "photon", "image"),
+    ("quad", "glass", "sppm", "image"),
+    ("sphere", "roughdielectric", "sppm", "image"),
+    ("sphere", "roughdielectric", "sppm", "indirect"),
+    ("spot", "roughconductor", "sppm", "indirect"),
+    ("mesh", "diffuse_mirror", "photon/sppm", "specular"),
+    ("mesh", "roughdielectric", "photon", "image"),
 ];
 
 fn scene_text(material: &str, light: &str, plane: bool) -> String {
@@ -220,33 +229,59 @@ material = "test"
     )
 }
 
-fn render(s: &str, kind: IntegratorKind, spp: u32, seed: u64) -> Image {
-    // Few photons: the scenes are tiny, and the matrix must run in under a minute.
+/// Camera samples per pixel of every integrator (SPPM's iterations; the photon integrator
+/// gathers 2 rays at each). With the same count and seed, the three integrators start the same
+/// camera rays, so what a pixel covers (a light's reflection smaller than a pixel in the mirror
+/// sphere) is the same in every render and cancels in their difference, which is measured per
+/// seed.
+const SPP: u32 = 48;
+/// Renders with seeds 11, 12, ...
+const RUNS: u64 = 3;
+
+/// The means of the image and of its direct, specular, caustic and indirect layers.
+fn render(s: &str, kind: IntegratorKind, seed: u64) -> [f64; 5] {
+    // Few photons: the scenes are tiny, and the matrix must run in about a minute.
     let photon = PhotonOptions {
         photons: Some(40_000),
         caustic_photons: Some(20_000),
-        gather: Some(16),
+        gather: Some(2),
         photons_per_iter: Some(8_000),
         ..Default::default()
     };
-    let o = Overrides { integrator: Some(kind), spp: Some(spp), seed: Some(seed), photon, ..Default::default() };
-    let loaded: LoadedScene = common::scene_with(s, &o);
-    loaded.render().image
+    let o = Overrides { integrator: Some(kind), spp: Some(SPP), seed: Some(seed), photon, ..Default::default() };
+    let mut loaded: LoadedScene = common::scene_with(s, &o);
+    loaded.settings.layers = true;
+    let out = loaded.render();
+    let mut means = [0.0; 5];
+    for (m, img) in means.iter_mut().zip(std::iter::once(&out.image).chain(&out.layers)) {
+        *m = mean(img);
+    }
+    means
 }
 
 fn mean(img: &Image) -> f64 {
     img.pixels.iter().map(|&c| luminance(c) as f64).sum::<f64>() / img.pixels.len() as f64
 }
 
-/// A mean and its standard error, from `runs` renders with different seeds. (The lights
-/// stay out of the camera's view: a tiny bright emitter covering part of a pixel would make the
-/// means depend on a few samples.)
-fn measure(s: &str, kind: IntegratorKind, spp: u32, runs: u64) -> (f64, f64) {
-    let means: Vec<f64> = (0..runs).map(|k| mean(&render(s, kind, spp, 11 + k))).collect();
-    let m = means.iter().sum::<f64>() / runs as f64;
-    let var = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (runs as f64 - 1.0);
-    (m, (var / runs as f64).sqrt())
+/// The mean of `b` over the runs, and the mean difference a - b with its standard error: from
+/// the per-seed differences when the runs are `paired` (same camera rays), else from each side's
+/// own spread.
+fn difference(a: &[f64], b: &[f64], paired: bool) -> (f64, f64, f64) {
+    let n = a.len() as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+    let var_of_mean = |v: &[f64]| {
+        let m = mean(v);
+        v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0) / n
+    };
+    let err2 = if paired {
+        var_of_mean(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>())
+    } else {
+        var_of_mean(a) + var_of_mean(b)
+    };
+    (mean(b), mean(a) - mean(b), err2.sqrt())
 }
+
+const LAYER_NAMES: [&str; 5] = ["image", "direct", "specular", "caustic", "indirect"];
 
 #[test]
 fn photon_mapping_and_sppm_agree_with_the_path_tracer_everywhere() {
@@ -258,40 +293,61 @@ fn photon_mapping_and_sppm_agree_with_the_path_tracer_everywhere() {
             let delta_light = matches!(*light, "point" | "spot" | "directional" | "directional_plane");
             let smooth_specular = matches!(*material, "mirror" | "glass" | "diffuse_mirror" | "plastic");
             let glass = matches!(*material, "glass" | "roughdielectric");
-            let (path, path_err) = measure(&s, IntegratorKind::Path, 96, 3);
-            let (photon, photon_err) = measure(&s, IntegratorKind::Photon, 4, 3);
-            let (sppm, sppm_err) = measure(&s, IntegratorKind::Sppm, 48, 3);
+            let runs = |kind| (11..11 + RUNS).map(|seed| render(&s, kind, seed)).collect::<Vec<_>>();
+            let (path, photon, sppm) =
+                (runs(IntegratorKind::Path), runs(IntegratorKind::Photon), runs(IntegratorKind::Sppm));
             let tol = if glass { 0.03 } else { 0.02 };
-            let bound = |ea: f64, b: f64, eb: f64| (tol * b).max(4.0 * (ea * ea + eb * eb).sqrt());
-            let mut cell = |name: &str, a: f64, ea: f64, b: f64, eb: f64| {
-                let known = KNOWN_OPEN.iter().any(|&(l, m, i)| l == *light && m == *material && name.starts_with(i));
-                let ok = (a - b).abs() <= bound(ea, b, eb) || known;
-                if !ok {
-                    failures.push(format!(
-                        "{light} x {material}: {name} {a:.5} vs {b:.5} ({:+.2}%)",
-                        (a / b - 1.0) * 100.0
-                    ));
+            // Compares integrator `a` with `b` on the image and (with `layers`) on each layer. A
+            // layer is held to the tolerance of its own mean, or to half the image's tolerance
+            // in image units where that is larger (a layer holding 1% of the light need not agree
+            // within 2% of itself), or to four standard errors of the difference.
+            let mut compare = |name: &str, a: &[[f64; 5]], b: &[[f64; 5]], layers: bool| {
+                let mut cells = Vec::new();
+                let image_b = b.iter().map(|r| r[0]).sum::<f64>() / b.len() as f64;
+                let paired = true;
+                for (j, layer) in LAYER_NAMES.iter().enumerate().take(if layers { 5 } else { 1 }) {
+                    let col = |v: &[[f64; 5]]| v.iter().map(|r| r[j]).collect::<Vec<_>>();
+                    let (mb, md, err) = difference(&col(a), &col(b), paired);
+                    let floor = if j == 0 { 0.0 } else { tol / 2.0 * image_b };
+                    let bound = (tol * mb).max(floor).max(4.0 * err);
+                    let known = KNOWN_OPEN.iter().any(|k| *k == (*light, *material, name, *layer));
+                    let mark = if md.abs() <= bound {
+                        ""
+                    } else if known {
+                        " (known)"
+                    } else {
+                        "!"
+                    };
+                    if md.abs() > bound && !known {
+                        failures.push(format!(
+                            "{light} x {material}: {name} {layer} {:.5} vs {mb:.5} ({:+.2}%, bound {bound:.5})",
+                            mb + md,
+                            md / mb * 100.0
+                        ));
+                    }
+                    if mb > 0.0 {
+                        cells.push(format!("{}{:+.1}%{mark}", &layer[..2], md / mb * 100.0));
+                    }
                 }
-                let mark = if !ok {
-                    "!"
-                } else if known {
-                    " (known open)"
-                } else {
-                    ""
-                };
-                format!("{:+.1}%{mark}", (a / b - 1.0) * 100.0)
+                format!("{name} {}", cells.join(" "))
             };
             let row = if delta_light && smooth_specular {
                 // Point-light caustics: photon mapping against SPPM.
-                format!("photon/sppm {}", cell("photon vs sppm", photon, photon_err, sppm, sppm_err))
-            } else {
+                compare("photon/sppm", &photon, &sppm, true)
+            } else if smooth_specular {
+                // Caustics of small lights through smooth mirrors and glass: the path tracer finds
+                // them by chance at these sample counts, so it checks the images, and photon
+                // mapping and SPPM check each other's layers.
                 format!(
-                    "photon {} sppm {}",
-                    cell("photon", photon, photon_err, path, path_err),
-                    cell("sppm", sppm, sppm_err, path, path_err)
+                    "{} | {} | {}",
+                    compare("photon", &photon, &path, false),
+                    compare("sppm", &sppm, &path, false),
+                    compare("photon/sppm", &photon, &sppm, true)
                 )
+            } else {
+                format!("{} | {}", compare("photon", &photon, &path, true), compare("sppm", &sppm, &path, true))
             };
-            table += &format!("{light:18} {material:16} path {path:.4} {row}\n");
+            table += &format!("{light:18} {material:16} {row}\n");
         }
     }
     eprintln!("{table}");

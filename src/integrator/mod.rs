@@ -3,6 +3,7 @@
 //! multi-pass method with its own passes in the same driver. [`Integrator::new`] is the one place
 //! an integrator is made from the scene's description.
 
+pub mod layers;
 pub mod path;
 pub mod photon;
 pub mod sppm;

@@ -4,7 +4,8 @@
 //! combined with BSDF sampling by multiple importance sampling (power heuristic, Veach 1997) for
 //! area and environment lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
 
-use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
+use super::layers::LayerPath;
+use crate::film::Layers;
 use crate::geometry::Ray;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
@@ -48,23 +49,8 @@ impl RayIntegrator for PathTracer {
         let mut prev_pdf = 0.0f32;
         let mut prev_p = ray.o;
         let mut depth = 0;
-        // Layer bookkeeping: x is the first non-specular vertex of the camera path.
-        let mut reached_x = false;
-        let mut prefix_specular = false;
-        let mut vertices_after_x = 0u32;
-        let mut specular_since_x = true;
-        // Where light arriving at the current vertex (by emission) belongs.
-        let layer_of_emission = |reached_x: bool, prefix_specular: bool, after: u32, spec: bool| {
-            if prefix_specular {
-                SPECULAR
-            } else if !reached_x || after == 0 {
-                DIRECT
-            } else if spec {
-                CAUSTIC
-            } else {
-                INDIRECT
-            }
-        };
+        // Which layer the light found along the path belongs to.
+        let mut layer = LayerPath::CAMERA;
         loop {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
@@ -78,15 +64,14 @@ impl RayIntegrator for PathTracer {
                             * scene.lights[env as usize].pdf(prev_p, prev_p, ray.d, ray.d);
                         power_heuristic(prev_pdf, light_pdf)
                     };
-                    let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
-                    layers[k] += beta * le * w;
+                    layers[layer.emitted()] += beta * le * w;
                 }
                 break;
             };
             let wo = -ray.d;
             if hit.is_emitter() && hit.is_front(ray.d) {
                 let le = scene.emitted(&hit, wo);
-                let k = layer_of_emission(reached_x, prefix_specular, vertices_after_x, specular_since_x);
+                let k = layer.emitted();
                 if specular_bounce {
                     layers[k] += beta * le;
                 } else {
@@ -100,30 +85,15 @@ impl RayIntegrator for PathTracer {
                 break;
             }
             let bsdf = scene.bsdf(&hit, wo);
-            let specular_vertex = bsdf.is_specular_only();
-            if reached_x {
-                vertices_after_x += 1;
-                specular_since_x &= specular_vertex;
-            } else if specular_vertex {
-                prefix_specular = true;
-            } else {
-                reached_x = true;
-            }
-            if !specular_vertex {
-                let k = if prefix_specular {
-                    SPECULAR
-                } else if vertices_after_x == 0 {
-                    DIRECT
-                } else {
-                    INDIRECT
-                };
-                layers[k] += beta * direct_light(scene, &hit, &bsdf, wo, sampler, stats, true);
+            if !bsdf.is_specular_only() {
+                layers[layer.direct()] += beta * direct_light(scene, &hit, &bsdf, wo, sampler, stats, true);
             }
             let uc = sampler.next_1d();
             let u = sampler.next_2d();
             let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
             beta *= s.weight;
             specular_bounce = s.flags.is_specular();
+            layer.bounce(specular_bounce);
             prev_pdf = s.pdf;
             prev_p = hit.p;
             depth += 1;

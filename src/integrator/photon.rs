@@ -1,6 +1,6 @@
 //! Photon mapping (Jensen 1996; Jensen 2001, "A practical guide to global illumination using
 //! photon mapping", sec. 4): two photon maps built before rendering, then for each camera ray
-//! - mirrors and glass are followed by ray tracing (the `SPECULAR` layer), and so are glossy
+//! - mirrors and glass are followed by ray tracing, and so are glossy
 //!   surfaces without a diffuse part (rough metal and glass): their direct light comes from
 //!   shadow rays, the rest by following one sampled direction (Jensen's Monte Carlo ray tracing
 //!   of specular and glossy reflection);
@@ -19,7 +19,8 @@
 //! side and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do
 //! not leak light into each other. Everything is in physical units; nothing is scaled by hand.
 
-use crate::film::{CAUSTIC, DIRECT, INDIRECT, Layers, SPECULAR};
+use super::layers::LayerPath;
+use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
@@ -363,7 +364,17 @@ impl PhotonIntegrator {
                     continue;
                 }
                 sum += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
-                break;
+                // The mirror or glass part of a mixed material reflects more indirect light.
+                if !by.has_delta() {
+                    break;
+                }
+                let Some(s) =
+                    by.sample_delta(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
+                else {
+                    break;
+                };
+                beta *= s.weight;
+                ray = scene.spawn(&y, s.wi);
             }
         }
         sum / n.max(1) as f32
@@ -441,23 +452,22 @@ impl RayIntegrator for PhotonIntegrator {
         let mut layers = [Color::ZERO; 4];
         let mut beta = Color::ONE;
         let mut ray = *ray;
-        let mut prefix_specular = false;
+        let mut layer = LayerPath::CAMERA;
         // The last bounce was glossy and its direct light came from shadow rays: a light hit
         // now would count it twice.
         let mut lit_by_shadow_rays = false;
         for depth in 0.. {
             stats.rays += 1;
-            let first = if prefix_specular { SPECULAR } else { DIRECT };
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
                 if !lit_by_shadow_rays {
-                    layers[first] += beta * scene.environment(ray.d);
+                    layers[layer.emitted()] += beta * scene.environment(ray.d);
                 }
                 break;
             };
             let wo = -ray.d;
             if hit.is_emitter() {
                 if hit.is_front(ray.d) && !lit_by_shadow_rays {
-                    layers[first] += beta * scene.emitted(&hit, wo);
+                    layers[layer.emitted()] += beta * scene.emitted(&hit, wo);
                 }
                 // A reflecting emitter (one with a BSDF) also reflects.
                 if scene.bsdf(&hit, wo).is_black() {
@@ -476,25 +486,23 @@ impl RayIntegrator for PhotonIntegrator {
                 }
                 let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
                 beta *= s.weight;
-                prefix_specular = true;
+                layer.bounce(true);
                 lit_by_shadow_rays = false;
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            let (kd, kc, ki) =
-                if prefix_specular { (SPECULAR, SPECULAR, SPECULAR) } else { (DIRECT, CAUSTIC, INDIRECT) };
-            layers[kd] += beta * self.direct(scene, &hit, &bsdf, wo, sampler, stats);
+            layers[layer.direct()] += beta * self.direct(scene, &hit, &bsdf, wo, sampler, stats);
             if bsdf.is_glossy_only() && !last {
                 // Ray-traced glossy reflection: one sampled direction carries the rest.
                 let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
                 beta *= s.weight;
-                prefix_specular = true;
+                layer.bounce(s.flags.is_specular());
                 lit_by_shadow_rays = !s.flags.is_specular();
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
             let c = &self.config;
-            layers[kc] += beta
+            layers[layer.caustic_photons()] += beta
                 * Self::estimate(
                     &self.caustic,
                     &hit,
@@ -521,7 +529,7 @@ impl RayIntegrator for PhotonIntegrator {
             } else {
                 self.final_gather(scene, &hit, &bsdf, wo, sampler, scratch, stats)
             };
-            layers[ki] += beta * indirect;
+            layers[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
             if !bsdf.has_delta() || last {
                 break;
@@ -530,7 +538,7 @@ impl RayIntegrator for PhotonIntegrator {
                 break;
             };
             beta *= s.weight;
-            prefix_specular = true;
+            layer.bounce(true);
             lit_by_shadow_rays = false;
             ray = scene.spawn(&hit, s.wi);
         }

@@ -321,14 +321,15 @@ impl Model {
     }
 
     /// True when light reflected or refracted by the model can focus into caustics: mirrors,
-    /// metals and glass, smooth or rough (where caustic photons are aimed).
+    /// metals and glass, smooth or rough, and plastic's smooth coating (where caustic photons are aimed).
     pub fn casts_caustics(&self) -> bool {
         match self {
             Model::Classic(c) => c.is_specular(),
             Model::Conductor { .. }
             | Model::RoughConductor { .. }
             | Model::Dielectric { .. }
-            | Model::RoughDielectric { .. } => true,
+            | Model::RoughDielectric { .. }
+            | Model::Plastic { .. } => true,
             _ => false,
         }
     }

@@ -211,16 +211,21 @@ pub fn trace_photon(
                 if caustic {
                     out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, n });
                 }
-                return;
-            }
-            let flags = if depth == 0 {
-                DIRECT
-            } else if caustic {
-                CAUSTIC
+                // The mirror or glass part of a mixed material (or plastic's coating) can still
+                // send it on along an L S+ D path.
+                if !bsdf.has_delta() {
+                    return;
+                }
             } else {
-                0
-            };
-            out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
+                let flags = if depth == 0 {
+                    DIRECT
+                } else if caustic {
+                    CAUSTIC
+                } else {
+                    0
+                };
+                out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
+            }
         }
         let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };
         if !flags.is_null() {

@@ -17,14 +17,14 @@
 //! plus one iteration's visible points and photons, whatever the number of iterations.
 //!
 //! Iterations are the sample indices of the shared render driver, which runs them in passes and
-//! owns the time limit, cancellation, checkpoints and progress. Layers: light found at a visible
-//! point reached through mirrors or glass is `SPECULAR`; otherwise emitted and direct light is
-//! `DIRECT`, photons that came only through mirrors and glass `CAUSTIC`, and the rest `INDIRECT`.
+//! owns the time limit, cancellation, checkpoints and progress. Layers follow the camera path's
+//! sampled lobes as in every integrator (`integrator::layers`).
 
 mod grid;
 
+use super::layers::LayerPath;
 use super::path::direct_light;
-use crate::film::{CAUSTIC, DIRECT, Film, INDIRECT, Image, SPECULAR};
+use crate::film::{CAUSTIC, DIRECT, Film, INDIRECT, Image, Layers, SPECULAR};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
@@ -121,12 +121,12 @@ impl PixelStats {
     }
 }
 
-/// A pixel's light split into layers (kept only when layers are asked for): emitted and direct
-/// light by `DIRECT` / `SPECULAR`, and the accumulated flux by `SPECULAR` / `CAUSTIC` /
+/// A pixel's light split into layers (kept only when layers are asked for): emitted and
+/// directly sampled light by layer, and the accumulated flux by `SPECULAR` / `CAUSTIC` /
 /// `INDIRECT`, each flux part rescaled with the pixel's radius like `tau`.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelLayers {
-    ld: [Color; 2],
+    ld: Layers,
     tau: [Color; 3],
 }
 
@@ -139,15 +139,15 @@ struct VisiblePoint {
     beta: Color,
     /// Distance travelled from the camera (for the initial radius).
     dist: f32,
-    /// The path reached it through mirrors or glass.
-    specular_prefix: bool,
+    /// The layers of the light gathered there.
+    layer: LayerPath,
 }
 
 /// What one iteration's camera sample of a pixel found.
 struct CameraSample {
-    /// Emitted and directly sampled light, and whether it came through mirrors or glass.
+    /// Emitted and directly sampled light, in all and by layer.
     ld: Color,
-    specular: bool,
+    ld_layers: Layers,
     point: Option<VisiblePoint>,
 }
 
@@ -241,7 +241,9 @@ impl Sppm {
                 if sample.ld.is_finite() {
                     px.ld += sample.ld;
                     if let Some(l) = layers {
-                        l.ld[usize::from(sample.specular)] += sample.ld;
+                        for (a, b) in l.ld.iter_mut().zip(sample.ld_layers) {
+                            *a += b;
+                        }
                     }
                 } else {
                     driver.record(&RayStats::default(), 1, 0);
@@ -277,11 +279,18 @@ impl Sppm {
                     let ratio = px.update(m, total, config.alpha);
                     if let Some(l) = layers {
                         let caustic = v.beta * phi_caustic;
-                        let parts = if v.specular_prefix {
-                            [total, Color::ZERO, Color::ZERO]
-                        } else {
-                            [Color::ZERO, caustic, total - caustic]
+                        let mut parts = [Color::ZERO; 3];
+                        let slot = |k: usize| {
+                            if k == SPECULAR {
+                                0
+                            } else if k == CAUSTIC {
+                                1
+                            } else {
+                                2
+                            }
                         };
+                        parts[slot(v.layer.caustic_photons())] += caustic;
+                        parts[slot(v.layer.other_photons())] += total - caustic;
                         for (t, p) in l.tau.iter_mut().zip(parts) {
                             *t = (*t + p) * ratio;
                         }
@@ -316,14 +325,19 @@ impl Sppm {
         let mut beta = Color::splat(weight);
         let mut dist = 0.0;
         let mut ld = Color::ZERO;
-        let mut specular = false;
+        let mut ld_layers = [Color::ZERO; 4];
+        let mut layer = LayerPath::CAMERA;
+        let mut add = |k: usize, l: Color| {
+            ld += l;
+            ld_layers[k] += l;
+        };
         // The last bounce was glossy and its direct light came from a light sample.
         let mut lit_by_light_sample = false;
         for depth in 0.. {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
                 if !lit_by_light_sample {
-                    ld += beta * scene.environment(ray.d);
+                    add(layer.emitted(), beta * scene.environment(ray.d));
                 }
                 break;
             };
@@ -331,7 +345,7 @@ impl Sppm {
             let wo = -ray.d;
             if hit.is_emitter() {
                 if hit.is_front(ray.d) && !lit_by_light_sample {
-                    ld += beta * scene.emitted(&hit, wo);
+                    add(layer.emitted(), beta * scene.emitted(&hit, wo));
                 }
                 // A reflecting emitter (one with a BSDF) also reflects.
                 if scene.bsdf(&hit, wo).is_black() {
@@ -355,16 +369,16 @@ impl Sppm {
                 }
                 let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = follow(sample, &mut beta) else { break };
-                specular = true;
+                layer.bounce(true);
                 lit_by_light_sample = false;
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            ld += beta * direct_light(scene, &hit, &bsdf, wo, &mut sampler, stats, false);
+            add(layer.direct(), beta * direct_light(scene, &hit, &bsdf, wo, &mut sampler, stats, false));
             if bsdf.is_glossy_only() && !last {
                 let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = follow(sample, &mut beta) else { break };
-                specular = true;
+                layer.bounce(s.flags.is_specular());
                 lit_by_light_sample = !s.flags.is_specular();
                 ray = scene.spawn(&hit, s.wi);
                 continue;
@@ -375,15 +389,15 @@ impl Sppm {
                 let sample = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = follow(sample, &mut beta) else { break };
                 beta /= 1.0 - q;
-                specular = true;
+                layer.bounce(true);
                 lit_by_light_sample = false;
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, specular_prefix: specular });
-            return CameraSample { ld, specular, point };
+            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, layer });
+            return CameraSample { ld, ld_layers, point };
         }
-        CameraSample { ld, specular, point: None }
+        CameraSample { ld, ld_layers, point: None }
     }
 }
 
@@ -451,10 +465,10 @@ impl State {
             let area = it * PI * p.r * p.r;
             let flux = |t: Color| if p.r > 0.0 { t / area } else { Color::ZERO };
             let c = match layer {
-                DIRECT => l.ld[0] / it,
-                SPECULAR => l.ld[1] / it + flux(l.tau[0]),
-                CAUSTIC => flux(l.tau[1]),
-                INDIRECT => flux(l.tau[2]),
+                DIRECT => l.ld[DIRECT] / it,
+                SPECULAR => l.ld[SPECULAR] / it + flux(l.tau[0]),
+                CAUSTIC => l.ld[CAUSTIC] / it + flux(l.tau[1]),
+                INDIRECT => l.ld[INDIRECT] / it + flux(l.tau[2]),
                 _ => Color::ZERO,
             };
             img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
@@ -488,7 +502,8 @@ mod tests {
         let mut lobes = Lobes::default();
         lobes.add(Bxdf::Lambert(Lambert { r: Color::splat(0.5) }));
         let bsdf = Bsdf::new(crate::math::Frame::from_z(Vec3::Z), Vec3::Z, true, lobes);
-        let v = VisiblePoint { p: Vec3::ZERO, wo: Vec3::Z, bsdf, beta: Color::ONE, dist: 1.0, specular_prefix: false };
+        let v =
+            VisiblePoint { p: Vec3::ZERO, wo: Vec3::Z, bsdf, beta: Color::ONE, dist: 1.0, layer: LayerPath::CAMERA };
         let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, n: Vec3::Z };
         let hits = [
             hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
