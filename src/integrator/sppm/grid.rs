@@ -25,20 +25,31 @@ fn cell_key(c: [i32; 3]) -> u64 {
 
 impl PhotonGrid {
     pub(super) fn build(hits: &[PhotonHit], cell: f32, origin: Vec3) -> Self {
+        let mut grid = PhotonGrid { cell, origin, mask: 0, starts: Vec::new(), entries: Vec::new() };
+        grid.rebuild(hits, cell, origin);
+        grid
+    }
+
+    /// Sorts `hits` into the grid again, reusing its buffers (an SPPM iteration allocates no
+    /// new grid).
+    pub(super) fn rebuild(&mut self, hits: &[PhotonHit], cell: f32, origin: Vec3) {
         let size = hits.len().next_power_of_two().max(1);
         let mask = size as u64 - 1;
-        let mut entries: Vec<(u64, u32)> =
-            hits.par_iter().enumerate().map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32)).collect();
+        self.entries.clear();
+        self.entries.par_extend(
+            hits.par_iter().enumerate().map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32)),
+        );
         let bucket = |k: u64| crate::sampling::mix64(k) & mask;
-        entries.par_sort_unstable_by_key(|&(k, i)| (bucket(k), k, i));
-        let mut starts = vec![0u32; size + 1];
-        for &(k, _) in &entries {
-            starts[bucket(k) as usize + 1] += 1;
+        self.entries.par_sort_unstable_by_key(|&(k, i)| (bucket(k), k, i));
+        self.starts.clear();
+        self.starts.resize(size + 1, 0);
+        for &(k, _) in &self.entries {
+            self.starts[bucket(k) as usize + 1] += 1;
         }
         for b in 0..size {
-            starts[b + 1] += starts[b];
+            self.starts[b + 1] += self.starts[b];
         }
-        PhotonGrid { cell, origin, mask, starts, entries }
+        (self.cell, self.origin, self.mask) = (cell, origin, mask);
     }
 
     #[inline]

@@ -165,6 +165,8 @@ impl Sppm {
         let n_pixels = settings.pixels() as usize;
         let state = RefCell::new(State {
             pixels: vec![PixelStats::default(); n_pixels],
+            points: Vec::new(),
+            grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
         });
@@ -210,18 +212,7 @@ impl Sppm {
             let b = scene.bounds();
             if b.is_empty() || !b.diagonal().is_finite() { 1.0 } else { b.diagonal() }
         };
-        // Pass 1: visible points, with the emitted and direct light each pixel's sample found.
-        let samples: Vec<CameraSample> = (0..n_pixels)
-            .into_par_iter()
-            .with_min_len(64)
-            .map(|k| {
-                let mut stats = RayStats::default();
-                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
-                driver.record(&stats, 0, 0);
-                sample
-            })
-            .collect();
-        // Pass 2: photons, without their first hits (direct light is traced above). A Ctrl-C
+        // Pass 1: photons, without their first hits (direct light is traced below). A Ctrl-C
         // here abandons the iteration before any pixel has changed.
         let seed = hash_seed(&[settings.seed, it as u64]);
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
@@ -229,15 +220,23 @@ impl Sppm {
         if pass.cancelled {
             return false;
         }
-        let hits: Vec<PhotonHit> = pass.hits.into_iter().filter(|h| h.flags & trace::DIRECT == 0).collect();
-        // The camera samples' light goes into the pixels, and new visible points get a radius.
-        let vps: Vec<Option<VisiblePoint>> = state
+        let mut hits = pass.hits;
+        hits.retain(|h| h.flags & trace::DIRECT == 0);
+        // Pass 2: each pixel's camera sample: its emitted and direct light goes into the pixel,
+        // and its visible point (a new one gets a radius) into a buffer kept between iterations.
+        state.points.resize(n_pixels, None);
+        // Ray counts are summed over the pass and recorded once (not an atomic per pixel).
+        let (rays, nonfinite) = state
             .pixels
             .par_iter_mut()
             .zip(layers_of(&mut state.layers, n_pixels))
-            .zip(samples.into_par_iter())
+            .zip(state.points.par_iter_mut())
+            .enumerate()
             .with_min_len(64)
-            .map(|((px, layers), sample)| {
+            .map(|(k, ((px, layers), point))| {
+                let mut stats = RayStats::default();
+                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
+                let mut nonfinite = 0u64;
                 if sample.ld.is_finite() {
                     px.ld += sample.ld;
                     if let Some(l) = layers {
@@ -246,17 +245,25 @@ impl Sppm {
                         }
                     }
                 } else {
-                    driver.record(&RayStats::default(), 1, 0);
+                    nonfinite = 1;
                 }
-                let vp = sample.point;
-                if let Some(v) = &vp
+                if let Some(v) = &sample.point
                     && px.r == 0.0
                 {
                     px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, v.dist, diag));
                 }
-                vp
+                *point = sample.point;
+                (stats, nonfinite)
             })
-            .collect();
+            .reduce(
+                || (RayStats::default(), 0),
+                |(mut a, na), (b, nb)| {
+                    a.add(&b);
+                    (a, na + nb)
+                },
+            );
+        driver.record(&rays, nonfinite, 0);
+        let vps = &state.points;
         let max_r = state.pixels.iter().map(|p| p.r).fold(0.0f32, f32::max);
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
@@ -264,7 +271,8 @@ impl Sppm {
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
             + hits.capacity() * std::mem::size_of::<PhotonHit>();
         if max_r > 0.0 && !hits.is_empty() {
-            let grid = PhotonGrid::build(&hits, max_r, scene.bounds().min.min(Vec3::ZERO));
+            state.grid.rebuild(&hits, max_r, scene.bounds().min.min(Vec3::ZERO));
+            let grid = &state.grid;
             bytes += grid.entries.capacity() * std::mem::size_of::<(u64, u32)>() + grid.starts.capacity() * 4;
             let layers = layers_of(&mut state.layers, n_pixels);
             state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
@@ -443,6 +451,10 @@ fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterat
 /// The per-pixel state of a render.
 struct State {
     pixels: Vec<PixelStats>,
+    /// This iteration's visible points, one per pixel, and photon grid (buffers kept between
+    /// iterations).
+    points: Vec<Option<VisiblePoint>>,
+    grid: PhotonGrid,
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
     peak_bytes: usize,

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Equal-time comparison of the path tracer, photon mapping and SPPM on three scenes (a caustic,
+# a glossy and a sky-lit one): each integrator renders for the same wall time, and the RMSE
+# against a long reference says which to pick for which kind of scene (BENCHMARKS.md).
+#
+#   scripts/equal_time.sh [SECONDS] [OUT_DIR]
+#
+# References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
+# the path tracer cannot find; the path tracer elsewhere). Needs the OpenEXR Python bindings.
+set -euo pipefail
+T=${1:-10}
+OUT=${2:-/tmp/caustic-equal-time}
+BIN=${BIN:-target/release/caustic}
+mkdir -p "$OUT"
+# name | scene | size | reference integrator and options
+scenes=(
+  "caustic|scenes/13-cornell-caustics.toml|--width 128 --height 128|--integrator sppm --spp 1000 --photons-per-iter 100000"
+  "glossy|scenes/15-materials.toml|--width 160 --height 120|--integrator path --spp 4096"
+  "sky|benches/scenes/sky-lit.toml|--width 160 --height 120|--integrator path --spp 8192"
+)
+printf '| scene | integrator | samples in %s s | RMSE | mean / reference |\n|---|---|---|---|---|\n' "$T"
+for entry in "${scenes[@]}"; do
+  IFS='|' read -r name scene size ref <<<"$entry"
+  if [[ ! -f "$OUT/$name-ref.exr" ]]; then
+    # shellcheck disable=SC2086
+    "$BIN" render "$scene" $size $ref -q -o "$OUT/$name-ref.exr"
+  fi
+  for integrator in path photon sppm; do
+    # shellcheck disable=SC2086
+    "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
+      2>"$OUT/$name-$integrator.log" >/dev/null
+    samples=$(grep -oE '[0-9]+ (samples|iterations)[^,]*' "$OUT/$name-$integrator.log" | tail -1 || true)
+    python3 - "$OUT/$name-$integrator.exr" "$OUT/$name-ref.exr" "$name" "$integrator" "$samples" <<'PY'
+import sys
+sys.path.insert(0, "scripts")
+from rmse import read_rgb
+import numpy as np
+a, r = read_rgb(sys.argv[1]), read_rgb(sys.argv[2])
+lum = lambda x: (x * [0.2126, 0.7152, 0.0722]).sum(-1).mean()
+print(f"| {sys.argv[3]} | {sys.argv[4]} | {sys.argv[5]} | {np.sqrt(((a - r) ** 2).mean()):.4f} | {lum(a) / lum(r):.3f} |")
+PY
+  done
+done
