@@ -4,7 +4,7 @@
 mod ply;
 mod serialized;
 
-pub use ply::load_ply;
+pub use ply::{load_ply, parse_ply};
 pub use serialized::{Serialized, load_serialized, parse_serialized};
 
 use super::Triangle;
