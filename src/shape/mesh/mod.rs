@@ -154,6 +154,26 @@ impl TriangleMesh {
         TriangleMesh { positions, normals: Some(normals), uvs: None, indices }
     }
 
+    /// Bytes held by the mesh's arrays.
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.capacity() * size_of::<Vec3>()
+            + self.normals.as_ref().map_or(0, |n| n.capacity() * size_of::<Vec3>())
+            + self.uvs.as_ref().map_or(0, |u| u.capacity() * size_of::<Vec2>())
+            + self.indices.capacity() * size_of::<[u32; 3]>()
+    }
+
+    /// Gives back spare capacity (a mesh is read once and kept for the whole render).
+    pub fn shrink_to_fit(&mut self) {
+        self.positions.shrink_to_fit();
+        self.indices.shrink_to_fit();
+        if let Some(n) = &mut self.normals {
+            n.shrink_to_fit();
+        }
+        if let Some(u) = &mut self.uvs {
+            u.shrink_to_fit();
+        }
+    }
+
     /// The mesh with positions and normals moved by `t`.
     pub fn transformed(mut self, t: &Transform) -> Self {
         for p in &mut self.positions {
