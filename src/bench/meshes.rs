@@ -80,7 +80,8 @@ pub fn run(repeats: u32, say: impl Fn(std::fmt::Arguments)) {
     let dir: PathBuf = std::env::temp_dir().join(format!("caustic-bench-meshes-{}", std::process::id()));
     let knot = TriangleMesh::torus_knot(2, 3, 1.5, 0.28, KNOT.0, KNOT.1);
     let (ply, obj) = (dir.join("knot.ply"), dir.join("knot.obj"));
-    let written = std::fs::create_dir_all(&dir).and_then(|_| write_ply(&knot, &ply)).and_then(|_| write_obj(&knot, &obj));
+    let written =
+        std::fs::create_dir_all(&dir).and_then(|_| write_ply(&knot, &ply)).and_then(|_| write_obj(&knot, &obj));
     if let Err(e) = written {
         say(format_args!("big meshes: cannot write the knot into {}: {e}", dir.display()));
         return;

@@ -162,7 +162,11 @@ impl SceneBuilder {
             }
         }
         let kept = self.target().len() - first;
-        self.mesh_info.push(MeshInfo { name: name.to_string(), triangles: kept, bounds: Aabb::from_points(&mesh.positions) });
+        self.mesh_info.push(MeshInfo {
+            name: name.to_string(),
+            triangles: kept,
+            bounds: Aabb::from_points(&mesh.positions),
+        });
         self.triangles += kept;
         self.degenerate_triangles += skipped;
         self.meshes.push(mesh);

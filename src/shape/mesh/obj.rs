@@ -25,9 +25,13 @@ const NONE: u32 = u32::MAX;
 /// kept when every face corner has them (v flipped, as Mitsuba does).
 pub fn load_obj(path: &Path) -> Result<TriangleMesh, MeshError> {
     let shown = path.display().to_string();
-    let file = std::fs::File::open(path)
-        .map_err(|e| MeshError::Read { path: shown.clone(), format: "OBJ", message: e.to_string() })?;
-    read_obj(std::io::BufReader::with_capacity(1 << 20, file)).map_err(|e| match e {
+    let file = std::fs::File::open(path).map_err(|e| MeshError::Read {
+        path: shown.clone(),
+        format: "OBJ",
+        message: e.to_string(),
+    })?;
+    let size = file.metadata().map_or(1 << 20, |m| m.len());
+    read_obj(std::io::BufReader::with_capacity(size.clamp(1 << 13, 1 << 20) as usize, file)).map_err(|e| match e {
         ObjError::Io(e) => MeshError::Read { path: shown, format: "OBJ", message: e.to_string() },
         ObjError::Bad(message) => MeshError::Invalid { path: shown, format: "OBJ", message },
     })

@@ -5,8 +5,11 @@
 use super::*;
 use proptest::prelude::*;
 
-/// Each triangle's corners as (position, uv, normal), the way a renderer sees them.
-fn corners(m: &TriangleMesh) -> Vec<[(Vec3, Option<Vec2>, Option<Vec3>); 3]> {
+/// A face corner as a renderer sees it: position, uv, normal.
+type Corner = (Vec3, Option<Vec2>, Option<Vec3>);
+
+/// Each triangle's corners.
+fn corners(m: &TriangleMesh) -> Vec<[Corner; 3]> {
     m.indices
         .iter()
         .map(|t| {
@@ -26,8 +29,10 @@ fn tobj_mesh(text: &str) -> Option<TriangleMesh> {
     let n = m.positions.len() / 3;
     Some(TriangleMesh {
         positions: m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect(),
-        normals: (m.normals.len() == 3 * n).then(|| m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()),
-        uvs: (m.texcoords.len() == 2 * n).then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect()),
+        normals: (m.normals.len() == 3 * n)
+            .then(|| m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()),
+        uvs: (m.texcoords.len() == 2 * n)
+            .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect()),
         indices: m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
     })
 }

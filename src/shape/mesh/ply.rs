@@ -139,8 +139,10 @@ struct Source<R> {
 }
 
 impl<R: Read> Source<R> {
-    fn new(reader: R) -> Self {
-        Source { reader, buf: vec![0; 1 << 20], pos: 0, len: 0, eof: false }
+    /// A source over `reader`, which holds `size` bytes (the buffer needs no more).
+    fn new(reader: R, size: u64) -> Self {
+        let cap = size.saturating_add(1).clamp(4096, 1 << 20) as usize;
+        Source { reader, buf: vec![0; cap], pos: 0, len: 0, eof: false }
     }
 
     /// Makes at least `n` bytes (n <= the buffer's size) available at `pos`, unless the file
@@ -207,7 +209,7 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, MeshError> {
     let invalid = |message: String| MeshError::Invalid { path: shown.clone(), format: "PLY", message };
     let file = std::fs::File::open(path).map_err(|e| read(e.to_string()))?;
     let size = file.metadata().map_err(|e| read(e.to_string()))?.len();
-    let mut source = Source::new(file);
+    let mut source = Source::new(file, size);
     let (header, header_len) = read_header(&mut source).map_err(|e| match e {
         HeaderError::Io(e) => read(e.to_string()),
         HeaderError::Bad(m) => invalid(m),
@@ -221,7 +223,7 @@ pub fn load_ply(path: &Path) -> Result<TriangleMesh, MeshError> {
 
 /// Reads a PLY mesh from memory (the fuzz target and tests).
 pub fn parse_ply(bytes: &[u8]) -> Result<TriangleMesh, String> {
-    let mut source = Source::new(bytes);
+    let mut source = Source::new(bytes, bytes.len() as u64);
     let (header, header_len) = read_header(&mut source).map_err(|e| e.to_string())?;
     parse_body(&header, (bytes.len() as u64).saturating_sub(header_len), &mut source).map_err(|e| e.to_string())
 }
@@ -240,7 +242,7 @@ type BodyError = HeaderError;
 fn read_header<R: Read>(src: &mut Source<R>) -> Result<(Header, u64), HeaderError> {
     let bad = |m: String| HeaderError::Bad(m);
     // Headers are short: a megabyte without `end_header` is not a PLY file.
-    let avail = src.fill(1 << 20)?;
+    let avail = src.fill(src.buf.len())?;
     let text = &src.buf[src.pos..src.pos + avail];
     if !text.starts_with(b"ply") {
         return Err(bad("it does not start with `ply`".into()));
@@ -467,7 +469,8 @@ fn scalar<R: Read>(ty: Scalar, format: Format, src: &mut Source<R>) -> Result<Op
         Format::Ascii => {
             let Some(w) = src.word()? else { return Ok(None) };
             let text = std::str::from_utf8(w).unwrap_or("?");
-            let not_number = || HeaderError::Bad(format!("`{}` is not a number", text.chars().take(40).collect::<String>()));
+            let not_number =
+                || HeaderError::Bad(format!("`{}` is not a number", text.chars().take(40).collect::<String>()));
             // Floats parsed at their own precision: one rounding, as a float reader would.
             let v: f64 = if ty == Scalar::F32 {
                 text.parse::<f32>().map_err(|_| not_number())? as f64
@@ -508,7 +511,8 @@ fn read_faces<R: Read>(
     cut: impl Fn(u64) -> BodyError,
 ) -> Result<(), BodyError> {
     // Reserve for triangles, as many as the bytes left could hold.
-    let typical = e.props.iter().map(|p| p.list.map_or(0, |c| c.size() + 3 * p.ty.size()).max(p.ty.size())).sum::<usize>();
+    let typical =
+        e.props.iter().map(|p| p.list.map_or(0, |c| c.size() + 3 * p.ty.size()).max(p.ty.size())).sum::<usize>();
     out.reserve_exact(e.count.min(body / typical.max(1) as u64 + 1) as usize);
     let bad_index = |i: u64, v: f64| HeaderError::Bad(format!("face {i} refers to vertex {v}"));
     // The common layout, a single `list uchar|int int|uint` per face, decoded directly.
@@ -586,7 +590,16 @@ fn fan(idx: &[u32], out: &mut Vec<[u32; 3]>) {
 }
 
 /// Reads past an element we do not keep.
-fn skip<R: Read>(e: &Element, format: Format, src: &mut Source<R>, cut: impl Fn(u64) -> BodyError) -> Result<(), BodyError> {
+fn skip<R: Read>(
+    e: &Element,
+    format: Format,
+    src: &mut Source<R>,
+    cut: impl Fn(u64) -> BodyError,
+) -> Result<(), BodyError> {
+    if e.props.is_empty() {
+        // Records of nothing take no bytes, however many the header declares.
+        return Ok(());
+    }
     let mut values = vec![0f64; e.props.len()];
     let fixed = e.fixed_size();
     for i in 0..e.count {

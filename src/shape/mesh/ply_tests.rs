@@ -221,6 +221,13 @@ fn lying_headers_are_refused_before_allocating() {
             assert!(e.contains("promises"), "{e}");
         }
     }
+    // Elements of no properties take no bytes: skipped at once, however many.
+    let text = "ply\nformat binary_little_endian 1.0\nelement nothing 18446744073709551615\nelement vertex 3\n\
+                property uchar x\nproperty uchar y\nproperty uchar z\nelement face 1\nproperty list uchar uchar vertex_indices\n\
+                end_header\n";
+    let mut bytes = text.as_bytes().to_vec();
+    bytes.extend([0, 0, 0, 1, 0, 0, 0, 1, 0, 3, 0, 1, 2]);
+    assert_eq!(parse_ply(&bytes).unwrap().indices, vec![[0, 1, 2]]);
     let e = parse_ply(b"ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n").unwrap_err();
     assert!(e.contains("whole number"), "{e}");
 }
@@ -277,4 +284,31 @@ fn bundled_meshes_and_file_errors() {
     assert!(e.contains("missing.ply") && e.contains("PLY"), "{e}");
     let e = load_ply(&dir.join("icosphere.obj")).unwrap_err().to_string();
     assert!(e.contains("icosphere.obj") && e.contains("does not start with `ply`"), "{e}");
+}
+
+/// Parse rates of big files (`scripts/make_big_knot.py`):
+/// `CAUSTIC_BIG_MESHES=/tmp/caustic-knot cargo test --release --lib big_files -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn big_files_parse_rate() {
+    let Some(dir) = std::env::var_os("CAUSTIC_BIG_MESHES").map(std::path::PathBuf::from) else { return };
+    for file in ["knot.ply", "knot.obj"] {
+        let path = dir.join(file);
+        let size = std::fs::metadata(&path).unwrap().len() as f64;
+        let t = std::time::Instant::now();
+        let m = TriangleMesh::load(&path).unwrap();
+        let s = t.elapsed().as_secs_f64();
+        println!("{file}: {} triangles, {:.1} MB in {s:.3} s: {:.0} MB/s", m.indices.len(), size / 1e6, size / s / 1e6);
+    }
+    // tobj, the OBJ reader before ours, on the same file (reading it whole, as the loader did).
+    let t = std::time::Instant::now();
+    let bytes = std::fs::read(dir.join("knot.obj")).unwrap();
+    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+    let (models, _) = tobj::load_obj_buf(&mut &bytes[..], &opts, |_| Ok(Default::default())).unwrap();
+    let s = t.elapsed().as_secs_f64();
+    println!(
+        "knot.obj with tobj: {} triangles in {s:.3} s: {:.0} MB/s",
+        models[0].mesh.indices.len() / 3,
+        bytes.len() as f64 / s / 1e6
+    );
 }
