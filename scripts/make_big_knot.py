@@ -5,7 +5,9 @@ triangles, 2.56 M vertices), the same geometry as caustic's `torus_knot` generat
 
     knot.ply        binary little-endian PLY, positions and faces only (about 97 MB; the
                     renderer computes smooth normals, as Mitsuba does)
-    knot.obj        OBJ with `v` and `f` lines (about 250 MB)
+    knot.obj        OBJ with `v` and `f` lines (about 211 MB)
+    knot-vn.obj     with --vn: OBJ with vertex normals numbered apart from the positions
+                    (listed in reverse, faces `v//vn`), so a reader must pair them up
     knot-ply.xml    a Mitsuba scene rendering knot.ply at 64 x 48, 1 spp
     knot-obj.xml    the same scene with knot.obj
     empty.xml       the same scene without the knot (the memory baseline)
@@ -69,13 +71,23 @@ def write_ply(path, verts, faces):
         f.write(rec.tobytes())
 
 
-def write_obj(path, verts, faces, chunk=200_000):
+def write_obj(path, verts, faces, normals=None, chunk=200_000):
     with open(path, "w") as f:
         f.write("# caustic scripts/make_big_knot.py\no knot\n")
         for k in range(0, len(verts), chunk):
             np.savetxt(f, verts[k : k + chunk], fmt="v %.7g %.7g %.7g")
+        if normals is not None:
+            rev = normals[::-1]
+            for k in range(0, len(rev), chunk):
+                np.savetxt(f, rev[k : k + chunk], fmt="vn %.6f %.6f %.6f")
+        n = len(verts)
         for k in range(0, len(faces), chunk):
-            np.savetxt(f, faces[k : k + chunk].astype(np.int64) + 1, fmt="f %d %d %d")
+            fk = faces[k : k + chunk].astype(np.int64)
+            if normals is None:
+                np.savetxt(f, fk + 1, fmt="f %d %d %d")
+            else:
+                pairs = np.stack([fk + 1, n - fk], axis=-1).reshape(-1, 6)
+                np.savetxt(f, pairs, fmt="f %d//%d %d//%d %d//%d")
 
 
 SCENE = """<?xml version="1.0"?>
@@ -99,12 +111,21 @@ def main():
     ap.add_argument("--segments", type=int, default=80000)
     ap.add_argument("--out", default="/tmp/caustic-knot")
     ap.add_argument("--no-obj", action="store_true")
+    ap.add_argument("--vn", action="store_true", help="also write knot-vn.obj (normals numbered apart)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     verts, faces = knot(2, 3, 1.5, 0.28, args.segments, 32)
     write_ply(os.path.join(args.out, "knot.ply"), verts, faces)
     if not args.no_obj:
         write_obj(os.path.join(args.out, "knot.obj"), verts, faces)
+    if args.vn:
+        # Smooth normals: the average of the adjacent faces' (enough for a reader's test).
+        fn = np.cross(verts[faces[:, 1]] - verts[faces[:, 0]], verts[faces[:, 2]] - verts[faces[:, 0]])
+        vn = np.zeros_like(verts)
+        for c in range(3):
+            np.add.at(vn, faces[:, c], fn)
+        vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-30)
+        write_obj(os.path.join(args.out, "knot-vn.obj"), verts, faces, vn)
     for kind in ["ply", "obj"]:
         shape = f'    <shape type="{kind}"><string name="filename" value="knot.{kind}"/></shape>\n'
         with open(os.path.join(args.out, f"knot-{kind}.xml"), "w") as f:

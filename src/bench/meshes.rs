@@ -51,7 +51,7 @@ pub fn write_obj(mesh: &TriangleMesh, path: &Path) -> std::io::Result<()> {
 }
 
 /// A field of /proc/self/status in bytes (VmRSS, VmHWM), when there is one.
-fn status_bytes(field: &str) -> Option<u64> {
+pub fn status_bytes(field: &str) -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = s.lines().find(|l| l.starts_with(field))?;
     Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
@@ -59,7 +59,7 @@ fn status_bytes(field: &str) -> Option<u64> {
 
 /// Resets the process's peak resident size to its current one (Linux), so a later VmHWM is the
 /// peak of what ran since.
-fn reset_peak() -> bool {
+pub fn reset_peak() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 

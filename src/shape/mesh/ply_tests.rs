@@ -292,13 +292,27 @@ fn bundled_meshes_and_file_errors() {
 #[ignore]
 fn big_files_parse_rate() {
     let Some(dir) = std::env::var_os("CAUSTIC_BIG_MESHES").map(std::path::PathBuf::from) else { return };
-    for file in ["knot.ply", "knot.obj"] {
+    use crate::bench::meshes::{reset_peak, status_bytes};
+    for file in ["knot.ply", "knot.obj", "knot-vn.obj"] {
         let path = dir.join(file);
-        let size = std::fs::metadata(&path).unwrap().len() as f64;
+        let Ok(meta) = std::fs::metadata(&path) else { continue };
+        let size = meta.len() as f64;
+        // The reader's peak over what it returns: its own temporaries.
+        let before = status_bytes("VmRSS:").unwrap_or(0);
+        reset_peak();
         let t = std::time::Instant::now();
         let m = TriangleMesh::load(&path).unwrap();
         let s = t.elapsed().as_secs_f64();
-        println!("{file}: {} triangles, {:.1} MB in {s:.3} s: {:.0} MB/s", m.indices.len(), size / 1e6, size / s / 1e6);
+        let peak = status_bytes("VmHWM:").unwrap_or(0).saturating_sub(before) as f64;
+        let tris = m.indices.len() as f64;
+        println!(
+            "{file}: {tris} triangles, {} vertices, {:.1} MB in {s:.3} s: {:.0} MB/s; mesh {:.1} bytes/triangle, reading peak {:.1}",
+            m.positions.len(),
+            size / 1e6,
+            size / s / 1e6,
+            m.memory_bytes() as f64 / tris,
+            peak / tris
+        );
     }
     // tobj, the OBJ reader before ours, on the same file (reading it whole, as the loader did).
     let t = std::time::Instant::now();
