@@ -301,3 +301,7 @@ impl Reader {
         Ok(mesh)
     }
 }
+
+#[cfg(test)]
+#[path = "obj_tests.rs"]
+mod tests;
