@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// Peak bytes per triangle while a scene is loaded: its indices in the mesh, its primitive
 /// (60 bytes, held twice while the BVH orders them), the BVH's 40-byte build record, 40-byte
-/// leaf shape and node share (measured on the 5 M-triangle knot: 270 bytes per triangle with
+/// leaf shape and node share (measured on the 5 M-triangle knot: 276 bytes per triangle with
 /// its vertices, BENCHMARKS.md "Big meshes, PLY and OBJ readers").
 pub const BYTES_PER_TRIANGLE: u64 = 258;
 /// Bytes per mesh vertex kept (position and normal; uv when the file has them).
