@@ -10,6 +10,8 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+pub mod meshes;
+
 /// A 102,400-triangle torus knot filling a 1024 x 1024 frame.
 pub const MESH_SCENE: &str = include_str!("../benches/scenes/mesh.toml");
 /// The bundled 100k-triangle example scene (torus knot on a floor, between two spheres).
@@ -147,6 +149,8 @@ macro_rules! say {
 pub fn run_all(repeats: u32) {
     let threads = rayon::current_num_threads();
     say!("caustic bench: {threads} threads, best of {repeats}");
+    // First, while the process holds little, so its peak memory is the big mesh's own.
+    meshes::run(repeats, |a| say!("{a}"));
 
     let t0 = Instant::now();
     let mesh = load(MESH_SCENE, "bench:mesh");

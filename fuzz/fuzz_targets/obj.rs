@@ -1,4 +1,4 @@
-//! Fuzzes the OBJ loader (`TriangleMesh::load_obj`, via tobj): any file must load or be
+//! Fuzzes the OBJ loader (`TriangleMesh::load_obj`, our line reader): any file must load or be
 //! rejected, never panic, and an accepted mesh has in-range indices and finite vertices.
 #![no_main]
 

@@ -321,14 +321,26 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
         let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint) };
         // Everything big the render will allocate, estimated before any of it is.
-        let mut need = estimate_render_bytes(&loaded, &settings);
+        let mut need = estimate_render_bytes(&loaded, &settings) + loaded.scene.geometry_bytes();
         if job.is_some() {
             // A shard keeps its earlier run's film and writes its partial image from columns.
             let partial = 64 + if settings.layers { 240 } else { 0 };
             need += settings.pixels() * (crate::film::BYTES_PER_PIXEL + partial);
         }
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
-        log(opts.quiet, format_args!("memory: about {} MiB needed (limit {} MiB)", need.div_ceil(1 << 20), limit >> 20));
+        // Loading peaks higher than the loaded scene (the BVH's build temporaries): the larger
+        // of the footprint estimated before loading and what rendering holds is the peak.
+        log(
+            opts.quiet,
+            format_args!(
+                "memory: about {} MiB at peak (loading {} MiB; rendering {} MiB, of which the loaded geometry {} MiB; limit {} MiB)",
+                need.max(footprint.total()).div_ceil(1 << 20),
+                footprint.total().div_ceil(1 << 20),
+                need.div_ceil(1 << 20),
+                loaded.scene.geometry_bytes().div_ceil(1 << 20),
+                limit >> 20
+            ),
+        );
         if need > limit {
             return Err(AppError::Memory { need_mib: need.div_ceil(1 << 20), limit_mib: limit >> 20 });
         }

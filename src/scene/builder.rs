@@ -13,7 +13,7 @@ use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{Emitter, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials};
 use crate::math::Vec3;
-use crate::shape::{Plane, Primitive, Shape, TriangleMesh};
+use crate::shape::{Plane, Primitive, Shape, Triangle, TriangleMesh};
 use crate::texture::Texture;
 use std::time::Instant;
 
@@ -144,23 +144,31 @@ impl SceneBuilder {
     }
 
     /// Adds a triangle mesh (zero-area triangles are skipped and counted); `name` says where it
-    /// came from, for the log.
-    pub fn add_mesh(&mut self, mesh: TriangleMesh, material: u32, name: &str) {
+    /// came from, for the log. Its primitives are made straight from the mesh, with no list of
+    /// triangles in between.
+    pub fn add_mesh(&mut self, mut mesh: TriangleMesh, material: u32, name: &str) {
         let first = self.target().len();
         let id = self.meshes.len() as u32;
-        let (tris, skipped) = mesh.triangles(id);
+        mesh.shrink_to_fit();
+        let target = self.target();
+        target.reserve_exact(mesh.indices.len());
+        let mut skipped = 0;
+        for (k, idx) in mesh.indices.iter().enumerate() {
+            let t = Triangle { p: idx.map(|i| mesh.positions[i as usize]), mesh: id, index: k as u32 };
+            if t.area() > 0.0 {
+                target.push(Primitive { shape: Shape::Triangle(t), material, light: NO_LIGHT });
+            } else {
+                skipped += 1;
+            }
+        }
+        let kept = self.target().len() - first;
         self.mesh_info.push(MeshInfo {
             name: name.to_string(),
-            triangles: tris.len(),
+            triangles: kept,
             bounds: Aabb::from_points(&mesh.positions),
         });
-        self.triangles += tris.len();
+        self.triangles += kept;
         self.degenerate_triangles += skipped;
-        self.target().extend(tris.into_iter().map(|t| Primitive {
-            shape: Shape::Triangle(t),
-            material,
-            light: NO_LIGHT,
-        }));
         self.meshes.push(mesh);
         self.note_specular(first, material);
     }

@@ -4,17 +4,21 @@
 //! face lines without keeping them, and instances are counted from the scene text. `caustic
 //! render` refuses a scene whose estimate exceeds `--max-memory` before loading it.
 //!
-//! The estimate is of resident memory after loading; reading a PLY or OBJ file needs about
-//! twice its triangles' share for a moment while the parser's tables and ours coexist.
+//! The estimate is of the peak resident memory while loading, which is while the BVH is built:
+//! the mesh, its primitives (twice while the BVH orders them), the BVH's build records, leaf
+//! shapes and nodes. The PLY and OBJ readers stream into the mesh's arrays and need nothing
+//! per triangle beyond them, so reading never peaks higher.
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-/// Resident bytes per triangle of a loaded mesh: its vertices and indices in the mesh, its
-/// primitive and its BVH leaf and node share (measured: BENCHMARKS.md, "Big meshes").
-pub const BYTES_PER_TRIANGLE: u64 = 270;
-/// Bytes per mesh vertex kept (position, normal, uv).
-pub const BYTES_PER_VERTEX: u64 = 32;
+/// Peak bytes per triangle while a scene is loaded: its indices in the mesh, its primitive
+/// (60 bytes, held twice while the BVH orders them), the BVH's 40-byte build record, 40-byte
+/// leaf shape and node share (measured on the 5 M-triangle knot: 276 bytes per triangle with
+/// its vertices, BENCHMARKS.md "Big meshes, PLY and OBJ readers").
+pub const BYTES_PER_TRIANGLE: u64 = 258;
+/// Bytes per mesh vertex kept (position and normal; uv when the file has them).
+pub const BYTES_PER_VERTEX: u64 = 24;
 /// Bytes per instance: two transforms, bounds and the top-level BVH's share.
 pub const BYTES_PER_INSTANCE: u64 = 160;
 
@@ -127,6 +131,7 @@ fn toml_files(text: &str, base: &Path, f: &mut Footprint) {
     for o in doc.get("objects").and_then(|v| v.as_array()).into_iter().flatten() {
         match o.get("type").and_then(|t| t.as_str()) {
             Some("instance") => f.instances = f.instances.saturating_add(BYTES_PER_INSTANCE),
+            Some("torus_knot") => f.meshes = f.meshes.saturating_add(knot_bytes(o)),
             _ => {
                 if let Some(p) = file_of(o) {
                     f.mesh(p);
@@ -136,7 +141,9 @@ fn toml_files(text: &str, base: &Path, f: &mut Footprint) {
     }
     for (_, group) in doc.get("groups").and_then(|v| v.as_table()).into_iter().flatten() {
         for o in group.get("objects").and_then(|v| v.as_array()).into_iter().flatten() {
-            if let Some(p) = file_of(o) {
+            if o.get("type").and_then(|t| t.as_str()) == Some("torus_knot") {
+                f.meshes = f.meshes.saturating_add(knot_bytes(o));
+            } else if let Some(p) = file_of(o) {
                 f.mesh(p);
             }
         }
@@ -153,7 +160,15 @@ fn toml_files(text: &str, base: &Path, f: &mut Footprint) {
     }
 }
 
-/// A mesh file's resident bytes once loaded: from a PLY header's element counts, an OBJ's `v`
+/// A generated torus knot's bytes: `segments` x `sides` vertices, twice as many triangles
+/// (the defaults of `scene::native`).
+fn knot_bytes(o: &toml::Value) -> u64 {
+    let get = |k: &str, d: u64| o.get(k).and_then(|v| v.as_integer()).map_or(d, |v| v.max(0) as u64);
+    let vertices = get("segments", 256).saturating_mul(get("sides", 32));
+    vertices.saturating_mul(BYTES_PER_VERTEX).saturating_add(vertices.saturating_mul(2 * BYTES_PER_TRIANGLE))
+}
+
+/// A mesh file's peak bytes while loaded: from a PLY header's element counts, an OBJ's `v`
 /// and `f` lines (polygons of n vertices count n - 2 triangles), or a Mitsuba serialized file's
 /// size (compressed about 3:1).
 pub fn mesh_bytes(path: &Path) -> Option<u64> {
@@ -305,6 +320,8 @@ mod tests {
         let f = estimate(&data("tests/data/emitters/cornell_mesh.xml"), &[]);
         assert_eq!(f.files.len(), 1);
         assert_eq!(f.meshes, 162 * BYTES_PER_VERTEX + 320 * BYTES_PER_TRIANGLE);
+        let f = estimate(&data("scenes/07-torus-knot.toml"), &[]);
+        assert_eq!(f.meshes, 1600 * 32 * (BYTES_PER_VERTEX + 2 * BYTES_PER_TRIANGLE));
         let f = estimate(&data("scenes/15-materials.toml"), &[]);
         assert!(f.textures > 0 && f.files.iter().all(|(_, b)| *b > 0), "{f:?}");
     }

@@ -178,6 +178,13 @@ impl Scene {
         }
     }
 
+    /// Bytes held by the geometry: meshes, the BVH (nodes, leaf shapes, primitives), instances.
+    pub fn geometry_bytes(&self) -> u64 {
+        (self.meshes.iter().map(TriangleMesh::memory_bytes).sum::<usize>()
+            + self.bvh.memory_bytes()
+            + self.instances.memory_bytes()) as u64
+    }
+
     /// Bytes the environment map holds (texels and sampling distribution); 0 without one.
     pub fn environment_bytes(&self) -> u64 {
         self.environment

@@ -1,10 +1,12 @@
 //! Triangle meshes: indexed vertex arrays, read from OBJ, PLY or Mitsuba `serialized` files
 //! (`TriangleMesh::load`, the one reader both scene formats use) or generated procedurally.
 
+mod obj;
 mod ply;
 mod serialized;
 
-pub use ply::load_ply;
+pub use obj::parse_obj;
+pub use ply::{load_ply, parse_ply};
 pub use serialized::{Serialized, load_serialized, parse_serialized};
 
 use super::Triangle;
@@ -64,24 +66,6 @@ impl MeshFormat {
     }
 }
 
-/// What tobj's error codes mean, in words.
-fn obj_error(e: &tobj::LoadError) -> &'static str {
-    use tobj::LoadError as E;
-    match e {
-        E::OpenFileFailed | E::ReadError => "the file cannot be read",
-        E::UnrecognizedCharacter => "a line starts with something OBJ does not know",
-        E::PositionParseError => "a vertex position (v) is not three numbers",
-        E::NormalParseError => "a vertex normal (vn) is not three numbers",
-        E::TexcoordParseError => "a texture coordinate (vt) is not two numbers",
-        E::FaceParseError => "a face (f) is malformed",
-        E::FaceVertexOutOfBounds => "a face refers to a vertex that does not exist",
-        E::FaceTexCoordOutOfBounds => "a face refers to a texture coordinate that does not exist",
-        E::FaceNormalOutOfBounds => "a face refers to a normal that does not exist",
-        E::InvalidPolygon => "a face has fewer than three vertices",
-        _ => "the file is not a valid OBJ file",
-    }
-}
-
 impl TriangleMesh {
     /// Reads an OBJ, PLY or `serialized` file (its first mesh), chosen by its extension.
     pub fn load(path: &Path) -> Result<Self, MeshError> {
@@ -93,63 +77,11 @@ impl TriangleMesh {
         }
     }
 
-    /// Loads every object of an OBJ file into one triangulated mesh. Faces with more than three
-    /// vertices are fanned; vertex normals and texture coordinates are kept when the file has
-    /// them for every vertex. Material libraries are not read.
+    /// Loads every object of an OBJ file into one triangulated mesh (`obj`): polygons fanned,
+    /// vertex normals and texture coordinates kept when every face corner has them. Material
+    /// libraries are not read.
     pub fn load_obj(path: &Path) -> Result<Self, MeshError> {
-        let shown = path.display().to_string();
-        let read = |message: String| MeshError::Read { path: shown.clone(), format: "OBJ", message };
-        let bytes = std::fs::read(path).map_err(|e| read(e.to_string()))?;
-        let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-        let (models, _materials) =
-            tobj::load_obj_buf(&mut std::io::BufReader::new(&bytes[..]), &opts, |_| Ok(Default::default()))
-                .map_err(|e| read(obj_error(&e).to_string()))?;
-        let invalid = |message: String| MeshError::Invalid { path: shown.clone(), format: "OBJ", message };
-        let mut mesh = TriangleMesh::default();
-        let mut all_normals = true;
-        let mut all_uvs = true;
-        for m in &models {
-            let base = mesh.positions.len() as u32;
-            let m = &m.mesh;
-            if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
-                return Err(invalid("positions or indices are not in triples".into()));
-            }
-            let n_verts = m.positions.len() / 3;
-            mesh.positions.extend(m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
-            if m.normals.len() == m.positions.len() {
-                let normals = mesh.normals.get_or_insert_with(Vec::new);
-                normals.extend(m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
-            } else {
-                all_normals = false;
-            }
-            if m.texcoords.len() == 2 * n_verts {
-                // OBJ's v runs up an image; Mitsuba's OBJ reader flips it (`flip_tex_coords`).
-                let uvs = mesh.uvs.get_or_insert_with(Vec::new);
-                uvs.extend(m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])));
-            } else {
-                all_uvs = false;
-            }
-            for c in m.indices.chunks_exact(3) {
-                if c.iter().any(|&i| i as usize >= n_verts) {
-                    let bad = c.iter().max().unwrap_or(&0) + 1;
-                    return Err(invalid(format!("a face refers to vertex {bad} of {n_verts}")));
-                }
-                mesh.indices.push([base + c[0], base + c[1], base + c[2]]);
-            }
-        }
-        if !all_normals {
-            mesh.normals = None;
-        }
-        if !all_uvs {
-            mesh.uvs = None;
-        }
-        if mesh.indices.is_empty() {
-            return Err(invalid("it has no faces (f lines)".into()));
-        }
-        if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(invalid(format!("vertex {} is not finite", bad + 1)));
-        }
-        Ok(mesh)
+        obj::load_obj(path)
     }
 
     /// Gives a mesh without vertex normals smooth ones, as Mitsuba does: each vertex gets the
@@ -220,6 +152,26 @@ impl TriangleMesh {
             }
         }
         TriangleMesh { positions, normals: Some(normals), uvs: None, indices }
+    }
+
+    /// Bytes held by the mesh's arrays.
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.capacity() * size_of::<Vec3>()
+            + self.normals.as_ref().map_or(0, |n| n.capacity() * size_of::<Vec3>())
+            + self.uvs.as_ref().map_or(0, |u| u.capacity() * size_of::<Vec2>())
+            + self.indices.capacity() * size_of::<[u32; 3]>()
+    }
+
+    /// Gives back spare capacity (a mesh is read once and kept for the whole render).
+    pub fn shrink_to_fit(&mut self) {
+        self.positions.shrink_to_fit();
+        self.indices.shrink_to_fit();
+        if let Some(n) = &mut self.normals {
+            n.shrink_to_fit();
+        }
+        if let Some(u) = &mut self.uvs {
+            u.shrink_to_fit();
+        }
     }
 
     /// The mesh with positions and normals moved by `t`.
