@@ -29,7 +29,7 @@ for entry in "${scenes[@]}"; do
     # shellcheck disable=SC2086
     "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
       2>"$OUT/$name-$integrator.log" >/dev/null
-    samples=$(grep -oE '[0-9]+ (samples|iterations)[^,]*' "$OUT/$name-$integrator.log" | tail -1 || true)
+    samples=$(grep -oE '([0-9]+ samples per pixel|took [0-9]+ iterations)' "$OUT/$name-$integrator.log" | tail -1 || true)
     python3 - "$OUT/$name-$integrator.exr" "$OUT/$name-ref.exr" "$name" "$integrator" "$samples" <<'PY'
 import sys
 sys.path.insert(0, "scripts")
