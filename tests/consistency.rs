@@ -237,7 +237,7 @@ material = "test"
 /// camera rays, so what a pixel covers (a light's reflection smaller than a pixel in the mirror
 /// sphere) is the same in every render and cancels in their difference, which is measured per
 /// seed.
-const SPP: u32 = 32;
+const SPP: u32 = 48;
 /// Renders with seeds 11, 12, ...
 const RUNS: u64 = 3;
 
