@@ -36,6 +36,11 @@ use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+mod fill;
+pub mod irradiance_cache;
+
+use irradiance_cache::{GatherSample, IrradianceCache};
+
 /// Settings of the photon-mapping integrator.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotonConfig {
@@ -47,6 +52,10 @@ pub struct PhotonConfig {
     pub caustic_cap: u64,
     /// Final-gather rays per camera sample; 0 reads the global map directly.
     pub gather_rays: u32,
+    /// Irradiance cache error threshold `a` (Ward's); 0 turns the cache off.
+    pub cache_error: f32,
+    /// Final-gather rays per irradiance record.
+    pub cache_rays: u32,
     /// Photons per radiance estimate (global map).
     pub gather_k: usize,
     /// Photons per caustic estimate.
@@ -77,6 +86,8 @@ impl PhotonConfig {
             caustic_photons,
             caustic_cap: caustic_photons.saturating_mul(200).max(1_000_000),
             gather_rays: o.gather.unwrap_or(16),
+            cache_error: o.irradiance_cache.unwrap_or(DEFAULT_CACHE_ERROR).max(0.0),
+            cache_rays: o.cache_rays.unwrap_or(DEFAULT_CACHE_RAYS).max(16),
             gather_k: o.gather_k.unwrap_or(64).max(1),
             caustic_k: o.caustic_k.unwrap_or(64).max(1),
             max_radius: o.max_radius.unwrap_or(0.05 * diag),
@@ -88,6 +99,11 @@ impl PhotonConfig {
         }
     }
 }
+
+/// Default irradiance cache error threshold (`--irradiance-cache`).
+pub const DEFAULT_CACHE_ERROR: f32 = 0.25;
+/// Default final-gather rays per irradiance record (`--cache-rays`).
+pub const DEFAULT_CACHE_RAYS: u32 = 512;
 
 /// What building the maps did, for the log.
 #[derive(Clone, Debug, Default)]
@@ -101,6 +117,9 @@ pub struct PhotonStats {
     pub build_time: Duration,
     pub global_bytes: usize,
     pub caustic_bytes: usize,
+    /// Irradiance records made before rendering, and the time they took.
+    pub cache_records: usize,
+    pub cache_time: Duration,
 }
 
 pub struct PhotonIntegrator {
@@ -111,6 +130,9 @@ pub struct PhotonIntegrator {
     /// whose `direction` is the surface normal and whose `power` is the irradiance. Final-gather
     /// rays read the nearest record instead of making a full radiance estimate.
     irradiance: PhotonMap,
+    /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
+    /// is off): filled once before rendering, then only read.
+    cache: IrradianceCache,
     pub stats: PhotonStats,
 }
 
@@ -186,8 +208,24 @@ impl PhotonIntegrator {
             build_time: t1.elapsed(),
             global_bytes: global_map.memory_bytes(),
             caustic_bytes: caustic_map.memory_bytes(),
+            ..Default::default()
         };
-        Some(PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats })
+        let a = config.cache_error;
+        let mut pm = PhotonIntegrator {
+            config,
+            global: global_map,
+            caustic: caustic_map,
+            irradiance,
+            cache: IrradianceCache::empty(a.max(1e-3)),
+            stats,
+        };
+        if a > 0.0 && pm.config.gather_rays > 0 {
+            let t2 = Instant::now();
+            pm.cache = pm.fill_cache(scene, cancel, progress)?;
+            pm.stats.cache_records = pm.cache.len();
+            pm.stats.cache_time = t2.elapsed();
+        }
+        Some(pm)
     }
 
     /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
@@ -329,7 +367,7 @@ impl PhotonIntegrator {
         for _ in 0..n {
             // A Lambertian surface samples the cosine directly (the same rays as always); any
             // other the non-delta part of its BSDF.
-            let (wi, mut beta) = if lambertian {
+            let (wi, beta) = if lambertian {
                 let wi = frame.to_world(cosine_hemisphere(sampler.next_2d()));
                 (wi, bsdf.f(wo, wi, Transport::Radiance) * PI)
             } else {
@@ -342,31 +380,69 @@ impl PhotonIntegrator {
             if beta == Color::ZERO {
                 continue;
             }
-            let mut ray = scene.spawn(hit, wi);
-            for _ in 0..4 {
-                stats.rays += 1;
-                let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
-                let wo_y = -ray.d;
-                let by = scene.bsdf(&y, wo_y);
-                // Emission is direct light or a caustic; what a reflecting emitter reflects is not.
-                if by.is_black() {
-                    break;
-                }
-                if by.is_specular_only() {
-                    let Some(s) =
-                        by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
-                    else {
-                        break;
-                    };
-                    beta *= s.weight;
-                    ray = scene.spawn(&y, s.wi);
-                    continue;
-                }
-                sum += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
-                break;
-            }
+            sum += beta * self.gather_ray(scene, hit, wi, sampler.rng(), scratch, stats).l;
         }
         sum / n.max(1) as f32
+    }
+
+    /// One final-gather ray from `hit` along `wi`: followed through mirrors and glass (at most
+    /// four bounces), then the radiance leaving the first other surface read from the global map,
+    /// times the specular bounces' weights; and the distance to the first surface it met.
+    fn gather_ray(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        wi: Vec3,
+        rng: &mut crate::sampling::Rng32,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> GatherSample {
+        let mut ray = scene.spawn(hit, wi);
+        let mut beta = Color::ONE;
+        let mut dist = f32::INFINITY;
+        for bounce in 0..4 {
+            stats.rays += 1;
+            let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
+            if bounce == 0 {
+                dist = y.t * ray.d.length();
+            }
+            let wo_y = -ray.d;
+            let by = scene.bsdf(&y, wo_y);
+            // Emission is direct light or a caustic; what a reflecting emitter reflects is not.
+            if by.is_black() {
+                break;
+            }
+            if by.is_specular_only() {
+                let Some(s) = by.sample(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
+                beta *= s.weight;
+                ray = scene.spawn(&y, s.wi);
+                continue;
+            }
+            return GatherSample { l: beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch), dist };
+        }
+        GatherSample { l: Color::ZERO, dist }
+    }
+
+    /// Indirect light at a hit: interpolated from the irradiance cache where a record reaches a
+    /// Lambertian surface, else by a final gather.
+    #[allow(clippy::too_many_arguments)]
+    fn indirect(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        sampler: &mut Sampler,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> Color {
+        if !self.cache.is_empty()
+            && let Some(albedo) = bsdf.lambert_albedo()
+            && let Some(e) = self.cache.lookup(hit.p, bsdf.normal())
+        {
+            return albedo * e * std::f32::consts::FRAC_1_PI;
+        }
+        self.final_gather(scene, hit, bsdf, wo, sampler, scratch, stats)
     }
 }
 
@@ -519,7 +595,7 @@ impl RayIntegrator for PhotonIntegrator {
                     scratch,
                 )
             } else {
-                self.final_gather(scene, &hit, &bsdf, wo, sampler, scratch, stats)
+                self.indirect(scene, &hit, &bsdf, wo, sampler, scratch, stats)
             };
             layers[ki] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
@@ -537,3 +613,6 @@ impl RayIntegrator for PhotonIntegrator {
         layers
     }
 }
+
+#[cfg(test)]
+mod tests;
