@@ -280,6 +280,10 @@ impl PhotonIntegrator {
         // Light arrives from behind only through a transmitting surface (rough glass); elsewhere
         // photons from behind belong to the other side of a thin object.
         let both_sides = bsdf.flags().is_transmission();
+        // A Lambertian BSDF is albedo / pi for every photon arriving in front of both the shading
+        // and the geometric surface, 0 otherwise: sum the power and apply it once.
+        let lambert = bsdf.lambert_albedo();
+        let ng = bsdf.geometric_normal();
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
             let ph = map.photon(i);
@@ -294,7 +298,16 @@ impl PhotonIntegrator {
                 Some(kc) => 1.0 - d2.sqrt() / (kc * r),
                 None => 1.0,
             };
-            sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
+            if lambert.is_some() {
+                if dir.dot(ng) < 0.0 {
+                    sum += ph.power() * w;
+                }
+            } else {
+                sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
+            }
+        }
+        if let Some(albedo) = lambert {
+            sum *= albedo * std::f32::consts::FRAC_1_PI;
         }
         let norm = match cone {
             Some(kc) => 1.0 - 2.0 / (3.0 * kc),
