@@ -437,7 +437,10 @@ impl PhotonIntegrator {
     }
 
     /// Indirect light at a hit: interpolated from the irradiance cache where a record reaches a
-    /// Lambertian surface, else by a final gather.
+    /// Lambertian surface, else by a final gather. The cache is read only with `use_cache`: at
+    /// points a camera path reached through mirrors and glass alone, where records are made.
+    /// After a glossy bounce the path may land anywhere (under a rough glass sphere, say), where
+    /// records sized by the pixel footprint seen straight from the camera do not apply.
     #[allow(clippy::too_many_arguments)]
     fn indirect(
         &self,
@@ -445,11 +448,13 @@ impl PhotonIntegrator {
         hit: &Hit,
         bsdf: &Bsdf,
         wo: Vec3,
+        use_cache: bool,
         sampler: &mut Sampler,
         scratch: &mut Gathered,
         stats: &mut RayStats,
     ) -> Color {
-        if !self.cache.is_empty()
+        if use_cache
+            && !self.cache.is_empty()
             && let Some(albedo) = bsdf.lambert_albedo()
             && let Some(e) = self.cache.lookup(hit.p, bsdf.normal())
         {
@@ -534,6 +539,9 @@ impl RayIntegrator for PhotonIntegrator {
         // The last bounce was glossy and its direct light came from shadow rays: a light hit
         // now would count it twice.
         let mut lit_by_shadow_rays = false;
+        // A glossy bounce was sampled on the way: the cache's records (made where camera paths
+        // through mirrors and glass land) are not read after one (see `indirect`).
+        let mut glossy_prefix = false;
         for depth in 0.. {
             stats.rays += 1;
             let first = if prefix_specular { SPECULAR } else { DIRECT };
@@ -579,6 +587,7 @@ impl RayIntegrator for PhotonIntegrator {
                 beta *= s.weight;
                 prefix_specular = true;
                 lit_by_shadow_rays = !s.flags.is_specular();
+                glossy_prefix |= !s.flags.is_specular();
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
@@ -608,7 +617,7 @@ impl RayIntegrator for PhotonIntegrator {
                     scratch,
                 )
             } else {
-                self.indirect(scene, &hit, &bsdf, wo, sampler, scratch, stats)
+                self.indirect(scene, &hit, &bsdf, wo, !glossy_prefix, sampler, scratch, stats)
             };
             layers[ki] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.

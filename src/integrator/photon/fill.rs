@@ -27,11 +27,16 @@ use std::sync::atomic::AtomicBool;
 
 /// Strides of the candidate grids, coarse to fine.
 const STRIDES: [u32; 5] = [16, 8, 4, 2, 1];
-/// A record's reach (a R) is kept between these many pixel footprints at its camera distance:
-/// no finer than the pixels (corners would otherwise take a record per pixel), no coarser than
-/// about a sixth of a 400-pixel image.
+/// A record's reach (a R) is kept between these many pixel footprints at its camera distance d
+/// (no finer than the pixels: corners would otherwise take a record per pixel; no coarser than
+/// about a sixth of a 400-pixel image), and each bound at most these fractions of d: on a small
+/// image a pixel spans a wide angle, and a record reaching further than a fraction of its own
+/// distance would reach points much nearer the camera (a far part of a floor plane, seeing
+/// nothing, would darken the floor under the objects).
 const MIN_REACH_PX: f32 = 1.5;
 const MAX_REACH_PX: f32 = 64.0;
+const MIN_REACH_DIST: f32 = 0.05;
+const MAX_REACH_DIST: f32 = 0.1;
 
 /// A camera path's first diffuse hit.
 pub(super) struct Candidate {
@@ -93,7 +98,9 @@ impl PhotonIntegrator {
         }
         let a = self.config.cache_error;
         let fp = scene.camera.footprint(c.dist);
-        let range = (MIN_REACH_PX * fp / a, MAX_REACH_PX * fp / a);
+        let lo = (MIN_REACH_PX * fp).min(MIN_REACH_DIST * c.dist);
+        let hi = (MAX_REACH_PX * fp).min(MAX_REACH_DIST * c.dist);
+        let range = (lo / a, hi / a);
         make_record(c.hit.p, &frame, m, n, &samples, &dirs, range)
     }
 
