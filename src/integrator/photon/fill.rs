@@ -11,7 +11,7 @@
 //! exactly what the gather estimates.
 
 use super::PhotonIntegrator;
-use super::irradiance_cache::{COVER, GatherSample, IrradianceCache, Record, make_record, stratum_direction, strata};
+use super::irradiance_cache::{COVER, GatherSample, IrradianceCache, Record, make_record, strata, stratum_direction};
 use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
@@ -148,8 +148,7 @@ impl PhotonIntegrator {
             // Accept in pixel order, skipping what this level's earlier records already reach.
             let first_new = records.len();
             for rec in made.into_iter().flatten() {
-                let reached =
-                    records[first_new..].iter().any(|o| o.error(rec.p, rec.n).is_some_and(|e| e < COVER * a));
+                let reached = records[first_new..].iter().any(|o| o.error(rec.p, rec.n).is_some_and(|e| e < COVER * a));
                 if !reached {
                     records.push(rec);
                 }

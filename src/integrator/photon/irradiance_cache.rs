@@ -188,14 +188,7 @@ pub fn make_record(
     }
     let r = r.clamp(r_range.0, r_range.1.max(r_range.0));
     let world = |v: Vec3| frame.to_world(v);
-    Record {
-        p,
-        n: frame.z,
-        e,
-        r,
-        grad_r: grad_r.map(world),
-        grad_t: grad_t.map(world),
-    }
+    Record { p, n: frame.z, e, r, grad_r: grad_r.map(world), grad_t: grad_t.map(world) }
 }
 
 /// The records and a multi-level hash grid over their reach: a record whose reach (radius
