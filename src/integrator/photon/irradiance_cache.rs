@@ -151,29 +151,23 @@ pub fn make_record(
         let phi_b = 2.0 * PI * k as f32 / n as f32;
         let v_k = Vec3::new(-phi_b.sin(), phi_b.cos(), 0.0);
         let prev_k = (k + n - 1) % n;
-        let mut acc_u = [0.0f32; 3];
-        let mut acc_v = [0.0f32; 3];
+        let mut acc_u = Color::ZERO;
+        let mut acc_v = Color::ZERO;
         for j in 0..m {
             let s = at(j, k);
             if j > 0 {
                 // Boundary between theta rows j - 1 and j.
                 let s2 = j as f32 / m as f32;
                 let w = s2.sqrt() * (1.0 - s2) / near(s, at(j - 1, k));
-                let o = at(j - 1, k);
-                for c in 0..3 {
-                    acc_u[c] += w * (s.l[c] - o.l[c]);
-                }
+                acc_u += (s.l - at(j - 1, k).l) * w;
             }
             // Boundary between azimuth columns k - 1 and k.
             let (s_lo, s_hi) = ((j as f32 / m as f32).sqrt(), ((j + 1) as f32 / m as f32).sqrt());
             let w = (s_hi - s_lo) / near(s, at(j, prev_k));
-            let o = at(j, prev_k);
-            for c in 0..3 {
-                acc_v[c] += w * (s.l[c] - o.l[c]);
-            }
+            acc_v += (s.l - at(j, prev_k).l) * w;
         }
-        for c in 0..3 {
-            grad_t[c] += u_k * (2.0 * PI / n as f32 * acc_u[c]) + v_k * acc_v[c];
+        for (c, g) in grad_t.iter_mut().enumerate() {
+            *g += u_k * (2.0 * PI / n as f32 * acc_u[c]) + v_k * acc_v[c];
         }
     }
 
