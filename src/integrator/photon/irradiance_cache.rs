@@ -36,8 +36,8 @@ pub struct Record {
     pub e: Color,
     /// Validity radius (scene units).
     pub r: f32,
-    /// Per colour channel: dE/d(rotation) (the change of E as n turns towards n + (axis x n))
-    /// and dE/dx, both in world space.
+    /// Per colour channel, in world space: the rotational gradient (E at a normal n is
+    /// E + (n_i x n) . grad_r to first order) and the translational one (E + (x - x_i) . grad_t).
     pub grad_r: [Vec3; 3],
     pub grad_t: [Vec3; 3],
 }
