@@ -145,6 +145,14 @@ struct RenderArgs {
     /// Photons per radiance estimate.
     #[arg(long, value_name = "K")]
     gather_k: Option<usize>,
+    /// Irradiance cache error threshold (Ward's a): indirect diffuse light is interpolated
+    /// between final gathers made before rendering where it is smooth; smaller is more accurate
+    /// and slower; 0 gathers at every sample [default: 0.25].
+    #[arg(long, value_name = "A")]
+    irradiance_cache: Option<f32>,
+    /// Final-gather rays per irradiance-cache record [default: 512].
+    #[arg(long, value_name = "N")]
+    cache_rays: Option<u32>,
     /// Largest radius of a radiance estimate, in scene units [default: 5% of the scene's size].
     #[arg(long, value_name = "R")]
     max_radius: Option<f32>,
@@ -250,6 +258,8 @@ impl RenderArgs {
         opt("caustic-photons", self.caustic_photons.map(|v| v.to_string()));
         opt("gather", self.gather.map(|v| v.to_string()));
         opt("gather-k", self.gather_k.map(|v| v.to_string()));
+        opt("irradiance-cache", self.irradiance_cache.map(|v| format!("{v:?}")));
+        opt("cache-rays", self.cache_rays.map(|v| v.to_string()));
         opt("max-radius", self.max_radius.map(|v| format!("{v:?}")));
         opt("iterations", self.iterations.map(|v| v.to_string()));
         opt("photons-per-iter", self.photons_per_iter.map(|v| v.to_string()));
@@ -293,6 +303,8 @@ impl RenderArgs {
                     caustic_photons: args.caustic_photons,
                     gather: args.gather,
                     gather_k: args.gather_k,
+                    irradiance_cache: args.irradiance_cache,
+                    cache_rays: args.cache_rays,
                     max_radius: args.max_radius,
                     photons_per_iter: args.photons_per_iter,
                     initial_radius: args.initial_radius,

@@ -179,7 +179,11 @@ intensity = 1"#,
 ///   the specular layer within 4%: the mesh light's reflection in the sphere covers part of a
 ///   pixel, and the photon integrator follows the mirror part of every sample where the path
 ///   tracer picks it at random, so pairing the camera rays does not cancel that noise.
+/// - envmap x roughdielectric (photon indirect +19%): photon mapping's light through frosted
+///   glass reads high in the indirect layer under every light (+13% under the quad light at
+///   120 x 100 and 16 samples, image +1.2%); SPPM shows the same at few iterations. Not yet fixed.
 const KNOWN_OPEN: &[(&str, &str, &str, &str)] = &[
+    ("envmap", "roughdielectric", "photon", "indirect"),
     ("quad", "glass", "photon", "image"),
     ("quad", "glass", "sppm", "image"),
     ("sphere", "roughdielectric", "sppm", "image"),

@@ -54,6 +54,8 @@ impl RenderId {
             ("caustic_photons".into(), opt(p.caustic_photons.map(|v| v.to_string()))),
             ("gather".into(), opt(p.gather.map(|v| v.to_string()))),
             ("gather_k".into(), opt(p.gather_k.map(|v| v.to_string()))),
+            ("irradiance_cache".into(), opt(p.irradiance_cache.map(|v| format!("{v:?}")))),
+            ("cache_rays".into(), opt(p.cache_rays.map(|v| v.to_string()))),
             ("caustic_k".into(), opt(p.caustic_k.map(|v| v.to_string()))),
             ("max_radius".into(), opt(p.max_radius.map(|v| format!("{v:?}")))),
             ("caustic_radius".into(), opt(p.caustic_radius.map(|v| format!("{v:?}")))),

@@ -37,6 +37,11 @@ use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+mod fill;
+pub mod irradiance_cache;
+
+use irradiance_cache::{GatherSample, IrradianceCache};
+
 /// Settings of the photon-mapping integrator.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotonConfig {
@@ -48,6 +53,10 @@ pub struct PhotonConfig {
     pub caustic_cap: u64,
     /// Final-gather rays per camera sample; 0 reads the global map directly.
     pub gather_rays: u32,
+    /// Irradiance cache error threshold `a` (Ward's); 0 turns the cache off.
+    pub cache_error: f32,
+    /// Final-gather rays per irradiance record.
+    pub cache_rays: u32,
     /// Photons per radiance estimate (global map).
     pub gather_k: usize,
     /// Photons per caustic estimate.
@@ -78,6 +87,8 @@ impl PhotonConfig {
             caustic_photons,
             caustic_cap: caustic_photons.saturating_mul(200).max(1_000_000),
             gather_rays: o.gather.unwrap_or(16),
+            cache_error: o.irradiance_cache.unwrap_or(DEFAULT_CACHE_ERROR).max(0.0),
+            cache_rays: o.cache_rays.unwrap_or(DEFAULT_CACHE_RAYS).max(16),
             gather_k: o.gather_k.unwrap_or(64).max(1),
             caustic_k: o.caustic_k.unwrap_or(64).max(1),
             max_radius: o.max_radius.unwrap_or(0.05 * diag),
@@ -89,6 +100,11 @@ impl PhotonConfig {
         }
     }
 }
+
+/// Default irradiance cache error threshold (`--irradiance-cache`).
+pub const DEFAULT_CACHE_ERROR: f32 = 0.25;
+/// Default final-gather rays per irradiance record (`--cache-rays`).
+pub const DEFAULT_CACHE_RAYS: u32 = 512;
 
 /// What building the maps did, for the log.
 #[derive(Clone, Debug, Default)]
@@ -102,6 +118,9 @@ pub struct PhotonStats {
     pub build_time: Duration,
     pub global_bytes: usize,
     pub caustic_bytes: usize,
+    /// Irradiance records made before rendering, and the time they took.
+    pub cache_records: usize,
+    pub cache_time: Duration,
 }
 
 pub struct PhotonIntegrator {
@@ -112,6 +131,9 @@ pub struct PhotonIntegrator {
     /// whose `direction` is the surface normal and whose `power` is the irradiance. Final-gather
     /// rays read the nearest record instead of making a full radiance estimate.
     irradiance: PhotonMap,
+    /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
+    /// is off): filled once before rendering, then only read.
+    cache: IrradianceCache,
     pub stats: PhotonStats,
 }
 
@@ -187,8 +209,24 @@ impl PhotonIntegrator {
             build_time: t1.elapsed(),
             global_bytes: global_map.memory_bytes(),
             caustic_bytes: caustic_map.memory_bytes(),
+            ..Default::default()
         };
-        Some(PhotonIntegrator { config, global: global_map, caustic: caustic_map, irradiance, stats })
+        let a = config.cache_error;
+        let mut pm = PhotonIntegrator {
+            config,
+            global: global_map,
+            caustic: caustic_map,
+            irradiance,
+            cache: IrradianceCache::empty(a.max(1e-3)),
+            stats,
+        };
+        if a > 0.0 && pm.config.gather_rays > 0 {
+            let t2 = Instant::now();
+            pm.cache = pm.fill_cache(scene, cancel, progress)?;
+            pm.stats.cache_records = pm.cache.len();
+            pm.stats.cache_time = t2.elapsed();
+        }
+        Some(pm)
     }
 
     /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
@@ -243,6 +281,10 @@ impl PhotonIntegrator {
         // Light arrives from behind only through a transmitting surface (rough glass); elsewhere
         // photons from behind belong to the other side of a thin object.
         let both_sides = bsdf.flags().is_transmission();
+        // A Lambertian BSDF is albedo / pi for every photon arriving in front of both the shading
+        // and the geometric surface, 0 otherwise: sum the power and apply it once.
+        let lambert = bsdf.lambert_albedo();
+        let ng = bsdf.geometric_normal();
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
             let ph = map.photon(i);
@@ -257,7 +299,16 @@ impl PhotonIntegrator {
                 Some(kc) => 1.0 - d2.sqrt() / (kc * r),
                 None => 1.0,
             };
-            sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
+            if lambert.is_some() {
+                if dir.dot(ng) < 0.0 {
+                    sum += ph.power() * w;
+                }
+            } else {
+                sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
+            }
+        }
+        if let Some(albedo) = lambert {
+            sum *= albedo * std::f32::consts::FRAC_1_PI;
         }
         let norm = match cone {
             Some(kc) => 1.0 - 2.0 / (3.0 * kc),
@@ -330,7 +381,7 @@ impl PhotonIntegrator {
         for _ in 0..n {
             // A Lambertian surface samples the cosine directly (the same rays as always); any
             // other the non-delta part of its BSDF.
-            let (wi, mut beta) = if lambertian {
+            let (wi, beta) = if lambertian {
                 let wi = frame.to_world(cosine_hemisphere(sampler.next_2d()));
                 (wi, bsdf.f(wo, wi, Transport::Radiance) * PI)
             } else {
@@ -343,41 +394,83 @@ impl PhotonIntegrator {
             if beta == Color::ZERO {
                 continue;
             }
-            let mut ray = scene.spawn(hit, wi);
-            for _ in 0..4 {
-                stats.rays += 1;
-                let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
-                let wo_y = -ray.d;
-                let by = scene.bsdf(&y, wo_y);
-                // Emission is direct light or a caustic; what a reflecting emitter reflects is not.
-                if by.is_black() {
-                    break;
-                }
-                if by.is_specular_only() {
-                    let Some(s) =
-                        by.sample(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
-                    else {
-                        break;
-                    };
-                    beta *= s.weight;
-                    ray = scene.spawn(&y, s.wi);
-                    continue;
-                }
-                sum += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
-                // The mirror or glass part of a mixed material reflects more indirect light.
-                if !by.has_delta() {
-                    break;
-                }
-                let Some(s) =
-                    by.sample_delta(wo_y, sampler.rng().uniform(), sampler.rng().uniform2(), Transport::Radiance)
-                else {
-                    break;
-                };
-                beta *= s.weight;
-                ray = scene.spawn(&y, s.wi);
-            }
+            sum += beta * self.gather_ray(scene, hit, wi, sampler.rng(), scratch, stats).l;
         }
         sum / n.max(1) as f32
+    }
+
+    /// One final-gather ray from `hit` along `wi`: followed through mirrors and glass (at most
+    /// four bounces), then the radiance leaving the first other surface read from the global map,
+    /// times the specular bounces' weights (and on through that surface's own mirror or glass
+    /// part, if it has one); and the distance to the first surface it met.
+    fn gather_ray(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        wi: Vec3,
+        rng: &mut crate::sampling::Rng32,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> GatherSample {
+        let mut ray = scene.spawn(hit, wi);
+        let mut beta = Color::ONE;
+        let mut dist = f32::INFINITY;
+        let mut l = Color::ZERO;
+        for bounce in 0..4 {
+            stats.rays += 1;
+            let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
+            if bounce == 0 {
+                dist = y.t * ray.d.length();
+            }
+            let wo_y = -ray.d;
+            let by = scene.bsdf(&y, wo_y);
+            // Emission is direct light or a caustic; what a reflecting emitter reflects is not.
+            if by.is_black() {
+                break;
+            }
+            if by.is_specular_only() {
+                let Some(s) = by.sample(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
+                beta *= s.weight;
+                ray = scene.spawn(&y, s.wi);
+                continue;
+            }
+            l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
+            // The mirror or glass part of a mixed material reflects more indirect light.
+            if !by.has_delta() {
+                break;
+            }
+            let Some(s) = by.sample_delta(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
+            beta *= s.weight;
+            ray = scene.spawn(&y, s.wi);
+        }
+        GatherSample { l, dist }
+    }
+
+    /// Indirect light at a hit: interpolated from the irradiance cache where a record reaches a
+    /// Lambertian surface, else by a final gather. The cache is read only with `use_cache`: at
+    /// points a camera path reached through mirrors and glass alone, where records are made.
+    /// After a glossy bounce the path may land anywhere (under a rough glass sphere, say), where
+    /// records sized by the pixel footprint seen straight from the camera do not apply.
+    #[allow(clippy::too_many_arguments)]
+    fn indirect(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        use_cache: bool,
+        sampler: &mut Sampler,
+        scratch: &mut Gathered,
+        stats: &mut RayStats,
+    ) -> Color {
+        if use_cache
+            && !self.cache.is_empty()
+            && let Some(albedo) = bsdf.lambert_albedo()
+            && let Some(e) = self.cache.lookup(hit.p, bsdf.normal())
+        {
+            return albedo * e * std::f32::consts::FRAC_1_PI;
+        }
+        self.final_gather(scene, hit, bsdf, wo, sampler, scratch, stats)
     }
 }
 
@@ -456,6 +549,9 @@ impl RayIntegrator for PhotonIntegrator {
         // The last bounce was glossy and its direct light came from shadow rays: a light hit
         // now would count it twice.
         let mut lit_by_shadow_rays = false;
+        // A glossy bounce was sampled on the way: the cache's records (made where camera paths
+        // through mirrors and glass land) are not read after one (see `indirect`).
+        let mut glossy_prefix = false;
         for depth in 0.. {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
@@ -498,6 +594,7 @@ impl RayIntegrator for PhotonIntegrator {
                 beta *= s.weight;
                 layer.bounce(s.flags.is_specular());
                 lit_by_shadow_rays = !s.flags.is_specular();
+                glossy_prefix |= !s.flags.is_specular();
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
@@ -527,7 +624,7 @@ impl RayIntegrator for PhotonIntegrator {
                     scratch,
                 )
             } else {
-                self.final_gather(scene, &hit, &bsdf, wo, sampler, scratch, stats)
+                self.indirect(scene, &hit, &bsdf, wo, !glossy_prefix, sampler, scratch, stats)
             };
             layers[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
@@ -545,3 +642,6 @@ impl RayIntegrator for PhotonIntegrator {
         layers
     }
 }
+
+#[cfg(test)]
+mod tests;

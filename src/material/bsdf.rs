@@ -220,6 +220,12 @@ impl Bsdf {
         self.frame.z
     }
 
+    /// The geometric normal on the viewer's side.
+    #[inline]
+    pub fn geometric_normal(&self) -> Vec3 {
+        self.ng
+    }
+
     /// Every kind of scattering the BSDF has.
     #[inline]
     pub fn flags(&self) -> LobeFlags {

@@ -76,6 +76,10 @@ pub struct PhotonOptions {
     pub caustic_photons: Option<u64>,
     pub gather: Option<u32>,
     pub gather_k: Option<usize>,
+    /// Irradiance cache error threshold (0 turns the cache off).
+    pub irradiance_cache: Option<f32>,
+    /// Final-gather rays per irradiance record.
+    pub cache_rays: Option<u32>,
     pub caustic_k: Option<usize>,
     pub max_radius: Option<f32>,
     pub caustic_radius: Option<f32>,
@@ -93,6 +97,8 @@ impl PhotonOptions {
             caustic_photons: other.caustic_photons.or(self.caustic_photons),
             gather: other.gather.or(self.gather),
             gather_k: other.gather_k.or(self.gather_k),
+            irradiance_cache: other.irradiance_cache.or(self.irradiance_cache),
+            cache_rays: other.cache_rays.or(self.cache_rays),
             caustic_k: other.caustic_k.or(self.caustic_k),
             max_radius: other.max_radius.or(self.max_radius),
             caustic_radius: other.caustic_radius.or(self.caustic_radius),
