@@ -267,7 +267,9 @@ fn check_occlusion(d: &Data) {
     for (label, f) in variants {
         let got: Vec<bool> = d.incoherent.par_iter().map(f).collect();
         let bad = got.iter().zip(&closest).filter(|(a, b)| a != b).count();
-        println!("check occlusion rays (t_max {t:.3}), {label}: {blocked} blocked by the closest hit, {bad} rays disagree");
+        println!(
+            "check occlusion rays (t_max {t:.3}), {label}: {blocked} blocked by the closest hit, {bad} rays disagree"
+        );
         assert_eq!(bad, 0, "occlusion {label} disagrees");
     }
 }

@@ -1,7 +1,6 @@
 //! The binary BVH as it was before the 4-wide tree (commit 7d99d8e), kept so the benchmark
 //! compares old and new in one run. Binned SAH, 32-byte nodes, near child first.
 
-
 use caustic::geometry::{Aabb, Ray};
 use caustic::math::float::gamma;
 use caustic::math::{Vec3, Vec3A};

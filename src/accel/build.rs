@@ -63,12 +63,8 @@ struct Bounds {
 }
 
 impl Bounds {
-    const EMPTY: Bounds = Bounds {
-        lo: Vec4::INFINITY,
-        hi: Vec4::NEG_INFINITY,
-        clo: Vec4::INFINITY,
-        chi: Vec4::NEG_INFINITY,
-    };
+    const EMPTY: Bounds =
+        Bounds { lo: Vec4::INFINITY, hi: Vec4::NEG_INFINITY, clo: Vec4::INFINITY, chi: Vec4::NEG_INFINITY };
 
     #[inline(always)]
     fn add(&mut self, p: &BuildPrim) {
@@ -185,7 +181,13 @@ fn plan(prims: &[BuildPrim], b: &Bounds, depth: usize) -> Option<Split> {
         return None;
     }
     let ext = b.chi - b.clo;
-    let longest = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+    let longest = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
     if !(ext[longest] > 0.0) || depth >= MEDIAN_DEPTH {
         // No plane separates the centroids (or the tree is already deep): split by count.
         return (n > MAX_LEAF).then_some(Split::Median { axis: longest });
@@ -195,10 +197,7 @@ fn plan(prims: &[BuildPrim], b: &Bounds, depth: usize) -> Option<Split> {
     let scale = Vec4::select(ext.cmpgt(Vec4::ZERO), Vec4::splat(nb as f32) / ext, Vec4::ZERO);
     let last = Vec4::splat((nb - 1) as f32);
     let bins = if n > PAR_BIN {
-        prims
-            .par_chunks(PAR_BIN / 2)
-            .map(|c| bin(c, b.clo, scale, last))
-            .reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
+        prims.par_chunks(PAR_BIN / 2).map(|c| bin(c, b.clo, scale, last)).reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
     } else {
         bin(prims, b.clo, scale, last)
     };
@@ -275,7 +274,13 @@ fn partition(prims: &mut [BuildPrim], split: Split) -> (usize, Bounds, Bounds) {
         // Rounding put everything on one side: fall back to the median.
         let ext = lb.merge(rb);
         let e = ext.chi - ext.clo;
-        let longest = if e.x >= e.y && e.x >= e.z { 0 } else if e.y >= e.z { 1 } else { 2 };
+        let longest = if e.x >= e.y && e.x >= e.z {
+            0
+        } else if e.y >= e.z {
+            1
+        } else {
+            2
+        };
         return median(prims, longest);
     }
     (i, lb, rb)
@@ -294,31 +299,44 @@ fn split_item(prims: &mut [BuildPrim], item: &Item) -> (Item, Item) {
     let (l, r) = prims.split_at(mid);
     let depth = item.depth + 1;
     let plan2 = |s: &[BuildPrim], b: &Bounds| plan(s, b, depth);
-    let (pl, pr) = if prims.len() > PAR_BIN { rayon::join(|| plan2(l, &lb), || plan2(r, &rb)) } else { (plan2(l, &lb), plan2(r, &rb)) };
+    let (pl, pr) = if prims.len() > PAR_BIN {
+        rayon::join(|| plan2(l, &lb), || plan2(r, &rb))
+    } else {
+        (plan2(l, &lb), plan2(r, &rb))
+    };
     (
         Item { start: item.start, len: mid, b: lb, depth, split: pl },
         Item { start: item.start + mid, len: item.len - mid, b: rb, depth, split: pr },
     )
 }
 
+/// A built tree: node 0 is the root.
+pub(super) struct Tree {
+    pub(super) nodes: Vec<WideNode>,
+    /// Number of node levels.
+    pub(super) depth: u32,
+    /// The exact bounds of all primitives.
+    pub(super) bounds: Aabb,
+}
+
 /// The wide tree over `prims`, which are reordered into leaf order (each leaf's offset
-/// indexes them). Node 0 is the root.
-pub(super) fn build_wide(prims: &mut [BuildPrim]) -> Vec<WideNode> {
+/// indexes them).
+pub(super) fn build_wide(prims: &mut [BuildPrim]) -> Tree {
     assert!(prims.len() < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} primitives");
     if prims.is_empty() {
-        return Vec::new();
+        return Tree { nodes: Vec::new(), depth: 0, bounds: Aabb::EMPTY };
     }
     let b = Bounds::of(prims);
     let root = Item { start: 0, len: prims.len(), b, depth: 0, split: plan(prims, &b, 0) };
     let mut nodes = Vec::new();
-    node(prims, 0, root, &mut nodes);
+    let depth = node(prims, 0, root, &mut nodes);
     nodes.shrink_to_fit();
-    nodes
+    Tree { nodes, depth, bounds: Aabb { min: b.lo.truncate(), max: b.hi.truncate() } }
 }
 
 /// Appends the wide node for `item` (covering all of `prims`, whose first element is at
-/// `offset` in the full array) and its subtree to `out`.
-fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNode>) {
+/// `offset` in the full array) and its subtree to `out`; returns the subtree's node levels.
+fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNode>) -> u32 {
     let mut items = [item; 4];
     let mut count = 1;
     items[0].start = 0;
@@ -332,10 +350,9 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
             count = 4;
             break;
         }
-        let Some(k) = (0..count)
-            .filter(|&k| items[k].split.is_some())
-            .max_by(|&a, &b| half_area(items[a].b.lo, items[a].b.hi).total_cmp(&half_area(items[b].b.lo, items[b].b.hi)))
-        else {
+        let Some(k) = (0..count).filter(|&k| items[k].split.is_some()).max_by(|&a, &b| {
+            half_area(items[a].b.lo, items[a].b.hi).total_cmp(&half_area(items[b].b.lo, items[b].b.hi))
+        }) else {
             break;
         };
         let it = items[k];
@@ -355,6 +372,7 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
             child[k] = LEAF | ((offset + it.start) as u32) << 3 | (it.len as u32 - 1);
         }
     }
+    let mut depth = 0;
     let interior = items.iter().filter(|it| it.split.is_some()).count();
     let big = items.iter().filter(|it| it.split.is_some() && it.len > PAR_TREE).count();
     // Slices of each child's primitives, in order.
@@ -368,15 +386,16 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
         }
     }
     if interior >= 2 && big >= 1 {
-        let subtrees: Vec<(usize, Vec<WideNode>)> = parts
+        let subtrees: Vec<(usize, Vec<WideNode>, u32)> = parts
             .into_par_iter()
             .map(|(k, s, it)| {
                 let mut v = Vec::new();
-                node(s, offset + it.start, Item { start: 0, ..it }, &mut v);
-                (k, v)
+                let d = node(s, offset + it.start, Item { start: 0, ..it }, &mut v);
+                (k, v, d)
             })
             .collect();
-        for (k, v) in subtrees {
+        for (k, v, d) in subtrees {
+            depth = depth.max(d);
             let base = out.len() as u32;
             child[k] = base;
             out.extend(v.into_iter().map(|mut c| {
@@ -387,11 +406,12 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
     } else {
         for (k, s, it) in parts {
             child[k] = out.len() as u32;
-            node(s, offset + it.start, Item { start: 0, ..it }, out);
+            depth = depth.max(node(s, offset + it.start, Item { start: 0, ..it }, out));
         }
     }
     let boxes: Vec<(Vec4, Vec4)> = items.iter().map(|it| (it.b.lo, it.b.hi)).collect();
     out[at] = WideNode::new(&boxes, child);
+    depth + 1
 }
 
 /// Reorders `items` so that item `i` becomes the old `items[order[i]]`, in place (following the

@@ -11,6 +11,9 @@ use rayon::prelude::*;
 
 pub struct Bvh {
     nodes: Vec<WideNode>,
+    /// Node levels (sizes the traversal stack).
+    depth: u32,
+    bounds: Aabb,
     /// Intersection data in leaf order (hot).
     shapes: Vec<CompactShape>,
     /// Index in `prims` of each leaf shape.
@@ -25,18 +28,20 @@ impl Bvh {
         let mut build: Vec<BuildPrim> =
             prims.par_iter().enumerate().map(|(i, p)| BuildPrim::new(p.shape.bounds(), i)).collect();
         let t1 = t0.elapsed();
-        let nodes = build_wide(&mut build);
+        let tree = build_wide(&mut build);
         let t2 = t0.elapsed();
         let order: Vec<u32> = build.par_iter().map(BuildPrim::index).collect();
         drop(build);
         let t3 = t0.elapsed();
         let shapes = order.par_iter().map(|&i| prims[i as usize].shape.compact()).collect();
-        if std::env::var_os("BVH_TIMES").is_some() { eprintln!("prims {t1:?} tree {t2:?} permute {t3:?} all {:?}", t0.elapsed()); }
-        Bvh { nodes, shapes, order, prims }
+        if std::env::var_os("BVH_TIMES").is_some() {
+            eprintln!("prims {t1:?} tree {t2:?} permute {t3:?} all {:?}", t0.elapsed());
+        }
+        Bvh { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, shapes, order, prims }
     }
 
     pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, WideNode::bounds)
+        self.bounds
     }
 
     pub fn node_count(&self) -> usize {
@@ -62,7 +67,7 @@ impl Bvh {
         let shear = RayShear::new(ray);
         let mut closest = t_max;
         let mut best = None;
-        traverse::<true>(&self.nodes, ray, &mut closest, |first, count, closest| {
+        traverse::<true>(&self.nodes, self.depth, ray, &mut closest, |first, count, closest| {
             for i in first..first + count {
                 if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
                     *closest = h.t;
@@ -79,7 +84,7 @@ impl Bvh {
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let shear = RayShear::new(ray);
         let mut t = t_max;
-        traverse::<false>(&self.nodes, ray, &mut t, |first, count, t| {
+        traverse::<false>(&self.nodes, self.depth, ray, &mut t, |first, count, t| {
             self.shapes[first..first + count].iter().any(|p| p.intersect(ray, &shear, *t).is_some())
         })
     }

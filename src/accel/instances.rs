@@ -107,6 +107,9 @@ pub struct InstanceHit {
 #[derive(Default)]
 pub struct Instances {
     nodes: Vec<WideNode>,
+    /// Node levels of the top-level tree, and its bounds.
+    depth: u32,
+    bounds: Aabb,
     /// Instances in leaf order.
     instances: Vec<Instance>,
     groups: Vec<Bvh>,
@@ -125,11 +128,11 @@ impl Instances {
             .enumerate()
             .map(|(k, i)| BuildPrim::new(i.bounds_of(group_bounds[i.group as usize]), k))
             .collect();
-        let nodes = build_wide(&mut build);
+        let tree = build_wide(&mut build);
         let mut order: Vec<u32> = build.iter().map(BuildPrim::index).collect();
         drop(build);
         permute(&mut instances, &mut order);
-        Instances { nodes, instances, groups }
+        Instances { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, instances, groups }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -145,7 +148,7 @@ impl Instances {
     }
 
     pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, WideNode::bounds)
+        self.bounds
     }
 
     /// World bounds of each instance (in `Instances`' order).
@@ -213,7 +216,7 @@ impl Instances {
     /// it was stopped.
     #[inline(always)]
     fn traverse(&self, ray: &Ray, closest: &mut f32, mut visit: impl FnMut(usize, &mut f32) -> bool) -> bool {
-        traverse::<true>(&self.nodes, ray, closest, |first, count, closest| {
+        traverse::<true>(&self.nodes, self.depth, ray, closest, |first, count, closest| {
             (first..first + count).any(|k| visit(k, closest))
         })
     }
