@@ -20,6 +20,8 @@ pub(super) const MAX_LEAF: usize = 4;
 const MEDIAN_DEPTH: usize = 32;
 /// Sets larger than this are binned with rayon.
 const PAR_BIN: usize = 1 << 15;
+/// Sets binned from a sample have at least this many primitives in it.
+const SAMPLE: usize = 1 << 16;
 /// Subtrees larger than this are built as rayon tasks.
 const PAR_TREE: usize = 1 << 14;
 /// Leaf offsets are stored in 28 bits (see `bvh::LEAF`).
@@ -151,9 +153,14 @@ fn add_to(bins: &mut Bins, p: &BuildPrim, lo: Vec4, scale: Vec4, last: Vec4) {
 }
 
 fn bin(prims: &[BuildPrim], lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
+    let mut a = [[EMPTY_BIN; BINS]; 3];
+    if prims.len() < 64 {
+        prims.iter().for_each(|p| add_to(&mut a, p, lo, scale, last));
+        return a;
+    }
     // Even and odd primitives go to separate bins, so a run of primitives falling in one bin
     // does not wait on its own stores.
-    let (mut a, mut b) = ([[EMPTY_BIN; BINS]; 3], [[EMPTY_BIN; BINS]; 3]);
+    let mut b = [[EMPTY_BIN; BINS]; 3];
     let mut pairs = prims.chunks_exact(2);
     for pair in &mut pairs {
         add_to(&mut a, &pair[0], lo, scale, last);
@@ -163,6 +170,15 @@ fn bin(prims: &[BuildPrim], lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
         add_to(&mut a, p, lo, scale, last);
     }
     merge_bins(a, b)
+}
+
+fn bin_sample(prims: &[BuildPrim], stride: usize, lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
+    if stride == 1 {
+        return bin(prims, lo, scale, last);
+    }
+    let mut a = [[EMPTY_BIN; BINS]; 3];
+    prims.iter().step_by(stride).for_each(|p| add_to(&mut a, p, lo, scale, last));
+    a
 }
 
 fn merge_bins(mut a: Bins, b: Bins) -> Bins {
@@ -197,7 +213,13 @@ fn plan(prims: &[BuildPrim], b: &Bounds, depth: usize) -> Option<Split> {
     let scale = Vec4::select(ext.cmpgt(Vec4::ZERO), Vec4::splat(nb as f32) / ext, Vec4::ZERO);
     let last = Vec4::splat((nb - 1) as f32);
     let bins = if n > PAR_BIN {
-        prims.par_chunks(PAR_BIN / 2).map(|c| bin(c, b.clo, scale, last)).reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
+        // Large sets are binned from every `stride`-th primitive: the top levels are where
+        // the build waits on memory, and a sample of 64k places the plane as well.
+        let stride = (n / SAMPLE).max(1);
+        prims
+            .par_chunks(PAR_BIN / 2)
+            .map(|c| bin_sample(c, stride, b.clo, scale, last))
+            .reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
     } else {
         bin(prims, b.clo, scale, last)
     };
@@ -328,15 +350,18 @@ pub(super) fn build_wide(prims: &mut [BuildPrim]) -> Tree {
     }
     let b = Bounds::of(prims);
     let root = Item { start: 0, len: prims.len(), b, depth: 0, split: plan(prims, &b, 0) };
-    let mut nodes = Vec::new();
-    let depth = node(prims, 0, root, &mut nodes);
+    // About one node per eight primitives; untouched capacity costs no memory.
+    let mut nodes = Vec::with_capacity(prims.len() / 6 + 1);
+    let depth = node(prims, 0, root, &mut nodes, (prims.len() / 16).max(PAR_TREE));
     nodes.shrink_to_fit();
     Tree { nodes, depth, bounds: Aabb { min: b.lo.truncate(), max: b.hi.truncate() } }
 }
 
 /// Appends the wide node for `item` (covering all of `prims`, whose first element is at
 /// `offset` in the full array) and its subtree to `out`; returns the subtree's node levels.
-fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNode>) -> u32 {
+/// Children larger than `par` are built as separate tasks (each then copied into `out`, so
+/// only the top levels, which make enough tasks for the threads, do that).
+fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNode>, par: usize) -> u32 {
     let mut items = [item; 4];
     let mut count = 1;
     items[0].start = 0;
@@ -374,7 +399,7 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
     }
     let mut depth = 0;
     let interior = items.iter().filter(|it| it.split.is_some()).count();
-    let big = items.iter().filter(|it| it.split.is_some() && it.len > PAR_TREE).count();
+    let big = items.iter().filter(|it| it.split.is_some() && it.len > par).count();
     // Slices of each child's primitives, in order.
     let mut rest = prims;
     let mut parts = Vec::with_capacity(4);
@@ -389,8 +414,8 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
         let subtrees: Vec<(usize, Vec<WideNode>, u32)> = parts
             .into_par_iter()
             .map(|(k, s, it)| {
-                let mut v = Vec::new();
-                let d = node(s, offset + it.start, Item { start: 0, ..it }, &mut v);
+                let mut v = Vec::with_capacity(it.len / 6 + 1);
+                let d = node(s, offset + it.start, Item { start: 0, ..it }, &mut v, par);
                 (k, v, d)
             })
             .collect();
@@ -406,7 +431,7 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
     } else {
         for (k, s, it) in parts {
             child[k] = out.len() as u32;
-            depth = depth.max(node(s, offset + it.start, Item { start: 0, ..it }, out));
+            depth = depth.max(node(s, offset + it.start, Item { start: 0, ..it }, out, par));
         }
     }
     let boxes: Vec<(Vec4, Vec4)> = items.iter().map(|it| (it.b.lo, it.b.hi)).collect();
