@@ -24,10 +24,10 @@
 mod binary;
 
 use caustic::accel::Bvh;
-use caustic::bench::{MESH_SCENE, load};
-use caustic::geometry::Ray;
+use caustic::bench::{MESH_SCENE, incoherent_rays, knot_primitives, load};
+use caustic::geometry::{Aabb, Ray};
 use caustic::math::{Vec2, Vec3, Vec3A};
-use caustic::shape::{Primitive, RayShear, Shape, TriangleMesh, intersect_triangle};
+use caustic::shape::{Primitive, RayShear, Shape, intersect_triangle};
 use divan::counter::ItemsCount;
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
@@ -91,12 +91,7 @@ struct Data {
 
 /// The knot of `MESH_SCENE` (1600 segments: 102,400 triangles).
 fn knot_prims(segments: u32) -> Vec<Primitive> {
-    let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, segments, 32);
-    mesh.triangles(0)
-        .0
-        .into_iter()
-        .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: caustic::geometry::NO_LIGHT })
-        .collect()
+    knot_primitives(segments)
 }
 
 fn obvhs_tris(prims: &[Primitive]) -> Vec<obvhs::triangle::Triangle> {
@@ -133,14 +128,6 @@ fn build_cwbvh(otris: &[obvhs::triangle::Triangle], p: BvhBuildParams) -> (CwBvh
     (bvh, tris)
 }
 
-/// splitmix64 of a counter, mapped to [0, 1).
-fn uniform(i: u64) -> f32 {
-    let mut z = i.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(0x632b_e59b_d9b4_e019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-}
-
 static DATA: LazyLock<Data> = LazyLock::new(|| {
     let prims = knot_prims(1600);
     let otris = obvhs_tris(&prims);
@@ -159,18 +146,9 @@ static DATA: LazyLock<Data> = LazyLock::new(|| {
         }
     }
 
-    let b = ours.bounds();
-    let incoherent = (0..N_INCOHERENT as u64)
-        .map(|i| {
-            let u = |k: u64| uniform(i * 5 + k);
-            let o = b.min + (b.max - b.min) * Vec3::new(u(0), u(1), u(2));
-            // Uniform direction on the sphere.
-            let z = 1.0 - 2.0 * u(3);
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = std::f32::consts::TAU * u(4);
-            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
-        })
-        .collect();
+    // The knot's exact bounds (the rays of BENCHMARKS.md's tables).
+    let b = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.shape.bounds()));
+    let incoherent = incoherent_rays(b, N_INCOHERENT);
     let shadow_t = 0.25 * (b.max - b.min).length();
     Data { prims, old, otris, ours, bvh2, cwbvh, camera, incoherent, shadow_t }
 });
@@ -259,7 +237,8 @@ fn check_occlusion(d: &Data) {
     let t = d.shadow_t;
     let closest: Vec<bool> = d.incoherent.par_iter().map(|r| ours_t(&d.ours, r) < t).collect();
     let blocked = closest.iter().filter(|b| **b).count();
-    let variants: [(&str, &(dyn Fn(&Ray) -> bool + Sync)); 3] = [
+    type Occluded<'a> = &'a (dyn Fn(&Ray) -> bool + Sync);
+    let variants: [(&str, Occluded); 3] = [
         ("ours", &|r| d.ours.occluded(r, t)),
         ("old binary BVH", &|r| d.old.occluded(r, t)),
         ("obvhs CWBVH fast", &|r| cwbvh_occluded(&d.cwbvh[0].0, &d.cwbvh[0].1, r, t)),

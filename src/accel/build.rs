@@ -20,6 +20,9 @@ pub(super) const MAX_LEAF: usize = 4;
 const MEDIAN_DEPTH: usize = 32;
 /// Sets larger than this are binned with rayon.
 const PAR_BIN: usize = 1 << 15;
+/// Sets up to this size are binned on their longest axis only.
+/// (Measured on the knot: 64 saves a tenth of the build's CPU time and no traversal speed.)
+const AXIS_ONLY: usize = 64;
 /// Sets binned from a sample have at least this many primitives in it.
 const SAMPLE: usize = 1 << 16;
 /// Subtrees larger than this are built as rayon tasks.
@@ -142,20 +145,20 @@ fn bin_index(c: f32, lo: f32, scale: f32, last: f32) -> usize {
 }
 
 #[inline(always)]
-fn add_to(bins: &mut Bins, p: &BuildPrim, lo: Vec4, scale: Vec4, last: Vec4) {
+fn add_to(bins: &mut Bins, p: &BuildPrim, lo: Vec4, scale: Vec4, last: Vec4, axes: (usize, usize)) {
     let idx = bin_of(p.c2(), lo, scale, last);
-    for (axis, &i) in idx.iter().enumerate() {
-        let b = &mut bins[axis][i];
+    for axis in axes.0..axes.1 {
+        let b = &mut bins[axis][idx[axis]];
         b.lo = b.lo.min(p.lo);
         b.hi = b.hi.max(p.hi);
         b.n += 1;
     }
 }
 
-fn bin(prims: &[BuildPrim], lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
+fn bin(prims: &[BuildPrim], lo: Vec4, scale: Vec4, last: Vec4, axes: (usize, usize)) -> Bins {
     let mut a = [[EMPTY_BIN; BINS]; 3];
     if prims.len() < 64 {
-        prims.iter().for_each(|p| add_to(&mut a, p, lo, scale, last));
+        prims.iter().for_each(|p| add_to(&mut a, p, lo, scale, last, axes));
         return a;
     }
     // Even and odd primitives go to separate bins, so a run of primitives falling in one bin
@@ -163,21 +166,21 @@ fn bin(prims: &[BuildPrim], lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
     let mut b = [[EMPTY_BIN; BINS]; 3];
     let mut pairs = prims.chunks_exact(2);
     for pair in &mut pairs {
-        add_to(&mut a, &pair[0], lo, scale, last);
-        add_to(&mut b, &pair[1], lo, scale, last);
+        add_to(&mut a, &pair[0], lo, scale, last, axes);
+        add_to(&mut b, &pair[1], lo, scale, last, axes);
     }
     for p in pairs.remainder() {
-        add_to(&mut a, p, lo, scale, last);
+        add_to(&mut a, p, lo, scale, last, axes);
     }
     merge_bins(a, b)
 }
 
-fn bin_sample(prims: &[BuildPrim], stride: usize, lo: Vec4, scale: Vec4, last: Vec4) -> Bins {
+fn bin_sample(prims: &[BuildPrim], stride: usize, lo: Vec4, scale: Vec4, last: Vec4, axes: (usize, usize)) -> Bins {
     if stride == 1 {
-        return bin(prims, lo, scale, last);
+        return bin(prims, lo, scale, last, axes);
     }
     let mut a = [[EMPTY_BIN; BINS]; 3];
-    prims.iter().step_by(stride).for_each(|p| add_to(&mut a, p, lo, scale, last));
+    prims.iter().step_by(stride).for_each(|p| add_to(&mut a, p, lo, scale, last, axes));
     a
 }
 
@@ -212,20 +215,23 @@ fn plan(prims: &[BuildPrim], b: &Bounds, depth: usize) -> Option<Split> {
     let nb = n.clamp(4, BINS);
     let scale = Vec4::select(ext.cmpgt(Vec4::ZERO), Vec4::splat(nb as f32) / ext, Vec4::ZERO);
     let last = Vec4::splat((nb - 1) as f32);
+    // Large sets are binned on all three axes; small ones, where the per-set cost dominates,
+    // on the longest (as pbrt-v4 does everywhere).
+    let axes = if n > AXIS_ONLY { (0, 3) } else { (longest, longest + 1) };
     let bins = if n > PAR_BIN {
         // Large sets are binned from every `stride`-th primitive: the top levels are where
         // the build waits on memory, and a sample of 64k places the plane as well.
         let stride = (n / SAMPLE).max(1);
         prims
             .par_chunks(PAR_BIN / 2)
-            .map(|c| bin_sample(c, stride, b.clo, scale, last))
+            .map(|c| bin_sample(c, stride, b.clo, scale, last, axes))
             .reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
     } else {
-        bin(prims, b.clo, scale, last)
+        bin(prims, b.clo, scale, last, axes)
     };
     let mut best = (f32::INFINITY, 0usize, 0usize);
     for (axis, bins) in bins.iter().enumerate() {
-        if !(ext[axis] > 0.0) {
+        if !(ext[axis] > 0.0) || axis < axes.0 || axis >= axes.1 {
             continue;
         }
         // Sweep from the right for the area and count of every right-hand side.

@@ -24,19 +24,12 @@ pub struct Bvh {
 
 impl Bvh {
     pub fn build(prims: Vec<Primitive>) -> Self {
-        let t0 = std::time::Instant::now();
         let mut build: Vec<BuildPrim> =
             prims.par_iter().enumerate().map(|(i, p)| BuildPrim::new(p.shape.bounds(), i)).collect();
-        let t1 = t0.elapsed();
         let tree = build_wide(&mut build);
-        let t2 = t0.elapsed();
         let order: Vec<u32> = build.par_iter().map(BuildPrim::index).collect();
         drop(build);
-        let t3 = t0.elapsed();
         let shapes = order.par_iter().map(|&i| prims[i as usize].shape.compact()).collect();
-        if std::env::var_os("BVH_TIMES").is_some() {
-            eprintln!("prims {t1:?} tree {t2:?} permute {t3:?} all {:?}", t0.elapsed());
-        }
         Bvh { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, shapes, order, prims }
     }
 

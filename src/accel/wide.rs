@@ -101,7 +101,7 @@ pub(super) fn traverse<const ORDERED: bool>(
     if nodes.is_empty() {
         return false;
     }
-    if 3 * depth as usize + 1 <= SMALL_STACK {
+    if 3 * (depth as usize) < SMALL_STACK {
         walk::<ORDERED, SMALL_STACK>(nodes, ray, t_max, leaf)
     } else {
         walk::<ORDERED, LARGE_STACK>(nodes, ray, t_max, leaf)
