@@ -16,6 +16,9 @@
 //! - Occlusion (`occluded_*`): the incoherent rays as shadow rays, any hit within `SHADOW_T`
 //!   (a quarter of the knot box's diagonal), stopping at the first hit.
 //!
+//! - `BVH_CPU_TIME=5 cargo bench --bench bvh_compare -- NOTHING`: the one-thread table by CPU
+//!   time, interleaved (see `cpu_time_table`), for a machine shared with other work.
+//!
 //! Before the benchmarks run, every ray is traced through every tree and the hit count and each
 //! closest distance (relative 1e-5) must agree with ours, and every tree must agree on which
 //! shadow rays are blocked, or the binary panics.
@@ -59,7 +62,73 @@ fn main() {
         check(name, rays, d);
     }
     check_occlusion(d);
+    if let Some(reps) = std::env::var("BVH_CPU_TIME").ok().and_then(|s| s.parse().ok()) {
+        cpu_time_table(d, reps);
+    }
     divan::main();
+}
+
+/// One thread's CPU time in nanoseconds (Linux), or `None`.
+fn thread_cpu_ns() -> Option<u64> {
+    std::fs::read_to_string("/proc/thread-self/schedstat").ok()?.split_whitespace().next()?.parse().ok()
+}
+
+/// `BVH_CPU_TIME=N`: Mrays/s on one thread from the thread's CPU time rather than wall time,
+/// the variants interleaved and the best of `reps` rounds kept, so that other processes on a
+/// shared machine (which steal wall time, not CPU time) disturb the comparison less.
+fn cpu_time_table(d: &Data, reps: usize) {
+    type Trace<'a> = &'a dyn Fn(&Ray) -> bool;
+    let t = d.shadow_t;
+    let (cw, cw_tris) = &d.cwbvh[0];
+    let rows: [(&str, &[Ray], [Trace; 3]); 3] = [
+        (
+            "camera, closest hit",
+            &d.camera,
+            [&|r| ours_t(&d.ours, r).is_finite(), &|r| old_t(&d.old, r).is_finite(), &|r| {
+                cwbvh_t(cw, cw_tris, r).is_finite()
+            }],
+        ),
+        (
+            "incoherent, closest hit",
+            &d.incoherent,
+            [&|r| ours_t(&d.ours, r).is_finite(), &|r| old_t(&d.old, r).is_finite(), &|r| {
+                cwbvh_t(cw, cw_tris, r).is_finite()
+            }],
+        ),
+        (
+            "incoherent, occlusion",
+            &d.incoherent,
+            [&|r| d.ours.occluded(r, t), &|r| d.old.occluded(r, t), &|r| cwbvh_occluded(cw, cw_tris, r, t)],
+        ),
+    ];
+    let mut best = [[0.0f64; 3]; 3];
+    for _ in 0..reps {
+        for (row, (_, rays, fs)) in rows.iter().enumerate() {
+            for (col, f) in fs.iter().enumerate() {
+                let (c0, w0) = (thread_cpu_ns(), std::time::Instant::now());
+                divan::black_box(rays.iter().filter(|r| f(r)).count());
+                let secs = match (c0, thread_cpu_ns()) {
+                    (Some(a), Some(b)) => (b - a) as f64 * 1e-9,
+                    _ => w0.elapsed().as_secs_f64(),
+                };
+                best[row][col] = best[row][col].max(rays.len() as f64 / secs / 1e6);
+            }
+        }
+    }
+    println!(
+        "one thread, Mrays/s by CPU time, best of {reps} interleaved rounds: ours / old binary / obvhs CWBVH fast"
+    );
+    for (row, (name, _, _)) in rows.iter().enumerate() {
+        let b = best[row];
+        println!(
+            "  {name}: {:.2} / {:.2} / {:.2} (ours/old {:.2}, ours/CWBVH {:.2})",
+            b[0],
+            b[1],
+            b[2],
+            b[0] / b[1],
+            b[0] / b[2]
+        );
+    }
 }
 
 fn preset(name: &str) -> BvhBuildParams {
