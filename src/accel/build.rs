@@ -27,7 +27,7 @@ const AXIS_ONLY: usize = 64;
 const SAMPLE: usize = 1 << 16;
 /// Subtrees larger than this are built as rayon tasks.
 const PAR_TREE: usize = 1 << 14;
-/// Leaf offsets are stored in 28 bits (see `bvh::LEAF`).
+/// Leaf offsets are stored in 28 bits (see `wide::LEAF`).
 pub(super) const MAX_PRIMS: usize = 1 << 28;
 /// Keeps index bits in `BuildPrim::lo.w` a normal float, so arithmetic on that lane is never
 /// slowed by denormals.
