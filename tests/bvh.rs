@@ -154,3 +154,32 @@ fn axis_aligned_rays_on_shared_faces() {
     }
     assert!(hits > 200, "{hits}");
 }
+
+/// A primitive with NaN coordinates is never hit and does not spoil the boxes of the others.
+#[test]
+fn nan_primitive_does_not_hide_the_others() {
+    let mut prims: Vec<Primitive> = (0..200)
+        .map(|i| Primitive {
+            shape: Shape::Sphere(Sphere::new(Vec3::new(i as f32 * 3.0, 0.0, 0.0), 1.0)),
+            material: i,
+            light: caustic::geometry::NO_LIGHT,
+        })
+        .collect();
+    let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+    prims.insert(
+        77,
+        Primitive {
+            shape: Shape::Triangle(Triangle::new(nan, Vec3::Y, Vec3::Z)),
+            material: 999,
+            light: caustic::geometry::NO_LIGHT,
+        },
+    );
+    let bvh = Bvh::build(prims);
+    assert!(bvh.bounds().min.is_finite() && bvh.bounds().max.is_finite());
+    for i in 0..200 {
+        let ray = Ray::new(Vec3::new(i as f32 * 3.0, 0.0, 5.0), -Vec3::Z);
+        let (k, h) = bvh.intersect(&ray, f32::INFINITY).expect("every sphere is hit");
+        assert_eq!(bvh.prims[k as usize].material, i);
+        assert!((h.t - 4.0).abs() < 1e-4);
+    }
+}

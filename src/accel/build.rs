@@ -73,11 +73,13 @@ impl Bounds {
 
     #[inline(always)]
     fn add(&mut self, p: &BuildPrim) {
-        self.lo = self.lo.min(p.lo);
-        self.hi = self.hi.max(p.hi);
+        // The running value is the second operand, which SSE min/max return when either is
+        // NaN: a primitive with NaN bounds (never hit) cannot poison its node's box.
+        self.lo = p.lo.min(self.lo);
+        self.hi = p.hi.max(self.hi);
         let c = p.c2();
-        self.clo = self.clo.min(c);
-        self.chi = self.chi.max(c);
+        self.clo = c.min(self.clo);
+        self.chi = c.max(self.chi);
     }
 
     fn merge(self, o: Bounds) -> Bounds {
@@ -149,8 +151,8 @@ fn add_to(bins: &mut Bins, p: &BuildPrim, lo: Vec4, scale: Vec4, last: Vec4, axe
     let idx = bin_of(p.c2(), lo, scale, last);
     for axis in axes.0..axes.1 {
         let b = &mut bins[axis][idx[axis]];
-        b.lo = b.lo.min(p.lo);
-        b.hi = b.hi.max(p.hi);
+        b.lo = p.lo.min(b.lo);
+        b.hi = p.hi.max(b.hi);
         b.n += 1;
     }
 }
