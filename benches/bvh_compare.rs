@@ -1,8 +1,10 @@
-//! `cargo bench --bench bvh_compare`: our binned-SAH BVH against obvhs 0.4 (PLOC BVH2 and the
-//! 8-wide compressed CWBVH), issue #2. Scene: the 102,400-triangle torus knot of `MESH_SCENE`.
+//! `cargo bench --bench bvh_compare`: our 4-wide BVH (`ours`), the binary BVH it replaced
+//! (`old`, kept in `bvh_compare/binary.rs`) and obvhs 0.4 (PLOC BVH2 and the 8-wide compressed
+//! CWBVH), issues #2 and #15. Scene: the 102,400-triangle torus knot of `MESH_SCENE`.
 //!
 //! - Build time: `Bvh::build` against obvhs's presets. Both build on rayon (2 threads here).
 //!   The obvhs figures include permuting the triangles into leaf order, which our build also does.
+//!   `build_*_5m`: the same knot with 5,120,000 triangles (segments = 80,000).
 //! - Traversal: closest hit, and every variant calls OUR watertight `intersect_triangle` on
 //!   triangles stored in leaf order (no index indirection), so only the tree and its traversal
 //!   differ. "camera" = the 1024 x 1024 pinhole rays through pixel centres of `MESH_SCENE`;
@@ -11,14 +13,24 @@
 //!   The `items/s` column is rays per second. For the obvhs traversals `P = 0` is the tree built
 //!   with `fast_build()`, `P = 1` with `medium_build()`.
 //!
+//! - Occlusion (`occluded_*`): the incoherent rays as shadow rays, any hit within `SHADOW_T`
+//!   (a quarter of the knot box's diagonal), stopping at the first hit.
+//!
+//! - `BVH_CPU_TIME=5 cargo bench --bench bvh_compare -- NOTHING`: the one-thread table by CPU
+//!   time, interleaved (see `cpu_time_table`), for a machine shared with other work.
+//!
 //! Before the benchmarks run, every ray is traced through every tree and the hit count and each
-//! closest distance (relative 1e-5) must agree with ours, or the binary panics.
+//! closest distance (relative 1e-5) must agree with ours, and every tree must agree on which
+//! shadow rays are blocked, or the binary panics.
+
+#[path = "bvh_compare/binary.rs"]
+mod binary;
 
 use caustic::accel::Bvh;
-use caustic::bench::{MESH_SCENE, load};
-use caustic::geometry::Ray;
+use caustic::bench::{MESH_SCENE, incoherent_rays, knot_primitives, load};
+use caustic::geometry::{Aabb, Ray};
 use caustic::math::{Vec2, Vec3, Vec3A};
-use caustic::shape::{Primitive, RayShear, Shape, TriangleMesh, intersect_triangle};
+use caustic::shape::{Primitive, RayShear, Shape, intersect_triangle};
 use divan::counter::ItemsCount;
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
@@ -36,9 +48,11 @@ const N_INCOHERENT: usize = 1 << 20;
 fn main() {
     let d = &*DATA;
     println!(
-        "torus knot: {} triangles; our BVH {} nodes; obvhs BVH2 fast/medium {}/{} nodes, CWBVH fast/medium {}/{} nodes",
+        "torus knot: {} triangles; our BVH {} 4-wide nodes ({:.1} bytes per triangle), old binary BVH {} nodes; obvhs BVH2 fast/medium {}/{} nodes, CWBVH fast/medium {}/{} nodes",
         d.prims.len(),
         d.ours.node_count(),
+        d.ours.node_bytes() as f64 / d.prims.len() as f64,
+        d.old.node_count(),
         d.bvh2[0].0.nodes.len(),
         d.bvh2[1].0.nodes.len(),
         d.cwbvh[0].0.nodes.len(),
@@ -47,7 +61,74 @@ fn main() {
     for (name, rays) in [("camera", &d.camera), ("incoherent", &d.incoherent)] {
         check(name, rays, d);
     }
+    check_occlusion(d);
+    if let Some(reps) = std::env::var("BVH_CPU_TIME").ok().and_then(|s| s.parse().ok()) {
+        cpu_time_table(d, reps);
+    }
     divan::main();
+}
+
+/// One thread's CPU time in nanoseconds (Linux), or `None`.
+fn thread_cpu_ns() -> Option<u64> {
+    std::fs::read_to_string("/proc/thread-self/schedstat").ok()?.split_whitespace().next()?.parse().ok()
+}
+
+/// `BVH_CPU_TIME=N`: Mrays/s on one thread from the thread's CPU time rather than wall time,
+/// the variants interleaved and the best of `reps` rounds kept, so that other processes on a
+/// shared machine (which steal wall time, not CPU time) disturb the comparison less.
+fn cpu_time_table(d: &Data, reps: usize) {
+    type Trace<'a> = &'a dyn Fn(&Ray) -> bool;
+    let t = d.shadow_t;
+    let (cw, cw_tris) = &d.cwbvh[0];
+    let rows: [(&str, &[Ray], [Trace; 3]); 3] = [
+        (
+            "camera, closest hit",
+            &d.camera,
+            [&|r| ours_t(&d.ours, r).is_finite(), &|r| old_t(&d.old, r).is_finite(), &|r| {
+                cwbvh_t(cw, cw_tris, r).is_finite()
+            }],
+        ),
+        (
+            "incoherent, closest hit",
+            &d.incoherent,
+            [&|r| ours_t(&d.ours, r).is_finite(), &|r| old_t(&d.old, r).is_finite(), &|r| {
+                cwbvh_t(cw, cw_tris, r).is_finite()
+            }],
+        ),
+        (
+            "incoherent, occlusion",
+            &d.incoherent,
+            [&|r| d.ours.occluded(r, t), &|r| d.old.occluded(r, t), &|r| cwbvh_occluded(cw, cw_tris, r, t)],
+        ),
+    ];
+    let mut best = [[0.0f64; 3]; 3];
+    for _ in 0..reps {
+        for (row, (_, rays, fs)) in rows.iter().enumerate() {
+            for (col, f) in fs.iter().enumerate() {
+                let (c0, w0) = (thread_cpu_ns(), std::time::Instant::now());
+                divan::black_box(rays.iter().filter(|r| f(r)).count());
+                let secs = match (c0, thread_cpu_ns()) {
+                    (Some(a), Some(b)) => (b - a) as f64 * 1e-9,
+                    _ => w0.elapsed().as_secs_f64(),
+                };
+                best[row][col] = best[row][col].max(rays.len() as f64 / secs / 1e6);
+            }
+        }
+    }
+    println!(
+        "one thread, Mrays/s by CPU time, best of {reps} interleaved rounds: ours / old binary / obvhs CWBVH fast"
+    );
+    for (row, (name, _, _)) in rows.iter().enumerate() {
+        let b = best[row];
+        println!(
+            "  {name}: {:.2} / {:.2} / {:.2} (ours/old {:.2}, ours/CWBVH {:.2})",
+            b[0],
+            b[1],
+            b[2],
+            b[0] / b[1],
+            b[0] / b[2]
+        );
+    }
 }
 
 fn preset(name: &str) -> BvhBuildParams {
@@ -65,6 +146,7 @@ const TRACED: [&str; 2] = ["fast", "medium"];
 
 struct Data {
     prims: Vec<Primitive>,
+    old: binary::Bvh,
     otris: Vec<obvhs::triangle::Triangle>,
     ours: Bvh,
     /// Each tree with its triangles permuted into leaf order.
@@ -72,15 +154,13 @@ struct Data {
     cwbvh: Vec<(CwBvh, Vec<[Vec3; 3]>)>,
     camera: Vec<Ray>,
     incoherent: Vec<Ray>,
+    /// Distance limit of the occlusion rays.
+    shadow_t: f32,
 }
 
-fn knot_prims() -> Vec<Primitive> {
-    let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, 1600, 32);
-    mesh.triangles(0)
-        .0
-        .into_iter()
-        .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: caustic::geometry::NO_LIGHT })
-        .collect()
+/// The knot of `MESH_SCENE` (1600 segments: 102,400 triangles).
+fn knot_prims(segments: u32) -> Vec<Primitive> {
+    knot_primitives(segments)
 }
 
 fn obvhs_tris(prims: &[Primitive]) -> Vec<obvhs::triangle::Triangle> {
@@ -117,18 +197,11 @@ fn build_cwbvh(otris: &[obvhs::triangle::Triangle], p: BvhBuildParams) -> (CwBvh
     (bvh, tris)
 }
 
-/// splitmix64 of a counter, mapped to [0, 1).
-fn uniform(i: u64) -> f32 {
-    let mut z = i.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(0x632b_e59b_d9b4_e019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-}
-
 static DATA: LazyLock<Data> = LazyLock::new(|| {
-    let prims = knot_prims();
+    let prims = knot_prims(1600);
     let otris = obvhs_tris(&prims);
     let ours = Bvh::build(prims.clone());
+    let old = binary::Bvh::build(prims.clone());
     let bvh2 = TRACED.iter().map(|p| build_bvh2(&otris, preset(p))).collect();
     let cwbvh = TRACED.iter().map(|p| build_cwbvh(&otris, preset(p))).collect();
 
@@ -142,24 +215,28 @@ static DATA: LazyLock<Data> = LazyLock::new(|| {
         }
     }
 
-    let b = ours.bounds();
-    let incoherent = (0..N_INCOHERENT as u64)
-        .map(|i| {
-            let u = |k: u64| uniform(i * 5 + k);
-            let o = b.min + (b.max - b.min) * Vec3::new(u(0), u(1), u(2));
-            // Uniform direction on the sphere.
-            let z = 1.0 - 2.0 * u(3);
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = std::f32::consts::TAU * u(4);
-            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
-        })
-        .collect();
-    Data { prims, otris, ours, bvh2, cwbvh, camera, incoherent }
+    // The knot's exact bounds (the rays of BENCHMARKS.md's tables).
+    let b = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.shape.bounds()));
+    let incoherent = incoherent_rays(b, N_INCOHERENT);
+    let shadow_t = 0.25 * (b.max - b.min).length();
+    Data { prims, old, otris, ours, bvh2, cwbvh, camera, incoherent, shadow_t }
 });
 
 #[inline(always)]
 fn ours_t(bvh: &Bvh, ray: &Ray) -> f32 {
     bvh.intersect(ray, f32::INFINITY).map_or(f32::INFINITY, |(_, h)| h.t)
+}
+
+#[inline(always)]
+fn old_t(bvh: &binary::Bvh, ray: &Ray) -> f32 {
+    bvh.intersect(ray, f32::INFINITY).map_or(f32::INFINITY, |(_, h)| h.t)
+}
+
+#[inline(always)]
+fn cwbvh_occluded(bvh: &CwBvh, tris: &[[Vec3; 3]], ray: &Ray, t_max: f32) -> bool {
+    let shear = RayShear::new(ray);
+    let o = obvhs::ray::Ray::new(Vec3A::from(ray.o), Vec3A::from(ray.d), 0.0, t_max);
+    !bvh.ray_traverse_miss(o, |r, id| intersect_triangle(&tris[id], ray, &shear, r.tmax).map_or(f32::INFINITY, |h| h.t))
 }
 
 #[inline(always)]
@@ -214,6 +291,7 @@ fn check(name: &str, rays: &[Ray], d: &Data) {
         assert_eq!(other_hits, hits, "{name} {label}: hit counts differ");
         assert_eq!(bad, 0, "{name} {label}: closest distances differ");
     };
+    compare("old binary BVH".into(), &|r| old_t(&d.old, r));
     for (i, p) in TRACED.iter().enumerate() {
         let (bvh, tris) = &d.bvh2[i];
         compare(format!("obvhs BVH2 {p}"), &|r| bvh2_t(bvh, tris, r));
@@ -222,12 +300,52 @@ fn check(name: &str, rays: &[Ray], d: &Data) {
     }
 }
 
+/// Every tree must block the same shadow rays, and those are the rays whose closest hit is
+/// within the limit.
+fn check_occlusion(d: &Data) {
+    let t = d.shadow_t;
+    let closest: Vec<bool> = d.incoherent.par_iter().map(|r| ours_t(&d.ours, r) < t).collect();
+    let blocked = closest.iter().filter(|b| **b).count();
+    type Occluded<'a> = &'a (dyn Fn(&Ray) -> bool + Sync);
+    let variants: [(&str, Occluded); 3] = [
+        ("ours", &|r| d.ours.occluded(r, t)),
+        ("old binary BVH", &|r| d.old.occluded(r, t)),
+        ("obvhs CWBVH fast", &|r| cwbvh_occluded(&d.cwbvh[0].0, &d.cwbvh[0].1, r, t)),
+    ];
+    for (label, f) in variants {
+        let got: Vec<bool> = d.incoherent.par_iter().map(f).collect();
+        let bad = got.iter().zip(&closest).filter(|(a, b)| a != b).count();
+        println!(
+            "check occlusion rays (t_max {t:.3}), {label}: {blocked} blocked by the closest hit, {bad} rays disagree"
+        );
+        assert_eq!(bad, 0, "occlusion {label} disagrees");
+    }
+}
+
 // ---------------------------------------------------------------- build
 
 #[divan::bench(sample_count = 10)]
 fn build_ours(bencher: divan::Bencher) {
-    let prims = knot_prims();
+    let prims = knot_prims(1600);
     bencher.with_inputs(|| prims.clone()).bench_local_values(Bvh::build);
+}
+
+#[divan::bench(sample_count = 10)]
+fn build_old(bencher: divan::Bencher) {
+    let prims = knot_prims(1600);
+    bencher.with_inputs(|| prims.clone()).bench_local_values(binary::Bvh::build);
+}
+
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn build_ours_5m(bencher: divan::Bencher) {
+    let prims = knot_prims(80_000);
+    bencher.counter(ItemsCount::new(prims.len())).with_inputs(|| prims.clone()).bench_local_values(Bvh::build);
+}
+
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn build_old_5m(bencher: divan::Bencher) {
+    let prims = knot_prims(80_000);
+    bencher.counter(ItemsCount::new(prims.len())).with_inputs(|| prims.clone()).bench_local_values(binary::Bvh::build);
 }
 
 #[divan::bench(sample_count = 10, args = ["fastest", "very_fast", "fast", "medium"])]
@@ -274,6 +392,18 @@ fn trace_ours_2t(bencher: divan::Bencher, which: &str) {
     bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| ours_t(bvh, r)));
 }
 
+#[divan::bench(sample_count = 5, sample_size = 1, args = RAYS)]
+fn trace_old_1t(bencher: divan::Bencher, which: &str) {
+    let (rays, bvh) = (rays(which), &DATA.old);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_1t(rays, |r| old_t(bvh, r)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1, args = RAYS)]
+fn trace_old_2t(bencher: divan::Bencher, which: &str) {
+    let (rays, bvh) = (rays(which), &DATA.old);
+    bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| old_t(bvh, r)));
+}
+
 #[divan::bench(sample_count = 5, sample_size = 1, consts = [0, 1], args = RAYS)]
 fn trace_obvhs_bvh2_1t<const P: usize>(bencher: divan::Bencher, which: &str) {
     let (rays, (bvh, tris)) = (rays(which), &DATA.bvh2[P]);
@@ -296,4 +426,53 @@ fn trace_obvhs_cwbvh_1t<const P: usize>(bencher: divan::Bencher, which: &str) {
 fn trace_obvhs_cwbvh_2t<const P: usize>(bencher: divan::Bencher, which: &str) {
     let (rays, (bvh, tris)) = (rays(which), &DATA.cwbvh[P]);
     bencher.counter(ItemsCount::new(rays.len())).bench_local(|| trace_2t(rays, |r| cwbvh_t(bvh, tris, r)));
+}
+
+// ---------------------------------------------------------------- occlusion
+
+/// Blocked rays: the incoherent rays as shadow rays up to `shadow_t`.
+fn occluded_2t(f: impl Fn(&Ray, f32) -> bool + Sync) -> usize {
+    let t = DATA.shadow_t;
+    DATA.incoherent.par_chunks(ROW).map(|row| row.iter().filter(|r| f(r, t)).count()).sum()
+}
+
+fn occluded_1t(f: impl Fn(&Ray, f32) -> bool) -> usize {
+    let t = DATA.shadow_t;
+    DATA.incoherent.iter().filter(|r| f(r, t)).count()
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_ours_1t(bencher: divan::Bencher) {
+    let bvh = &DATA.ours;
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_1t(|r, t| bvh.occluded(r, t)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_ours_2t(bencher: divan::Bencher) {
+    let bvh = &DATA.ours;
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_2t(|r, t| bvh.occluded(r, t)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_old_1t(bencher: divan::Bencher) {
+    let bvh = &DATA.old;
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_1t(|r, t| bvh.occluded(r, t)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_old_2t(bencher: divan::Bencher) {
+    let bvh = &DATA.old;
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_2t(|r, t| bvh.occluded(r, t)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_obvhs_cwbvh_1t(bencher: divan::Bencher) {
+    let (bvh, tris) = &DATA.cwbvh[0];
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_1t(|r, t| cwbvh_occluded(bvh, tris, r, t)));
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn occluded_obvhs_cwbvh_2t(bencher: divan::Bencher) {
+    let (bvh, tris) = &DATA.cwbvh[0];
+    bencher.counter(ItemsCount::new(N_INCOHERENT)).bench_local(|| occluded_2t(|r, t| cwbvh_occluded(bvh, tris, r, t)));
 }

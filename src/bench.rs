@@ -1,11 +1,13 @@
 //! Fixed benchmark scenes and throughput measurements, shared by `caustic bench` and
 //! `cargo bench`. The scenes are compiled in, so the numbers never depend on files on disk.
 
+use crate::accel::Bvh;
 use crate::app::{LoadedScene, load_toml_str};
-use crate::geometry::Ray;
-use crate::math::Vec2;
+use crate::geometry::{Aabb, NO_LIGHT, Ray};
+use crate::math::{Vec2, Vec3};
 use crate::render::RenderStats;
 use crate::scene::Overrides;
+use crate::shape::{Primitive, Shape, TriangleMesh};
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -132,6 +134,49 @@ pub fn primary_rays(s: &LoadedScene) -> (u64, u64, Duration) {
     (cam.width as u64 * cam.height as u64, hits, start.elapsed())
 }
 
+/// splitmix64 of a counter, mapped to [0, 1).
+fn uniform(i: u64) -> f32 {
+    let mut z = i.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(0x632b_e59b_d9b4_e019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// `n` rays with origins uniform in `b` and directions uniform on the sphere, the same for
+/// every run (the incoherent rays of `benches/bvh_compare.rs` and `caustic bench`).
+pub fn incoherent_rays(b: Aabb, n: usize) -> Vec<Ray> {
+    (0..n as u64)
+        .map(|i| {
+            let u = |k: u64| uniform(i * 5 + k);
+            let o = b.min + (b.max - b.min) * Vec3::new(u(0), u(1), u(2));
+            let z = 1.0 - 2.0 * u(3);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * u(4);
+            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
+        })
+        .collect()
+}
+
+/// Closest hits of `rays` in `s` in parallel over 1024-ray chunks: (hits, wall time).
+pub fn trace_rays(s: &LoadedScene, rays: &[Ray]) -> (u64, Duration) {
+    let start = Instant::now();
+    let hits = rays
+        .par_chunks(1024)
+        .map(|c| c.iter().filter(|r| s.scene.intersect(r, f32::INFINITY).is_some()).count() as u64)
+        .sum();
+    (hits, start.elapsed())
+}
+
+/// The triangles of a torus knot with `segments` x 32 x 2 triangles, as primitives.
+pub fn knot_primitives(segments: u32) -> Vec<Primitive> {
+    let mesh = TriangleMesh::torus_knot(2, 3, 1.0, 0.28, segments, 32);
+    mesh.triangles(0)
+        .0
+        .into_iter()
+        .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: NO_LIGHT })
+        .collect()
+}
+
 /// A full Whitted render of a loaded scene with its own settings.
 pub fn whitted_render(s: &LoadedScene) -> RenderStats {
     s.render().stats
@@ -169,6 +214,35 @@ pub fn run_all(repeats: u32) {
         best.0,
         best.2.as_secs_f64()
     );
+
+    let rays = incoherent_rays(mesh.scene.bounds(), 1 << 20);
+    let best = (0..repeats).map(|_| trace_rays(&mesh, &rays)).min_by_key(|r| r.1).unwrap_or_default();
+    say!(
+        "incoherent rays (mesh, 1M fixed-seed rays from inside the knot's box, closest hit): {:.2} Mrays/s ({} hits, {:.3} s)",
+        rays.len() as f64 / best.1.as_secs_f64() / 1e6,
+        best.0,
+        best.1.as_secs_f64()
+    );
+    drop(rays);
+
+    let prims = knot_primitives(16_000);
+    let best = (0..repeats)
+        .map(|_| {
+            let p = prims.clone();
+            let t = Instant::now();
+            let bvh = Bvh::build(p);
+            (t.elapsed(), bvh.node_bytes())
+        })
+        .min_by_key(|r| r.0)
+        .unwrap_or_default();
+    say!(
+        "BVH build ({} triangles, torus knot): {:.2} M triangles/s ({:.3} s), nodes {:.1} bytes per triangle",
+        prims.len(),
+        prims.len() as f64 / best.0.as_secs_f64() / 1e6,
+        best.0.as_secs_f64(),
+        best.1 as f64 / prims.len() as f64
+    );
+    drop(prims);
 
     let size = Overrides { width: Some(1920), height: Some(1440), ..Default::default() };
     let knot = load_sized(KNOT_EXAMPLE, "scenes/07-torus-knot.toml", &size);

@@ -82,3 +82,104 @@ fn degenerate_inputs_build() {
     assert_eq!(bvh.prims[i as usize].material, 999);
     assert!((h.t - (3.0 - 1.999)).abs() < 1e-5);
 }
+
+/// A mesh large enough for every parallel path of the build (parallel and sampled binning,
+/// subtrees as tasks): same closest distance and occlusion as brute force.
+#[test]
+fn large_mesh_matches_brute_force() {
+    let prims = caustic::bench::knot_primitives(2400);
+    assert!(prims.len() > 150_000);
+    let bvh = Bvh::build(prims.clone());
+    let b = bvh.bounds();
+    let rays = caustic::bench::incoherent_rays(b, 300);
+    let mut hits = 0;
+    for ray in &rays {
+        let shear = RayShear::new(ray);
+        let mut best = f32::INFINITY;
+        for p in &prims {
+            if let Some(h) = p.shape.intersect(ray, &shear, best) {
+                best = h.t;
+            }
+        }
+        let got = bvh.intersect(ray, f32::INFINITY);
+        assert_eq!(got.map_or(f32::INFINITY, |(_, h)| h.t), best, "ray {ray:?}");
+        if let Some((i, h)) = got {
+            // The index names the primitive that was hit.
+            assert_eq!(bvh.prims[i as usize].shape.intersect(ray, &shear, f32::INFINITY).map(|g| g.t), Some(h.t));
+            hits += 1;
+        }
+        assert_eq!(bvh.occluded(ray, f32::INFINITY), best.is_finite());
+    }
+    assert!(hits > 100, "{hits}");
+}
+
+/// Rays along the axes, with +0 and -0 direction components, starting on the planes of
+/// boxes that share faces: every box test must keep the hits brute force finds.
+#[test]
+fn axis_aligned_rays_on_shared_faces() {
+    let mut prims = Vec::new();
+    for i in 0..64u32 {
+        let c = Vec3::new((i % 4) as f32, ((i / 4) % 4) as f32, (i / 16) as f32);
+        // Two triangles on each of the cube's three low faces: the faces of neighbours touch.
+        for (a, b) in [(Vec3::X, Vec3::Y), (Vec3::Y, Vec3::Z), (Vec3::Z, Vec3::X)] {
+            for t in [Triangle::new(c, c + a, c + a + b), Triangle::new(c, c + a + b, c + b)] {
+                prims.push(Primitive { shape: Shape::Triangle(t), material: i, light: caustic::geometry::NO_LIGHT });
+            }
+        }
+    }
+    let bvh = Bvh::build(prims.clone());
+    let mut hits = 0;
+    for k in 0..2000u32 {
+        let axis = (k % 3) as usize;
+        let sign = if k % 6 < 3 { 1.0 } else { -1.0 };
+        let zero = if k % 12 < 6 { 0.0 } else { -0.0 };
+        let mut d = Vec3::splat(zero);
+        d[axis] = sign;
+        // Origins on grid planes (the faces), at half steps, and just off them.
+        let coord = |j: u32| [0.0, 0.5, 1.0, 1.0 + 1e-7, 2.0 - 1e-7, 3.0, 4.0][(j % 7) as usize] + (j / 7 % 2) as f32;
+        let mut o = Vec3::new(coord(k / 3), coord(k / 21 + 1), coord(k / 147 + 2));
+        o[axis] = if sign > 0.0 { -1.0 } else { 5.0 };
+        let ray = Ray::new(o, d);
+        let shear = RayShear::new(&ray);
+        let mut best = f32::INFINITY;
+        for p in &prims {
+            if let Some(h) = p.shape.intersect(&ray, &shear, best) {
+                best = h.t;
+            }
+        }
+        let got = bvh.intersect(&ray, f32::INFINITY).map_or(f32::INFINITY, |(_, h)| h.t);
+        assert_eq!(got, best, "ray {ray:?}");
+        assert_eq!(bvh.occluded(&ray, f32::INFINITY), best.is_finite(), "ray {ray:?}");
+        hits += best.is_finite() as u32;
+    }
+    assert!(hits > 200, "{hits}");
+}
+
+/// A primitive with NaN coordinates is never hit and does not spoil the boxes of the others.
+#[test]
+fn nan_primitive_does_not_hide_the_others() {
+    let mut prims: Vec<Primitive> = (0..200)
+        .map(|i| Primitive {
+            shape: Shape::Sphere(Sphere::new(Vec3::new(i as f32 * 3.0, 0.0, 0.0), 1.0)),
+            material: i,
+            light: caustic::geometry::NO_LIGHT,
+        })
+        .collect();
+    let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+    prims.insert(
+        77,
+        Primitive {
+            shape: Shape::Triangle(Triangle::new(nan, Vec3::Y, Vec3::Z)),
+            material: 999,
+            light: caustic::geometry::NO_LIGHT,
+        },
+    );
+    let bvh = Bvh::build(prims);
+    assert!(bvh.bounds().min.is_finite() && bvh.bounds().max.is_finite());
+    for i in 0..200 {
+        let ray = Ray::new(Vec3::new(i as f32 * 3.0, 0.0, 5.0), -Vec3::Z);
+        let (k, h) = bvh.intersect(&ray, f32::INFINITY).expect("every sphere is hit");
+        assert_eq!(bvh.prims[k as usize].material, i);
+        assert!((h.t - 4.0).abs() < 1e-4);
+    }
+}

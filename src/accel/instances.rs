@@ -9,14 +9,13 @@
 //! top-level tree; the group's geometry is stored once however many instances there are.
 
 use super::Bvh;
-use super::bvh::{BoxRay, BuildPrim, Node, build_nodes};
+use super::build::{BuildPrim, build_wide, permute};
+use super::wide::{WideNode, traverse};
 use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::Vec3;
 use crate::math::float::gamma;
 use crate::shape::{PrimHit, Primitive, SurfacePoint};
 use glam::Affine3;
-
-const STACK_SIZE: usize = 64;
 
 /// A group placed in the scene.
 #[derive(Clone, Copy, Debug)]
@@ -107,7 +106,10 @@ pub struct InstanceHit {
 /// Groups and their instances, with the top-level BVH over the instances.
 #[derive(Default)]
 pub struct Instances {
-    nodes: Vec<Node>,
+    nodes: Vec<WideNode>,
+    /// Node levels of the top-level tree, and its bounds.
+    depth: u32,
+    bounds: Aabb,
     /// Instances in leaf order.
     instances: Vec<Instance>,
     groups: Vec<Bvh>,
@@ -126,11 +128,11 @@ impl Instances {
             .enumerate()
             .map(|(k, i)| BuildPrim::new(i.bounds_of(group_bounds[i.group as usize]), k))
             .collect();
-        let nodes = build_nodes(&mut build);
-        let mut order: Vec<u32> = build.iter().map(|b| b.index).collect();
+        let tree = build_wide(&mut build);
+        let mut order: Vec<u32> = build.iter().map(BuildPrim::index).collect();
         drop(build);
         permute(&mut instances, &mut order);
-        Instances { nodes, instances, groups }
+        Instances { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, instances, groups }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -146,7 +148,7 @@ impl Instances {
     }
 
     pub fn bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, |n| Aabb { min: n.min, max: n.max })
+        self.bounds
     }
 
     /// World bounds of each instance (in `Instances`' order).
@@ -162,7 +164,7 @@ impl Instances {
     /// Bytes held by the instances, the top-level tree and the groups' trees and primitives.
     pub fn memory_bytes(&self) -> usize {
         self.instances.capacity() * std::mem::size_of::<Instance>()
-            + self.nodes.capacity() * std::mem::size_of::<Node>()
+            + self.nodes.capacity() * std::mem::size_of::<WideNode>()
             + self.groups.iter().map(Bvh::memory_bytes).sum::<usize>()
     }
 
@@ -209,69 +211,14 @@ impl Instances {
         })
     }
 
-    /// Visits the instances whose boxes the ray enters before `closest`, nearest child first;
+    /// Visits the instances whose boxes the ray enters before `closest`, nearest first;
     /// `visit(instance, closest)` may lower `closest` and returns true to stop. Returns whether
     /// it was stopped.
     #[inline(always)]
     fn traverse(&self, ray: &Ray, closest: &mut f32, mut visit: impl FnMut(usize, &mut f32) -> bool) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let br = BoxRay::new(ray);
-        let mut stack = [0u32; STACK_SIZE];
-        let mut sp = 0;
-        let mut idx = 0usize;
-        loop {
-            let node = &self.nodes[idx];
-            if br.hits(node, *closest) {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for k in first..first + node.count as usize {
-                        if visit(k, closest) {
-                            return true;
-                        }
-                    }
-                } else {
-                    let (near, far) = if br.neg[node.axis as usize] {
-                        (node.offset as usize, idx + 1)
-                    } else {
-                        (idx + 1, node.offset as usize)
-                    };
-                    stack[sp] = far as u32;
-                    sp += 1;
-                    idx = near;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            idx = stack[sp] as usize;
-        }
-    }
-}
-
-/// Reorders `items` so that item `i` becomes the old `items[order[i]]`, in place (following the
-/// permutation's cycles), so a million instances are never held twice. `order` is consumed.
-fn permute<T: Copy>(items: &mut [T], order: &mut [u32]) {
-    const DONE: u32 = u32::MAX;
-    for start in 0..items.len() {
-        if order[start] == DONE {
-            continue;
-        }
-        let first = items[start];
-        let mut cur = start;
-        loop {
-            let src = order[cur] as usize;
-            order[cur] = DONE;
-            if src == start {
-                items[cur] = first;
-                break;
-            }
-            items[cur] = items[src];
-            cur = src;
-        }
+        traverse::<true>(&self.nodes, self.depth, ray, closest, |first, count, closest| {
+            (first..first + count).any(|k| visit(k, closest))
+        })
     }
 }
 
