@@ -12,11 +12,11 @@
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-/// Peak bytes per triangle while a scene is loaded: its indices in the mesh, its primitive
-/// (60 bytes, held twice while the BVH orders them), the BVH's 40-byte build record, 40-byte
-/// leaf shape and node share (measured on the 5 M-triangle knot: 276 bytes per triangle with
-/// its vertices, BENCHMARKS.md "Big meshes, PLY and OBJ readers").
-pub const BYTES_PER_TRIANGLE: u64 = 258;
+/// Peak bytes per triangle while a scene is loaded: its indices in the mesh (12), its primitive
+/// (60), the BVH's 40-byte leaf shape, 4-byte primitive index and node share (about 19); the
+/// 32-byte build records are freed before the leaves are made (measured on the 5 M-triangle
+/// knot: 152 bytes per triangle with its vertices, BENCHMARKS.md "Big meshes, merged").
+pub const BYTES_PER_TRIANGLE: u64 = 140;
 /// Bytes per mesh vertex kept (position and normal; uv when the file has them).
 pub const BYTES_PER_VERTEX: u64 = 24;
 /// Bytes per instance: two transforms, bounds and the top-level BVH's share.
