@@ -317,7 +317,7 @@ fn photon_mapping_and_sppm_agree_with_the_path_tracer_everywhere() {
                     let (mb, md, err) = difference(&col(a), &col(b), paired);
                     let floor = if j == 0 { 0.0 } else { tol / 2.0 * image_b };
                     let bound = (tol * mb).max(floor).max(4.0 * err);
-                    let known = KNOWN_OPEN.iter().any(|k| *k == (*light, *material, name, *layer));
+                    let known = KNOWN_OPEN.contains(&(*light, *material, name, *layer));
                     let mark = if md.abs() <= bound {
                         ""
                     } else if known {

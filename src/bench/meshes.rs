@@ -133,3 +133,48 @@ pub fn run(repeats: u32, say: impl Fn(std::fmt::Arguments)) {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Parse rates of big files (`scripts/make_big_knot.py`):
+    /// `CAUSTIC_BIG_MESHES=/tmp/caustic-knot cargo test --release --lib big_files_parse_rate -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn big_files_parse_rate() {
+        let Some(dir) = std::env::var_os("CAUSTIC_BIG_MESHES").map(std::path::PathBuf::from) else { return };
+        for file in ["knot.ply", "knot.obj", "knot-vn.obj"] {
+            let path = dir.join(file);
+            let Ok(meta) = std::fs::metadata(&path) else { continue };
+            let size = meta.len() as f64;
+            // The reader's peak over what it returns: its own temporaries.
+            let before = status_bytes("VmRSS:").unwrap_or(0);
+            reset_peak();
+            let t = std::time::Instant::now();
+            let m = TriangleMesh::load(&path).unwrap();
+            let s = t.elapsed().as_secs_f64();
+            let peak = status_bytes("VmHWM:").unwrap_or(0).saturating_sub(before) as f64;
+            let tris = m.indices.len() as f64;
+            println!(
+                "{file}: {tris} triangles, {} vertices, {:.1} MB in {s:.3} s: {:.0} MB/s; mesh {:.1} bytes/triangle, reading peak {:.1}",
+                m.positions.len(),
+                size / 1e6,
+                size / s / 1e6,
+                m.memory_bytes() as f64 / tris,
+                peak / tris
+            );
+        }
+        // tobj, the OBJ reader before ours, on the same file (reading it whole, as the loader did).
+        let t = std::time::Instant::now();
+        let bytes = std::fs::read(dir.join("knot.obj")).unwrap();
+        let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+        let (models, _) = tobj::load_obj_buf(&mut &bytes[..], &opts, |_| Ok(Default::default())).unwrap();
+        let s = t.elapsed().as_secs_f64();
+        println!(
+            "knot.obj with tobj: {} triangles in {s:.3} s: {:.0} MB/s",
+            models[0].mesh.indices.len() / 3,
+            bytes.len() as f64 / s / 1e6
+        );
+    }
+}

@@ -278,7 +278,7 @@ impl Sppm {
             state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
                 |((px, layers), vp)| {
                     let Some(v) = vp else { return };
-                    let (m, phi, phi_caustic) = gather(v, px.r, &grid, &hits);
+                    let (m, phi, phi_caustic) = gather(v, px.r, grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
