@@ -2,13 +2,13 @@
 """caustic's photon integrator against POV-Ray 3.7 on the point-light caustic Cornell box.
 
     python3 scripts/povray_compare.py [--caustic target/release/caustic] [--reps 2]
-        [--spp 32] [--caustic-args "--sampler sobol"] [--pov-args "..."]
+        [--spp 32] [--caustic-args "--sampler sobol --irradiance-cache 0.25"] [--pov-args "..."]
 
 Renders, alternately and back to back (`--reps` times each, so both see the same machine load):
 - POV-Ray: scripts/povray/cornell-caustics.pov at 256 x 256, photons (~200k) + radiosity,
   16 anti-aliasing samples (+AM1 +A0.0 +R4: a 4 x 4 grid in every pixel), HDR output;
 - caustic: scenes/13-cornell-caustics.toml at 256 x 256 with `--integrator photon --spp 32
-  --sampler sobol` (the scene's own photon counts; the irradiance cache on by default);
+  --sampler sobol` (the scene's own photon counts; the irradiance cache on, --irradiance-cache 0.25);
 and prints each one's wall time (the whole process: parsing, photons, radiosity or
 irradiance-cache pretrace, render), its RMSE against a converged reference over all pixels and
 channels (linear values) and its mean luminance relative to the reference's.
@@ -83,7 +83,7 @@ def main():
     ap.add_argument("--caustic", default=os.path.join(ROOT, "target", "release", "caustic"))
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--spp", type=int, default=32)
-    ap.add_argument("--caustic-args", default="--sampler sobol", help="more caustic options")
+    ap.add_argument("--caustic-args", default="--sampler sobol --irradiance-cache 0.25", help="more caustic options")
     ap.add_argument("--pov-args", default="", help="more POV-Ray options")
     ap.add_argument("--ref-iterations", type=int, default=1024)
     ap.add_argument("--ref-photons", type=int, default=200_000)
