@@ -9,6 +9,10 @@ use crate::geometry::{Aabb, Ray};
 use crate::shape::{CompactShape, PrimHit, Primitive, RayShear};
 use rayon::prelude::*;
 
+/// Up to this many primitives every ray tests them all in leaf order: no box test beats a
+/// handful of shape tests (a four-sphere Whitted scene ran 17% slower through one wide node).
+const LINEAR_MAX: usize = 8;
+
 pub struct Bvh {
     nodes: Vec<WideNode>,
     /// Node levels (sizes the traversal stack).
@@ -60,6 +64,15 @@ impl Bvh {
         let shear = RayShear::new(ray);
         let mut closest = t_max;
         let mut best = None;
+        if self.shapes.len() <= LINEAR_MAX {
+            for (i, shape) in self.shapes.iter().enumerate() {
+                if let Some(h) = shape.intersect(ray, &shear, closest) {
+                    closest = h.t;
+                    best = Some((i, h));
+                }
+            }
+            return best.map(|(i, h)| (self.order[i], h));
+        }
         traverse::<true>(&self.nodes, self.depth, ray, &mut closest, |first, count, closest| {
             for i in first..first + count {
                 if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
@@ -76,6 +89,9 @@ impl Bvh {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let shear = RayShear::new(ray);
+        if self.shapes.len() <= LINEAR_MAX {
+            return self.shapes.iter().any(|p| p.intersect(ray, &shear, t_max).is_some());
+        }
         let mut t = t_max;
         traverse::<false>(&self.nodes, self.depth, ray, &mut t, |first, count, t| {
             self.shapes[first..first + count].iter().any(|p| p.intersect(ray, &shear, *t).is_some())
