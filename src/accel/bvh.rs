@@ -64,16 +64,7 @@ impl Bvh {
         let shear = RayShear::new(ray);
         let mut closest = t_max;
         let mut best = None;
-        if self.shapes.len() <= LINEAR_MAX {
-            for (i, shape) in self.shapes.iter().enumerate() {
-                if let Some(h) = shape.intersect(ray, &shear, closest) {
-                    closest = h.t;
-                    best = Some((i, h));
-                }
-            }
-            return best.map(|(i, h)| (self.order[i], h));
-        }
-        traverse::<true>(&self.nodes, self.depth, ray, &mut closest, |first, count, closest| {
+        let mut leaf = |first: usize, count: usize, closest: &mut f32| {
             for i in first..first + count {
                 if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
                     *closest = h.t;
@@ -81,7 +72,12 @@ impl Bvh {
                 }
             }
             false
-        });
+        };
+        if self.shapes.len() <= LINEAR_MAX {
+            leaf(0, self.shapes.len(), &mut closest);
+        } else {
+            traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
+        }
         best.map(|(i, h)| (self.order[i], h))
     }
 
@@ -89,12 +85,13 @@ impl Bvh {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let shear = RayShear::new(ray);
-        if self.shapes.len() <= LINEAR_MAX {
-            return self.shapes.iter().any(|p| p.intersect(ray, &shear, t_max).is_some());
-        }
-        let mut t = t_max;
-        traverse::<false>(&self.nodes, self.depth, ray, &mut t, |first, count, t| {
+        let leaf = |first: usize, count: usize, t: &mut f32| {
             self.shapes[first..first + count].iter().any(|p| p.intersect(ray, &shear, *t).is_some())
-        })
+        };
+        let mut t = t_max;
+        if self.shapes.len() <= LINEAR_MAX {
+            return leaf(0, self.shapes.len(), &mut t);
+        }
+        traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }
 }

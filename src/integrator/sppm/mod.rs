@@ -24,7 +24,7 @@ mod grid;
 
 use super::layers::LayerPath;
 use super::path::direct_light;
-use crate::film::{CAUSTIC, DIRECT, Film, INDIRECT, Image, Layers, SPECULAR};
+use crate::film::{Film, Image, Layers};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
@@ -122,12 +122,12 @@ impl PixelStats {
 }
 
 /// A pixel's light split into layers (kept only when layers are asked for): emitted and
-/// directly sampled light by layer, and the accumulated flux by `SPECULAR` / `CAUSTIC` /
-/// `INDIRECT`, each flux part rescaled with the pixel's radius like `tau`.
+/// directly sampled light, and the accumulated flux (never `DIRECT`: first hits are not
+/// gathered), each flux part rescaled with the pixel's radius like `tau`.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelLayers {
     ld: Layers,
-    tau: [Color; 3],
+    tau: Layers,
 }
 
 /// A camera path's first non-specular hit.
@@ -287,18 +287,9 @@ impl Sppm {
                     let ratio = px.update(m, total, config.alpha);
                     if let Some(l) = layers {
                         let caustic = v.beta * phi_caustic;
-                        let mut parts = [Color::ZERO; 3];
-                        let slot = |k: usize| {
-                            if k == SPECULAR {
-                                0
-                            } else if k == CAUSTIC {
-                                1
-                            } else {
-                                2
-                            }
-                        };
-                        parts[slot(v.layer.caustic_photons())] += caustic;
-                        parts[slot(v.layer.other_photons())] += total - caustic;
+                        let mut parts = [Color::ZERO; 4];
+                        parts[v.layer.caustic_photons()] += caustic;
+                        parts[v.layer.other_photons()] += total - caustic;
                         for (t, p) in l.tau.iter_mut().zip(parts) {
                             *t = (*t + p) * ratio;
                         }
@@ -476,13 +467,7 @@ impl State {
         for (k, (p, l)) in self.pixels.iter().zip(&self.layers).enumerate() {
             let area = it * PI * p.r * p.r;
             let flux = |t: Color| if p.r > 0.0 { t / area } else { Color::ZERO };
-            let c = match layer {
-                DIRECT => l.ld[DIRECT] / it,
-                SPECULAR => l.ld[SPECULAR] / it + flux(l.tau[0]),
-                CAUSTIC => l.ld[CAUSTIC] / it + flux(l.tau[1]),
-                INDIRECT => l.ld[INDIRECT] / it + flux(l.tau[2]),
-                _ => Color::ZERO,
-            };
+            let c = l.ld[layer] / it + flux(l.tau[layer]);
             img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
         }
         img
