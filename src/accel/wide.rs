@@ -16,8 +16,10 @@ use glam::Vec4;
 pub(super) const LEAF: u32 = 1 << 31;
 /// A tree of `depth` node levels needs at most `3 * depth + 1` stack entries (each level
 /// leaves at most three siblings behind, the deepest pushes four). Trees up to 21 levels use
-/// the small stack (cheaper to set up per ray); binary depth, and so `depth`, is at most
+/// the small stack, trees up to 5 levels the tiny one (the stack is zeroed per ray: a room
+/// of a few dozen primitives should not pay for 64 entries); binary depth, and so `depth`, is at most
 /// 32 SAH levels plus 28 median levels (`build::MEDIAN_DEPTH`, `build::MAX_PRIMS`).
+const TINY_STACK: usize = 16;
 const SMALL_STACK: usize = 64;
 const LARGE_STACK: usize = 256;
 /// pbrt-v4's widening of a box's exit distance, so rounding never drops a box the ray grazes.
@@ -101,7 +103,9 @@ pub(super) fn traverse<const ORDERED: bool>(
     if nodes.is_empty() {
         return false;
     }
-    if 3 * (depth as usize) < SMALL_STACK {
+    if 3 * (depth as usize) < TINY_STACK {
+        walk::<ORDERED, TINY_STACK>(nodes, ray, t_max, leaf)
+    } else if 3 * (depth as usize) < SMALL_STACK {
         walk::<ORDERED, SMALL_STACK>(nodes, ray, t_max, leaf)
     } else {
         walk::<ORDERED, LARGE_STACK>(nodes, ray, t_max, leaf)

@@ -121,15 +121,36 @@ impl Lobes {
     }
 }
 
+/// The lobes a BSDF holds: a material's own lobes, shared by every hit on it (a hit costs a
+/// pointer, not a 240-byte copy), or lobes made for this hit (textures, blends, wrappers).
+/// Owned lobes stay inline: boxing them would allocate per hit.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug)]
+pub enum LobeSet<'a> {
+    Shared(&'a Lobes),
+    Owned(Lobes),
+}
+
+impl std::ops::Deref for LobeSet<'_> {
+    type Target = Lobes;
+    #[inline(always)]
+    fn deref(&self) -> &Lobes {
+        match self {
+            LobeSet::Shared(l) => l,
+            LobeSet::Owned(l) => l,
+        }
+    }
+}
+
 /// A material's scattering at one hit: its lobes in the hit's shading frame, oriented to the
 /// side the viewer is on.
 #[derive(Clone, Copy, Debug)]
-pub struct Bsdf {
+pub struct Bsdf<'a> {
     /// Shading frame; z is the shading normal on the side of `wo`.
     frame: Frame,
     /// Geometric normal on the same side.
     ng: Vec3,
-    lobes: Lobes,
+    lobes: LobeSet<'a>,
     /// Probability of scattering at all; with 1 - opacity light passes straight through.
     opacity: f32,
     /// For a perturbed normal: the unperturbed shading normal (on the side of `wo`) and the
@@ -144,12 +165,18 @@ pub fn front_side(wo: Vec3, ng: Vec3) -> bool {
     wo.dot(ng) >= 0.0
 }
 
-impl Bsdf {
+impl<'a> Bsdf<'a> {
     /// The BSDF with `lobes` in `frame` (shading frame of the hit, z = shading normal) with
     /// geometric normal `ng`, both outward; they are turned to the viewer's side when `front`
     /// (see `front_side`) is false (two-sided surfaces).
     #[inline]
     pub fn new(frame: Frame, ng: Vec3, front: bool, lobes: Lobes) -> Self {
+        Self::with_lobes(frame, ng, front, LobeSet::Owned(lobes))
+    }
+
+    /// `new` with lobes that may be shared with the material.
+    #[inline]
+    pub fn with_lobes(frame: Frame, ng: Vec3, front: bool, lobes: LobeSet<'a>) -> Self {
         let (frame, ng) = if front { (frame, ng) } else { (frame.flipped(), -ng) };
         Bsdf { frame, ng, lobes, opacity: 1.0, perturbed: None }
     }

@@ -2,7 +2,7 @@
 //! wrappers (two-sided, masks, bump and normal maps, blends) are resolved here, untextured
 //! materials' lobes come from a table made once, textured ones are evaluated at the hit's (u, v).
 
-use super::bsdf::{Bsdf, Lobes, MAX_LOBES, front_side};
+use super::bsdf::{Bsdf, LobeSet, Lobes, MAX_LOBES, front_side};
 use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
 use super::{Classic, ClassicKind, Material, Model, Param};
 use crate::geometry::Hit;
@@ -115,23 +115,23 @@ impl Materials {
     /// The lobes of plain material `m` at `uv` on side `front` (`as_front`: a two-sided wrapper
     /// decided the side already).
     #[inline]
-    fn lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool) -> Lobes {
+    fn lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool) -> LobeSet<'_> {
         let material = &self.list[m as usize];
         let visible = front || as_front || material.two_sided || material.model.is_glass();
         if !visible {
-            return Lobes::default();
+            return LobeSet::Owned(Lobes::default());
         }
         // Glass inverts its index seen from inside; everything else looks the same both sides.
         let outward = front || !material.model.is_glass();
         if let Some(c) = &self.cached[m as usize] {
-            return c[usize::from(!outward)];
+            return LobeSet::Shared(&c[usize::from(!outward)]);
         }
-        material.model.lobes(outward, uv, &self.textures)
+        LobeSet::Owned(material.model.lobes(outward, uv, &self.textures))
     }
 
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
     #[inline]
-    pub fn bsdf(&self, h: &Hit, wo: Vec3) -> Bsdf {
+    pub fn bsdf(&self, h: &Hit, wo: Vec3) -> Bsdf<'_> {
         let front = front_side(wo, h.ng);
         let m = h.material;
         // The common case: a plain material.
@@ -144,13 +144,13 @@ impl Materials {
                 | Model::Blend { .. }
         ) {
             let lobes = self.lobes(m, h_uv(h, &self.list[m as usize].model), front, false);
-            return Bsdf::new(frame_for(h, &lobes), h.ng, front, lobes);
+            return Bsdf::with_lobes(frame_for(h, &lobes), h.ng, front, lobes);
         }
         self.wrapped_bsdf(h, wo, front)
     }
 
     /// `bsdf` through wrappers.
-    fn wrapped_bsdf(&self, h: &Hit, wo: Vec3, front: bool) -> Bsdf {
+    fn wrapped_bsdf(&self, h: &Hit, wo: Vec3, front: bool) -> Bsdf<'_> {
         let uv = h.uv();
         let mut m = h.material;
         let mut opacity = 1.0f32;
@@ -184,7 +184,7 @@ impl Materials {
                     break;
                 }
                 _ => {
-                    lobes = self.lobes(m, uv, front, as_front);
+                    lobes = *self.lobes(m, uv, front, as_front);
                     break;
                 }
             }

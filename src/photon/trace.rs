@@ -90,7 +90,7 @@ pub const MAX_BOUNCES: u32 = 64;
 
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power).
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> PhotonPass {
-    let mut hits = run_chunks(
+    let hits = run_chunks(
         0,
         n_emit,
         |i| {
@@ -105,10 +105,9 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> Phot
         },
         scene,
         false,
+        1.0 / n_emit.max(1) as f32,
         watch,
     );
-    let scale = 1.0 / n_emit.max(1) as f32;
-    hits.iter_mut().for_each(|h| h.flux *= scale);
     PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
@@ -138,6 +137,7 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
             },
             scene,
             true,
+            1.0,
             Watch { progress: None, ..watch },
         ));
         emitted += n;
@@ -149,21 +149,26 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
     PhotonPass { hits, emitted, capped, cancelled: watch.cancelled() }
 }
 
-/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order. Once
-/// the watch's cancel flag is set, chunks not yet started are skipped.
+/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order, each
+/// stored flux multiplied by `scale` (1 / photons emitted, when known beforehand). Once the
+/// watch's cancel flag is set, chunks not yet started are skipped.
 fn run_chunks(
     first: u64,
     n: u64,
     emit: impl Fn(u64) -> Option<(EmittedPhoton, f32, Rng32)> + Sync,
     scene: &Scene,
     caustic_only: bool,
+    scale: f32,
     watch: Watch,
 ) -> Vec<PhotonHit> {
     let chunks = n.div_ceil(CHUNK);
     let parts: Vec<Vec<PhotonHit>> = (0..chunks)
         .into_par_iter()
         .map(|c| {
-            let mut out = Vec::new();
+            // Room for one stored hit per global photon (a closed room stores one or two), so
+            // threads do not take turns in the allocator growing their buffers; caustic photons
+            // are mostly not stored.
+            let mut out = Vec::with_capacity(if caustic_only { 0 } else { 2 * CHUNK as usize });
             if watch.cancelled() {
                 return out;
             }
@@ -176,6 +181,9 @@ fn run_chunks(
                         trace_photon(scene, e.ray, flux, &mut rng, caustic_only, &mut out);
                     }
                 }
+            }
+            if scale != 1.0 {
+                out.iter_mut().for_each(|h| h.flux *= scale);
             }
             watch.advance(end - start);
             out

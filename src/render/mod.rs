@@ -93,8 +93,20 @@ impl RenderSettings {
     /// filter around the pixel's centre (filter importance sampling, `film::filter`).
     #[inline]
     pub fn camera_sample(&self, scene: &Scene, x: u32, y: u32, index: u32) -> (Sampler, Ray, f32) {
+        self.camera_sample_of(scene, x, y, self.pixel_seed(x, y), index)
+    }
+
+    /// The seed of film pixel (x, y)'s samples, for `camera_sample_of`.
+    #[inline]
+    pub fn pixel_seed(&self, x: u32, y: u32) -> u64 {
+        Sampler::pixel_seed(self.seed, x + self.origin.0, y + self.origin.1)
+    }
+
+    /// `camera_sample` with the pixel's seed (`pixel_seed`) computed once for all its samples.
+    #[inline]
+    pub fn camera_sample_of(&self, scene: &Scene, x: u32, y: u32, pixel_seed: u64, index: u32) -> (Sampler, Ray, f32) {
         let (x, y) = (x + self.origin.0, y + self.origin.1);
-        let mut sampler = Sampler::new(self.sampler, self.seed, x, y, index, self.strata);
+        let mut sampler = Sampler::for_pixel(self.sampler, pixel_seed, index, self.strata);
         let jitter = sampler.pixel();
         let (offset, weight) = if self.antialias {
             self.filter.sample(jitter, x, y, &self.window)

@@ -84,8 +84,9 @@ fn render_tile<I: RayIntegrator>(
             let (x, y) = (tile.x0 + i, tile.y0 + j);
             let k = (j * tile.width + i) as usize;
             let next = settings.first_sample.saturating_add(tile.count[k]);
+            let pixel_seed = settings.pixel_seed(x, y);
             for index in next..range.end {
-                let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, index);
+                let (mut sampler, ray, weight) = settings.camera_sample_of(scene, x, y, pixel_seed, index);
                 let mut layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);

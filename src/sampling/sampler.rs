@@ -48,7 +48,19 @@ impl Sampler {
     /// The sampler for sample `index` of pixel (x, y). `strata` is N for N x N jittered strata;
     /// indices k N^2 .. (k+1) N^2 - 1 form the k-th stratified set.
     pub fn new(kind: SamplerKind, seed: u64, x: u32, y: u32, index: u32, strata: u32) -> Self {
-        let pixel_seed = hash_seed(&[seed, x as u64, y as u64]);
+        Self::for_pixel(kind, Self::pixel_seed(seed, x, y), index, strata)
+    }
+
+    /// The seed of pixel (x, y)'s samples: computed once per pixel by callers that take many
+    /// samples of it (`for_pixel`).
+    #[inline]
+    pub fn pixel_seed(seed: u64, x: u32, y: u32) -> u64 {
+        hash_seed(&[seed, x as u64, y as u64])
+    }
+
+    /// `new` for the pixel whose `pixel_seed` is given.
+    #[inline]
+    pub fn for_pixel(kind: SamplerKind, pixel_seed: u64, index: u32, strata: u32) -> Self {
         Sampler {
             kind,
             rng: Rng32::new(hash_seed(&[pixel_seed, index as u64])),

@@ -80,7 +80,7 @@ pub struct Scene {
 impl Scene {
     /// Samples light `light` from `p` (see `Light::sample`), with the texture a spot or
     /// projector casts.
-    #[inline]
+    #[inline(always)]
     pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
         let mut s = light.sample(p, u)?;
         if self.any_projection && light.is_delta() {
@@ -312,7 +312,7 @@ impl Scene {
 
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
     #[inline(always)]
-    pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf {
+    pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf<'_> {
         self.materials.bsdf(h, wo)
     }
 }

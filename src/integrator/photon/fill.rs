@@ -39,9 +39,9 @@ const MIN_REACH_DIST: f32 = 0.05;
 const MAX_REACH_DIST: f32 = 0.1;
 
 /// A camera path's first diffuse hit.
-pub(super) struct Candidate {
+pub(super) struct Candidate<'a> {
     pub hit: Hit,
-    pub bsdf: Bsdf,
+    pub bsdf: Bsdf<'a>,
     /// Length of the camera path to it (through mirrors and glass).
     pub dist: f32,
 }
@@ -50,7 +50,7 @@ impl PhotonIntegrator {
     /// The camera path through the centre of film pixel (x, y), followed through mirrors and
     /// glass as `radiance` follows it, to its first surface with a Lambertian BSDF that will be
     /// gathered at; `None` when it ends elsewhere.
-    pub(super) fn first_diffuse(&self, scene: &Scene, x: u32, y: u32, rng: &mut Rng32) -> Option<Candidate> {
+    pub(super) fn first_diffuse<'s>(&self, scene: &'s Scene, x: u32, y: u32, rng: &mut Rng32) -> Option<Candidate<'s>> {
         let mut ray = scene.camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), Vec2::splat(0.5));
         let mut dist = 0.0;
         for depth in 0.. {

@@ -132,10 +132,10 @@ struct PixelLayers {
 
 /// A camera path's first non-specular hit.
 #[derive(Clone, Copy)]
-struct VisiblePoint {
+struct VisiblePoint<'a> {
     p: Vec3,
     wo: Vec3,
-    bsdf: Bsdf,
+    bsdf: Bsdf<'a>,
     beta: Color,
     /// Distance travelled from the camera (for the initial radius).
     dist: f32,
@@ -144,11 +144,11 @@ struct VisiblePoint {
 }
 
 /// What one iteration's camera sample of a pixel found.
-struct CameraSample {
+struct CameraSample<'a> {
     /// Emitted and directly sampled light, in all and by layer.
     ld: Color,
     ld_layers: Layers,
-    point: Option<VisiblePoint>,
+    point: Option<VisiblePoint<'a>>,
 }
 
 impl Sppm {
@@ -203,7 +203,7 @@ impl Sppm {
 
     /// One iteration: visible points, photons, statistics. Returns false when the render was
     /// cancelled during it, leaving every pixel as it was.
-    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) -> bool {
+    fn iteration<'s>(&self, scene: &'s Scene, driver: &Driver, state: &mut State<'s>, it: u32) -> bool {
         let config = &self.config;
         let settings = driver.settings;
         let w = settings.width;
@@ -310,14 +310,14 @@ impl Sppm {
     /// transparent part) and a non-delta part makes the visible point with the probability of
     /// the non-delta part and follows the delta part otherwise, each weighted by the inverse of
     /// its probability, so one visible point per sample carries both.
-    fn camera_sample(
+    fn camera_sample<'s>(
         &self,
-        scene: &Scene,
+        scene: &'s Scene,
         settings: &RenderSettings,
         (x, y): (u32, u32),
         it: u32,
         stats: &mut RayStats,
-    ) -> CameraSample {
+    ) -> CameraSample<'s> {
         let config = &self.config;
         let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
         // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
@@ -440,18 +440,18 @@ fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterat
 }
 
 /// The per-pixel state of a render.
-struct State {
+struct State<'a> {
     pixels: Vec<PixelStats>,
     /// This iteration's visible points, one per pixel, and photon grid (buffers kept between
     /// iterations).
-    points: Vec<Option<VisiblePoint>>,
+    points: Vec<Option<VisiblePoint<'a>>>,
     grid: PhotonGrid,
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
     peak_bytes: usize,
 }
 
-impl State {
+impl State<'_> {
     fn image(&self, settings: &RenderSettings, iterations: u32) -> Image {
         let mut img = Image::new(settings.width, settings.height);
         for (k, p) in self.pixels.iter().enumerate() {

@@ -21,7 +21,7 @@ const TESTS: usize = 40;
 /// Mitsuba's eta for plastics (polypropylene in air).
 const PLASTIC_ETA: f32 = 1.489_587;
 
-fn bsdf_of(lobes: &[Bxdf], wo: Vec3) -> Bsdf {
+fn bsdf_of(lobes: &[Bxdf], wo: Vec3) -> Bsdf<'static> {
     let mut l = Lobes::default();
     for &lobe in lobes {
         l.add(lobe);

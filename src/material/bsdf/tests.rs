@@ -14,13 +14,13 @@ use crate::sampling::warp::uniform_sphere;
 /// Chi-square tests run in this file (for the Sidak correction).
 const TESTS: usize = 12;
 
-fn single(lobe: Bxdf, wo: Vec3) -> Bsdf {
+fn single(lobe: Bxdf, wo: Vec3) -> Bsdf<'static> {
     let mut lobes = Lobes::default();
     lobes.add(lobe);
     Bsdf::new(Frame::from_z(Vec3::Z), Vec3::Z, front_side(wo, Vec3::Z), lobes)
 }
 
-fn classic(kind: ClassicKind, kd: f32, ks: f32, kr: f32, kt: f32, wo: Vec3) -> Bsdf {
+fn classic(kind: ClassicKind, kd: f32, ks: f32, kr: f32, kt: f32, wo: Vec3) -> Bsdf<'static> {
     let m = Classic { kind, color: Color::new(0.9, 0.6, 0.3), kd, ks, kr, kt, exponent: 20.0, ..Classic::default() };
     let hit = crate::geometry::Hit {
         t: 1.0,
@@ -229,7 +229,7 @@ fn dielectric_reflects_and_transmits_by_fresnel() {
     assert!((s.unwrap().weight.x - 1.0 / 2.25).abs() < 1e-4);
 }
 
-fn classic_material(m: &Classic, wo: Vec3) -> Bsdf {
+fn classic_material(m: &Classic, wo: Vec3) -> Bsdf<'static> {
     let hit = crate::geometry::Hit {
         t: 1.0,
         p: Vec3::ZERO,
