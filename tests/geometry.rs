@@ -330,6 +330,15 @@ fn path_elements_add_search_folders() {
     // A file only in the scene's folder is still found; a missing folder is reported.
     let d = mitsuba_str(&format!(r#"<path value="nowhere"/>{shape}"#), &root).unwrap();
     assert!(d.warnings.iter().any(|w| w.contains("nowhere") && w.contains("does not exist")), "{:?}", d.warnings);
+    // `<include>` files are searched in the `<path>` folders before them too.
+    std::fs::write(root.join("b").join("inc.xml"), format!(r#"<scene version="3.0.0">{shape}</scene>"#)).unwrap();
+    let s = built(mitsuba_str(r#"<path value="b"/><include filename="inc.xml"/>"#, &root).unwrap());
+    assert!((s.scene.bounds().max.z - 3.0).abs() < 1e-6, "{:?}", s.scene.bounds());
+    let Err(e) = mitsuba_str(r#"<include filename="inc.xml"/><path value="b"/>"#, &root) else {
+        panic!("an <include> before its <path> must not be found")
+    };
+    let e = e.to_string();
+    assert!(e.contains("inc.xml"), "{e}");
 }
 
 fn obj_text(m: &TriangleMesh) -> String {

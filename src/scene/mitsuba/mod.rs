@@ -50,7 +50,7 @@ pub fn load_mitsuba_str(
     options: &LoadOptions,
 ) -> Result<SceneDescription, SceneError> {
     let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf(), path: None }];
-    let root = xml::parse_source(&mut srcs, 0, 0)?;
+    let root = xml::parse_source(&mut srcs, 0, 0, &mut Vec::new())?;
     let mut cx = Cx {
         srcs: &srcs,
         defines: HashMap::new(),

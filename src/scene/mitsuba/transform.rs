@@ -52,7 +52,8 @@ impl<'a> Cx<'a> {
                     if axis.length_squared() == 0.0 {
                         return Err(self.err(op, "<rotate> needs a non-zero axis (x, y, z or value)"));
                     }
-                    Transform::rotate(axis, angle)
+                    // Mitsuba uses the axis as written (a longer axis also scales).
+                    Transform::rotate_as_written(axis, angle)
                 }
                 "matrix" => {
                     let (v, span) = self.value(op)?;

@@ -39,7 +39,14 @@ pub(super) struct Attr {
 }
 
 /// Parses source `id` of `srcs`, expanding `<include>`s, and returns its `<scene>` element.
-pub(super) fn parse_source(srcs: &mut Vec<Src>, id: usize, depth: usize) -> Result<El, SceneError> {
+/// `paths` gathers the `<path>` folders met so far in document order (an `<include>` is searched
+/// for in them, newest first, as Mitsuba does).
+pub(super) fn parse_source(
+    srcs: &mut Vec<Src>,
+    id: usize,
+    depth: usize,
+    paths: &mut Vec<PathBuf>,
+) -> Result<El, SceneError> {
     let text = srcs[id].text.clone();
     let name = srcs[id].name.clone();
     let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
@@ -71,7 +78,7 @@ pub(super) fn parse_source(srcs: &mut Vec<Src>, id: usize, depth: usize) -> Resu
             format!("the root element must be <scene version=\"3.0.0\">, found <{}>", el.tag),
         ));
     }
-    expand_includes(srcs, &mut el, depth)?;
+    expand_includes(srcs, &mut el, depth, paths)?;
     Ok(el)
 }
 
@@ -106,12 +113,19 @@ fn convert<'d, 'i>(node: roxmltree::Node<'d, 'i>, src: usize, depth: usize) -> R
     Ok(El { tag, attrs, children, src, span })
 }
 
-/// Replaces every `<include filename="..."/>` below `el` by the children of the included scene.
-fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize) -> Result<(), SceneError> {
+/// Replaces every `<include filename="..."/>` below `el` by the children of the included scene,
+/// found in the `<path>` folders met before it (newest first), else next to the file naming it.
+fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize, paths: &mut Vec<PathBuf>) -> Result<(), SceneError> {
     let children = std::mem::take(&mut el.children);
     for mut child in children {
+        if child.tag == "path"
+            && let Some(v) = child.attrs.iter().find(|a| a.name == "value")
+        {
+            // Checked (and a missing folder warned about) when the scene is read.
+            paths.push(srcs[child.src].base.join(&v.value));
+        }
         if child.tag != "include" {
-            expand_includes(srcs, &mut child, depth)?;
+            expand_includes(srcs, &mut child, depth, paths)?;
             el.children.push(child);
             continue;
         }
@@ -129,13 +143,15 @@ fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize) -> Result<(),
                 format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)"),
             ));
         }
-        let path = src.base.join(&file.value);
+        let rel = Path::new(&file.value);
+        let path =
+            paths.iter().rev().map(|dir| dir.join(rel)).find(|p| p.is_file()).unwrap_or_else(|| src.base.join(rel));
         let text = std::fs::read_to_string(&path)
             .map_err(|e| at(file.span.clone(), format!("cannot read included file `{}`: {e}", path.display())))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         srcs.push(Src { name: path.display().to_string(), text, base, path: Some(path.clone()) });
         let id = srcs.len() - 1;
-        let included = parse_source(srcs, id, depth + 1)?;
+        let included = parse_source(srcs, id, depth + 1, paths)?;
         el.children.extend(included.children);
     }
     Ok(())
