@@ -180,7 +180,19 @@ pub fn make_record(
     if g > 0.0 && lum > 0.0 {
         r = r.min(lum / g);
     }
-    let r = r.clamp(r_range.0, r_range.1.max(r_range.0));
+    let clamped = r.clamp(r_range.0, r_range.1.max(r_range.0));
+    // A radius raised to the minimum would let the gradient extrapolate past E's own size (next
+    // to a corner the gradient is huge): scale it down in proportion (Krivanek et al. 2008), so
+    // within the record's reach a R the change stays below a E.
+    if clamped > r && r > 0.0 {
+        let k = r / clamped;
+        for g in &mut grad_t {
+            *g *= k;
+        }
+    } else if clamped > r {
+        grad_t = [Vec3::ZERO; 3];
+    }
+    let r = clamped;
     let world = |v: Vec3| frame.to_world(v);
     Record { p, n: frame.z, e, r, grad_r: grad_r.map(world), grad_t: grad_t.map(world) }
 }
