@@ -88,6 +88,32 @@ CASES = {
         <rgb name="intensity" value="60"/>
     </emitter>
 """)),
+    "area_bitmap": ("a rectangle emitting a 16 x 8 RGB PNG as its radiance (bilinear), facing the "
+                    "camera behind the sphere, lighting the sphere and floor.",
+                    STAGE.format(lights="""    <shape type="rectangle">
+        <transform name="to_world"><scale x="2.5" y="1.2"/><rotate x="1" angle="90"/><translate y="2" z="0.4"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area">
+            <texture type="bitmap" name="radiance">
+                <string name="filename" value="../materials/textures/tiles.png"/>
+            </texture>
+        </emitter>
+    </shape>
+""")),
+    "area_checker_sphere": ("the sphere itself emitting a checkerboard radiance (4 x 4 checks in uv), lighting "
+                            "the floor.",
+                            STAGE.replace("""    <shape type="sphere">
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>
+    </shape>""", """    <shape type="sphere">
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area">
+            <texture type="checkerboard" name="radiance">
+                <rgb name="color0" value="1, 0.8, 0.5"/>
+                <rgb name="color1" value="0.1, 0.3, 0.9"/>
+                <transform name="to_uv"><scale x="4" y="4"/></transform>
+            </texture>
+        </emitter>
+    </shape>""").format(lights="")),
 }
 
 

@@ -146,6 +146,35 @@ emission = 1
     };
     assert!(!bsdf_at(Vec3::ZERO, -Vec3::Z).is_black());
     assert!(bsdf_at(Vec3::new(2.5, 2.5, 5.0), -Vec3::Z).is_black());
+
+    // `emission_texture` multiplies the emission (1 when only the texture is named).
+    let s = common::scene(
+        r#"
+[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[textures.checks]
+type = "checkerboard"
+color0 = [4, 4, 4]
+color1 = [0, 0, 0]
+[[objects]]
+type = "quad"
+corner = [0, 0, 0]
+edge1 = [2, 0, 0]
+edge2 = [0, 1, 0]
+emission_texture = "checks"
+[[objects]]
+type = "quad"
+corner = [0, 0, -1]
+edge1 = [2, 0, 0]
+edge2 = [0, 1, 0]
+emission = 0.5
+emission_texture = "checks"
+"#,
+    );
+    let power: Vec<f64> = s.scene.lights.iter().map(|l| l.power().x as f64).collect();
+    assert_eq!(power.len(), 2);
+    assert!((power[0] - PI * 2.0 * 2.0).abs() < 1e-4 && (power[1] - PI * 2.0 * 1.0).abs() < 1e-4, "{power:?}");
 }
 
 #[test]
@@ -157,6 +186,8 @@ fn emitters_match_mitsuba() {
             ("spot_textured", 256),
             ("projector", 256),
             ("reflecting_emitter", 256),
+            ("area_bitmap", 256),
+            ("area_checker_sphere", 256),
         ],
         64,
     );
@@ -165,9 +196,14 @@ fn emitters_match_mitsuba() {
 #[test]
 fn photon_mapping_and_sppm_carry_mesh_lights_projectors_and_reflecting_emitters() {
     let mut failures = Vec::new();
-    for (case, photon_spp, sppm_spp) in
-        [("cornell_mesh", 16, 256), ("projector", 16, 256), ("reflecting_emitter", 16, 256), ("spot_textured", 16, 256)]
-    {
+    for (case, photon_spp, sppm_spp) in [
+        ("cornell_mesh", 16, 256),
+        ("projector", 16, 256),
+        ("reflecting_emitter", 16, 256),
+        ("spot_textured", 16, 256),
+        ("area_bitmap", 16, 256),
+        ("area_checker_sphere", 16, 256),
+    ] {
         failures.extend(REFS.compare_mean(case, 64, photon_spp, IntegratorKind::Photon, 0.03));
         failures.extend(REFS.compare_mean(case, 64, sppm_spp, IntegratorKind::Sppm, 0.03));
     }
@@ -200,4 +236,109 @@ fn emitting_disks_and_cylinders_give_the_irradiance_of_the_formula() {
     // that of an infinite one, pi L (r / D); this one (h = 2, D = 1) gives a known fraction of it.
     let e = irradiance(&s, Vec3::new(1.0, 0.0, 1.0), -Vec3::X, 200_000);
     assert!(e > 0.0 && e < PI * 2.0 * 0.5, "cylinder: {e}");
+}
+
+/// Textured area lights read their texture at the same surface point whether a light sample
+/// picks it or a ray hits it (so next-event estimation, MIS hits and photons agree), on every
+/// emitting shape: rectangle, sphere, disk, cylinder and a mesh with its own texture
+/// coordinates; and their power is the untextured power times the texture's mean.
+#[test]
+fn textured_emitters_read_the_same_texture_where_sampled_and_where_hit() {
+    let dir = common::scratch("textured-emitters");
+    // The square [-1, 1]^2 at z = 0 as two triangles (a parallelogram: the loader keeps its
+    // triangles for their uv), and as a fan of four around its centre; uv run over [0, 2] x [0, 1].
+    std::fs::write(
+        dir.join("quad.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 2 0\nvt 2 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("fan.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv 0 0 0\nvt 0 0\nvt 2 0\nvt 2 1\nvt 0 1\nvt 1 0.5\n\
+         f 1/1 2/2 5/5\nf 2/2 3/3 5/5\nf 3/3 4/4 5/5\nf 4/4 1/1 5/5\n",
+    )
+    .unwrap();
+    let checker = r#"<texture type="checkerboard" name="radiance"><rgb name="color0" value="3, 2, 1"/>
+        <rgb name="color1" value="0.2, 0.4, 0.8"/><transform name="to_uv"><scale x="5" y="3"/></transform></texture>"#;
+    let up = r#"<transform name="to_world"><rotate x="1" angle="180"/><translate z="2"/></transform>"#;
+    let shapes = [
+        ("rectangle", format!(r#"<shape type="rectangle">{up}<emitter type="area">{checker}</emitter></shape>"#)),
+        (
+            "sphere",
+            format!(
+                r#"<shape type="sphere"><point name="center" x="0.3" y="0" z="2"/><emitter type="area">{checker}</emitter></shape>"#
+            ),
+        ),
+        ("disk", format!(r#"<shape type="disk">{up}<emitter type="area">{checker}</emitter></shape>"#)),
+        (
+            "cylinder",
+            format!(
+                r#"<shape type="cylinder"><point name="p0" x="-1" y="0" z="2"/><point name="p1" x="1" y="0" z="2"/>
+            <float name="radius" value="0.5"/><emitter type="area">{checker}</emitter></shape>"#
+            ),
+        ),
+        (
+            "mesh",
+            format!(
+                r#"<shape type="obj"><string name="filename" value="{}"/>{up}<emitter type="area">{checker}</emitter></shape>"#,
+                dir.join("quad.obj").display()
+            ),
+        ),
+        (
+            "fan",
+            format!(
+                r#"<shape type="obj"><string name="filename" value="{}"/>{up}<emitter type="area">{checker}</emitter></shape>"#,
+                dir.join("fan.obj").display()
+            ),
+        ),
+    ];
+    for (name, body) in shapes {
+        let s = xml(&body);
+        let scene = &s.scene;
+        assert!(scene.lights.iter().all(|l| matches!(l, Light::Area { texture: Some(_), .. })), "{name}");
+        let (mut agree, mut total, mut colours) = (0, 0, std::collections::HashSet::new());
+        let mut rng = caustic::sampling::Rng32::new(11);
+        let p = Vec3::new(0.05, -0.02, 0.0);
+        for _ in 0..4000 {
+            let (i, _) = scene.light_picker.pick(rng.uniform()).unwrap();
+            let Some(ls) = scene.sample_light(&scene.lights[i], p, rng.uniform2()) else { continue };
+            let Some(h) = scene.intersect(&Ray::new(p, ls.wi), f32::INFINITY) else { continue };
+            total += 1;
+            let seen = scene.emitted(&h, -ls.wi);
+            // Where the texture is read: on the rectangle and the mesh (turned over about x, so
+            // local (x, y) = (q.x, -q.y)) the uv Mitsuba gives them (an OBJ's v flipped, as
+            // Mitsuba's `flip_tex_coords` does by default).
+            let (x, y) = (h.p.x, -h.p.y);
+            let want_uv = match name {
+                "rectangle" => Some(caustic::math::Vec2::new((x + 1.0) / 2.0, (y + 1.0) / 2.0)),
+                "mesh" | "fan" => Some(caustic::math::Vec2::new(x + 1.0, 1.0 - (y + 1.0) / 2.0)),
+                _ => None,
+            };
+            let Light::Area { texture: Some(t), .. } = scene.lights[i] else { unreachable!() };
+            let want = want_uv.map(|uv| scene.materials.textures[t.texture as usize].eval(uv));
+            if (seen - ls.radiance).abs().max_element() < 1e-4
+                && want.is_none_or(|w| (w - seen).abs().max_element() < 1e-4)
+            {
+                agree += 1;
+            } else if total < 50 {
+                eprintln!("{name}: p {} uv {:?} seen {seen} sampled {} want {want:?}", h.p, h.uv(), ls.radiance);
+            }
+            colours.insert((ls.radiance.x * 10.0) as i32);
+        }
+        // Points within rounding of a check's edge may read the neighbouring check.
+        assert!(total > 1000 && agree as f64 >= 0.995 * total as f64, "{name}: {agree} of {total} agree");
+        assert_eq!(colours.len(), 2, "{name}: both checks are seen: {colours:?}");
+        // Power: the checkerboard's mean (half of each colour) times pi times the area.
+        let power: f64 = scene.lights.iter().map(|l| l.power().x as f64).sum();
+        let area: f64 = scene
+            .lights
+            .iter()
+            .map(|l| match l {
+                Light::Area { emitter, .. } => emitter.area() as f64,
+                _ => 0.0,
+            })
+            .sum();
+        let exact = PI * area * (3.0 + 0.2) / 2.0;
+        assert!((power - exact).abs() < 1e-3 * exact, "{name}: power {power} vs {exact}");
+    }
 }

@@ -382,6 +382,10 @@ fn loaders_refuse_what_instancing_cannot_do() {
         (format!("{group}[[objects]]\ntype = \"instance\"\ngroup = \"h\"\n"), "no group named `h` (defined: g)"),
         ("[[objects]]\ntype = \"instance\"\n".to_string(), "an instance needs `group`"),
         ("[groups.g]\nobjects = [{ type = \"plane\" }]\n".to_string(), "a plane is unbounded"),
+        (
+            "[groups.g]\nobjects = [{ type = \"sphere\", emission = 2 }]\n".to_string(),
+            "an object in a group cannot emit",
+        ),
         (format!("{group}[groups.h]\nobjects = [{{ type = \"instance\", group = \"g\" }}]\n"), "cannot hold instances"),
         ("[groups.g]\nobjects = []\n".to_string(), "group `g` has no objects"),
         ("[groups.g]\nshapes = []\n".to_string(), "unknown key `shapes` in group `g`"),

@@ -2,6 +2,7 @@
 //! and triangles) or by the solid angle it subtends (spheres), with the error bounds of the
 //! sampled points so rays leaving them start off the surface.
 
+use crate::geometry::SurfaceParam;
 use crate::math::float::gamma;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::warp::{uniform_cone, uniform_sphere};
@@ -15,13 +16,17 @@ pub enum Emitter {
     Quad(Quad),
     /// Emits outwards.
     Sphere(Sphere),
-    /// Emits from the side (p1 - p0) x (p2 - p0) points to.
-    Triangle([Vec3; 3]),
+    /// Emits from the side (p1 - p0) x (p2 - p0) points to; `uv` are the vertices' texture
+    /// coordinates (`TRIANGLE_UV` when the mesh has none: uv = the barycentrics (b1, b2)).
+    Triangle { p: [Vec3; 3], uv: [Vec2; 3] },
     /// Emits from the side its normal points to.
     Disk(Disk),
     /// Emits from the side its normals point to (outwards unless flipped).
     Cylinder(Cylinder),
 }
+
+/// Texture coordinates of a triangle without them, as Mitsuba gives: uv = (b1, b2).
+pub const TRIANGLE_UV: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
 
 /// A point sampled on an emitter's surface.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +36,10 @@ pub struct SurfaceSample {
     pub p_error: Vec3,
     /// Unit normal on the emitting side.
     pub n: Vec3,
+    /// The shape's own surface coordinates of `p`, as a ray hitting `p` reports them (`Hit::uv`;
+    /// for a triangle its barycentrics (b1, b2)); `texture_uv` turns them into texture
+    /// coordinates.
+    pub uv: Vec2,
 }
 
 impl Emitter {
@@ -39,7 +48,7 @@ impl Emitter {
         match *self {
             Emitter::Quad(q) => Shape::Quad(q),
             Emitter::Sphere(s) => Shape::Sphere(s),
-            Emitter::Triangle([p0, p1, p2]) => Shape::Triangle(Triangle::new(p0, p1, p2)),
+            Emitter::Triangle { p: [p0, p1, p2], .. } => Shape::Triangle(Triangle::new(p0, p1, p2)),
             Emitter::Disk(d) => Shape::Disk(d),
             Emitter::Cylinder(c) => Shape::Cylinder(c),
         }
@@ -49,9 +58,20 @@ impl Emitter {
         match self {
             Emitter::Quad(q) => q.area(),
             Emitter::Sphere(s) => 4.0 * PI * s.radius * s.radius,
-            Emitter::Triangle([p0, p1, p2]) => 0.5 * (*p1 - *p0).cross(*p2 - *p0).length(),
+            Emitter::Triangle { p: [p0, p1, p2], .. } => 0.5 * (*p1 - *p0).cross(*p2 - *p0).length(),
             Emitter::Disk(d) => d.area(),
             Emitter::Cylinder(c) => c.area(),
+        }
+    }
+
+    /// Texture coordinates of the surface point whose own coordinates are `uv` (`Hit::uv` of a
+    /// hit on this emitter's shape, or `SurfaceSample::uv`): the vertices' coordinates
+    /// interpolated on a triangle, `uv` itself on every other shape.
+    #[inline]
+    pub fn texture_uv(&self, uv: Vec2) -> Vec2 {
+        match self {
+            Emitter::Triangle { uv: t, .. } => t[0] * (1.0 - uv.x - uv.y) + t[1] * uv.x + t[2] * uv.y,
+            _ => uv,
         }
     }
 
@@ -60,30 +80,33 @@ impl Emitter {
         match self {
             Emitter::Quad(q) => {
                 let (a, b) = (q.e1 * u.x, q.e2 * u.y);
-                SurfaceSample { p: q.p0 + a + b, p_error: gamma(6) * (q.p0.abs() + a.abs() + b.abs()), n: q.n }
+                let p_error = gamma(6) * (q.p0.abs() + a.abs() + b.abs());
+                SurfaceSample { p: q.p0 + a + b, p_error, n: q.n, uv: u }
             }
             Emitter::Sphere(s) => {
                 let n = uniform_sphere(u);
                 let local = n * s.radius;
                 let p = s.center + local;
-                SurfaceSample { p, p_error: gamma(5) * local.abs() + gamma(1) * p.abs(), n }
+                let uv = SurfaceParam::Sphere { n, radius: s.radius }.uv();
+                SurfaceSample { p, p_error: gamma(5) * local.abs() + gamma(1) * p.abs(), n, uv }
             }
-            Emitter::Triangle([p0, p1, p2]) => {
+            Emitter::Triangle { p: [p0, p1, p2], .. } => {
                 // Uniform barycentrics by the square-root warp (pbrt-v4 SampleUniformTriangle).
                 let su = u.x.sqrt();
                 let (b0, b1) = (1.0 - su, u.y * su);
                 let b2 = 1.0 - b0 - b1;
                 let p = *p0 * b0 + *p1 * b1 + *p2 * b2;
                 let p_error = gamma(7) * ((*p0 * b0).abs() + (*p1 * b1).abs() + (*p2 * b2).abs());
-                SurfaceSample { p, p_error, n: (*p1 - *p0).cross(*p2 - *p0).normalize_or_zero() }
+                let n = (*p1 - *p0).cross(*p2 - *p0).normalize_or_zero();
+                SurfaceSample { p, p_error, n, uv: Vec2::new(b1, b2) }
             }
             Emitter::Disk(d) => {
                 let s = d.sample_area(u);
-                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n }
+                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n, uv: s.uv }
             }
             Emitter::Cylinder(c) => {
                 let s = c.sample_area(u);
-                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n }
+                SurfaceSample { p: s.p, p_error: s.p_error, n: s.n, uv: s.uv }
             }
         }
     }
@@ -93,7 +116,7 @@ impl Emitter {
     #[inline]
     pub fn sample_towards(&self, p: Vec3, u: Vec2) -> Option<(SurfaceSample, f32)> {
         match self {
-            Emitter::Quad(_) | Emitter::Triangle(_) | Emitter::Disk(_) | Emitter::Cylinder(_) => {
+            Emitter::Quad(_) | Emitter::Triangle { .. } | Emitter::Disk(_) | Emitter::Cylinder(_) => {
                 let s = self.sample_area(u);
                 let v = s.p - p;
                 let d2 = v.length_squared();
@@ -122,7 +145,8 @@ impl Emitter {
                 let x = p + dir * t;
                 let n = (x - sphere.center).normalize();
                 let p_error = gamma(5) * (x - sphere.center).abs() + gamma(1) * x.abs();
-                Some((SurfaceSample { p: x, p_error, n }, 1.0 / (2.0 * PI * (1.0 - cos_max))))
+                let uv = SurfaceParam::Sphere { n, radius: sphere.radius }.uv();
+                Some((SurfaceSample { p: x, p_error, n, uv }, 1.0 / (2.0 * PI * (1.0 - cos_max))))
             }
         }
     }
@@ -131,7 +155,7 @@ impl Emitter {
     #[inline]
     pub fn pdf_towards(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match self {
-            Emitter::Quad(_) | Emitter::Triangle(_) | Emitter::Disk(_) | Emitter::Cylinder(_) => {
+            Emitter::Quad(_) | Emitter::Triangle { .. } | Emitter::Disk(_) | Emitter::Cylinder(_) => {
                 let cos = n.dot(-wi);
                 if cos <= 0.0 {
                     return 0.0;

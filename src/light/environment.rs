@@ -242,7 +242,7 @@ impl Environment {
         }
         let d = -wi;
         let (ray, inv_density) = self.disk.ray(d, u_pos)?;
-        Some(EmittedPhoton { ray, flux: radiance * (inv_density / pdf), n: d })
+        Some(EmittedPhoton { ray, flux: radiance * (inv_density / pdf), n: d, uv: crate::math::Vec2::ZERO })
     }
 }
 

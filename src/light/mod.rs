@@ -13,7 +13,7 @@ mod area;
 mod disk;
 mod environment;
 
-pub use area::{Emitter, SurfaceSample};
+pub use area::{Emitter, SurfaceSample, TRIANGLE_UV};
 pub use disk::{PLANE_REACH, PhotonDisk};
 pub use environment::{EnvMap, Environment};
 
@@ -37,11 +37,20 @@ pub enum Light {
     /// `irradiance` what a surface facing it receives. Its photons enter through `disk` (set when
     /// the scene is built), which also gives its power.
     Directional { direction: Vec3, irradiance: Color, disk: PhotonDisk },
-    /// A shape emitting constant radiance from its front side.
-    Area { emitter: Emitter, radiance: Color },
+    /// A shape emitting from its front side: `radiance`, times the texture at the point's uv
+    /// when it has one (Mitsuba's `area` emitter with a radiance texture).
+    Area { emitter: Emitter, radiance: Color, texture: Option<EmissionTexture> },
     /// Light from every direction at infinity: an environment map or a constant radiance, seen
     /// by rays that leave the scene.
     Environment(Environment),
+}
+
+/// A texture that modulates an area light's radiance, with its mean over uv (the light's power
+/// is its untextured power times the mean).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmissionTexture {
+    pub texture: u32,
+    pub mean: Color,
 }
 
 /// No texture: a spot light of uniform intensity.
@@ -157,6 +166,8 @@ pub struct LightSample {
     /// The light is a delta light (point, spot, directional): no ray can hit it, so it takes no
     /// part in multiple importance sampling.
     pub delta: bool,
+    /// Texture coordinates of the sampled point of an area light (where its texture is read).
+    pub uv: Vec2,
 }
 
 impl LightSample {
@@ -175,6 +186,8 @@ pub struct EmittedPhoton {
     pub flux: Color,
     /// Normal at the emission point (for spawning the ray off an area light).
     pub n: Vec3,
+    /// Texture coordinates of the emission point on an area light.
+    pub uv: Vec2,
 }
 
 impl Light {
@@ -259,7 +272,9 @@ impl Light {
             // Untextured power times the texture's mean: the image plane's irradiance integral.
             Light::Projector(p) => p.intensity * p.plane_area() * p.mean,
             Light::Directional { irradiance, disk, .. } => irradiance * disk.area(),
-            Light::Area { emitter, radiance } => radiance * PI * emitter.area(),
+            Light::Area { emitter, radiance, texture } => {
+                radiance * PI * emitter.area() * texture.map_or(Color::ONE, |t| t.mean)
+            }
             Light::Environment(e) => e.power(),
         }
     }
@@ -268,7 +283,7 @@ impl Light {
     /// nothing from this sample (outside a spot cone, behind an area light, at the light).
     #[inline]
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let delta = |wi, dist, radiance| LightSample { wi, dist, radiance, pdf: 1.0, delta: true };
+        let delta = |wi, dist, radiance| LightSample { wi, dist, radiance, pdf: 1.0, delta: true, uv: Vec2::ZERO };
         match *self {
             Light::Point { position, intensity } => {
                 let v = position - p;
@@ -291,7 +306,7 @@ impl Light {
                 (i.max_element() > 0.0).then(|| delta(wi, dist, i / d2))
             }
             Light::Directional { direction, irradiance, .. } => Some(delta(-direction, f32::INFINITY, irradiance)),
-            Light::Area { emitter, radiance } => {
+            Light::Area { emitter, radiance, .. } => {
                 let (s, pdf) = emitter.sample_towards(p, u)?;
                 let v = s.p - p;
                 let d2 = v.length_squared();
@@ -303,11 +318,11 @@ impl Light {
                 if s.n.dot(-wi) <= 0.0 {
                     return None;
                 }
-                Some(LightSample { wi, dist, radiance, pdf, delta: false })
+                Some(LightSample { wi, dist, radiance, pdf, delta: false, uv: emitter.texture_uv(s.uv) })
             }
             Light::Environment(e) => {
                 let (wi, radiance, pdf) = e.sample(u)?;
-                Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false })
+                Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false, uv: Vec2::ZERO })
             }
         }
     }
@@ -340,14 +355,14 @@ impl Light {
         match *self {
             Light::Point { position, intensity } => {
                 let d = uniform_sphere(u_dir);
-                Some(EmittedPhoton { ray: Ray::new(position, d), flux: intensity * 4.0 * PI, n: d })
+                Some(EmittedPhoton { ray: Ray::new(position, d), flux: intensity * 4.0 * PI, n: d, uv: Vec2::ZERO })
             }
             Light::Spot(s) => {
                 let local = uniform_cone(u_dir, s.cos_cutoff);
                 let d = s.frame.to_world(local);
                 let pdf = 1.0 / (2.0 * PI * (1.0 - s.cos_cutoff));
                 let flux = s.intensity * (s.falloff(local.z) / pdf);
-                Some(EmittedPhoton { ray: Ray::new(s.position, d), flux, n: d })
+                Some(EmittedPhoton { ray: Ray::new(s.position, d), flux, n: d, uv: Vec2::ZERO })
             }
             Light::Projector(p) => {
                 // A uniform point of the image plane: flux = intensity(d) / pdf(d), where
@@ -356,18 +371,24 @@ impl Light {
                 let x = (1.0 - 2.0 * u_dir.x) * p.tan_x;
                 let y = (1.0 - 2.0 * u_dir.y) * p.tan_y;
                 let d = p.frame.to_world(Vec3::new(x, y, 1.0).normalize());
-                Some(EmittedPhoton { ray: Ray::new(p.position, d), flux: p.intensity * p.plane_area(), n: d })
+                Some(EmittedPhoton {
+                    ray: Ray::new(p.position, d),
+                    flux: p.intensity * p.plane_area(),
+                    n: d,
+                    uv: Vec2::ZERO,
+                })
             }
             Light::Directional { direction, irradiance, disk } => {
                 let (ray, inv_density) = disk.ray(direction, u_pos)?;
-                Some(EmittedPhoton { ray, flux: irradiance * inv_density, n: direction })
+                Some(EmittedPhoton { ray, flux: irradiance * inv_density, n: direction, uv: Vec2::ZERO })
             }
-            Light::Area { emitter, radiance } => {
+            Light::Area { emitter, radiance, .. } => {
                 let s = emitter.sample_area(u_pos);
                 let d = Frame::from_z(s.n).to_world(cosine_hemisphere(u_dir));
                 // L cos / (pdf_area * cos / pi) = L * area * pi.
                 let ray = Ray::spawn(s.p, s.p_error, s.n, d, 0.0);
-                Some(EmittedPhoton { ray, flux: radiance * (emitter.area() * PI), n: s.n })
+                let uv = emitter.texture_uv(s.uv);
+                Some(EmittedPhoton { ray, flux: radiance * (emitter.area() * PI), n: s.n, uv })
             }
             Light::Environment(e) => e.emit(u_pos, u_dir),
         }
@@ -418,12 +439,20 @@ mod tests {
                 irradiance: Color::splat(2.0),
                 disk: PhotonDisk::new(Vec3::ONE, 0.5, true),
             },
-            Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0) },
+            Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0), texture: None },
             Light::Area {
-                emitter: Emitter::Triangle([Vec3::ZERO, Vec3::X * 2.0, Vec3::new(0.3, 1.5, -0.2)]),
+                emitter: Emitter::Triangle {
+                    p: [Vec3::ZERO, Vec3::X * 2.0, Vec3::new(0.3, 1.5, -0.2)],
+                    uv: TRIANGLE_UV,
+                },
                 radiance: Color::splat(2.5),
+                texture: None,
             },
-            Light::Area { emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)), radiance: Color::splat(1.5) },
+            Light::Area {
+                emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
+                radiance: Color::splat(1.5),
+                texture: None,
+            },
         ];
         let mut rng = Rng32::new(3);
         for l in lights {
@@ -539,7 +568,7 @@ mod tests {
         // A triangle (facing +y, seen from above) against Van Oosterom and Strackee's formula
         // tan(omega / 2) = |a . (b x c)| / (abc + (a . b) c + (a . c) b + (b . c) a).
         let tri = [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(0.5, 2.0, 1.0), Vec3::new(1.5, 2.0, -0.5)];
-        let t = Emitter::Triangle(tri);
+        let t = Emitter::Triangle { p: tri, uv: TRIANGLE_UV };
         let mut omega = 0.0f64;
         for _ in 0..n {
             let (s, pdf) = t.sample_towards(above, rng.uniform2()).unwrap();

@@ -18,7 +18,7 @@ use crate::geometry::Ray;
 use crate::light::{EmittedPhoton, Light};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Frame, Vec3};
+use crate::math::{Color, Frame, Vec2, Vec3};
 use crate::progress::Progress;
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, hash_seed};
@@ -129,7 +129,7 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
                 let (li, p) = scene.light_picker.pick(rng.uniform())?;
                 let light = &scene.lights[li];
                 let mut e = emit_towards(light, &scene.specular_targets, &mut rng)?;
-                e.flux *= scene.projected_texture(light, e.ray.d);
+                e.flux *= scene.emission_texture(light, &e);
                 if light.is_infinite() {
                     e.ray = scene.photon_entry(e.ray);
                 }
@@ -316,15 +316,15 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         _ => {}
     }
     // Position (on area lights), then a direction towards one of the targets.
-    let (p, p_error, n, pos_weight, radiance_like) = match *light {
-        Light::Point { position, intensity } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity),
+    let (p, p_error, n, pos_weight, radiance_like, uv) = match *light {
+        Light::Point { position, intensity } => (position, Vec3::ZERO, Vec3::ZERO, 1.0, intensity, Vec2::ZERO),
         Light::Spot(crate::light::Spot { position, .. })
         | Light::Projector(crate::light::Projector { position, .. }) => {
-            (position, Vec3::ZERO, Vec3::ZERO, 1.0, Color::ONE)
+            (position, Vec3::ZERO, Vec3::ZERO, 1.0, Color::ONE, Vec2::ZERO)
         }
-        Light::Area { emitter, radiance } => {
+        Light::Area { emitter, radiance, .. } => {
             let s = emitter.sample_area(u_pos);
-            (s.p, s.p_error, s.n, emitter.area(), radiance)
+            (s.p, s.p_error, s.n, emitter.area(), radiance, emitter.texture_uv(s.uv))
         }
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
@@ -349,7 +349,7 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
     let (ray, n_out) = if n == Vec3::ZERO { (Ray::new(p, d), d) } else { (Ray::spawn(p, p_error, n, d, 0.0), n) };
-    Some(EmittedPhoton { ray, flux: emitted / pdf_dir, n: n_out })
+    Some(EmittedPhoton { ray, flux: emitted / pdf_dir, n: n_out, uv })
 }
 
 /// A photon travelling along `direction` from infinity, through a point of the disks the targets
@@ -383,7 +383,7 @@ fn towards_from_infinity(
     let pdf_area = covering as f32 / total;
     let back = (center - q).dot(-direction) + radius;
     let o = q - direction * back.max(r);
-    Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction })
+    Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction, uv: Vec2::ZERO })
 }
 
 /// Index chosen from `weights` in proportion to them, by the uniform number `u`.

@@ -10,9 +10,9 @@ use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
 use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
-use crate::light::{Emitter, Environment, Light, LightPicker, PhotonDisk};
+use crate::light::{EmissionTexture, Emitter, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials};
-use crate::math::Vec3;
+use crate::math::{Color, Vec3};
 use crate::shape::{Plane, Primitive, Shape, Triangle, TriangleMesh};
 use crate::texture::Texture;
 use std::time::Instant;
@@ -199,20 +199,23 @@ impl SceneBuilder {
 
     /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
     /// reflects with (a reflecting emitter); `None` makes it black.
-    pub fn add_area_light(&mut self, emitter: Emitter, radiance: crate::math::Color, surface: Option<Material>) {
-        self.add_area_lights([emitter], radiance, surface);
+    pub fn add_area_light(&mut self, emitter: Emitter, radiance: Color, surface: Option<Material>) {
+        self.add_area_lights([emitter], radiance, None, surface);
     }
 
     /// Adds one emitting object made of several surfaces (the faces of a cube, the triangles of
     /// a mesh): a light per surface, so light sampling picks among them by power (by area, as
-    /// they share the radiance), and one material for all.
+    /// they share the radiance), and one material for all. With a `texture` (an index from
+    /// `add_texture`) the radiance is multiplied by it at each point's uv.
     pub fn add_area_lights(
         &mut self,
         emitters: impl IntoIterator<Item = Emitter>,
-        radiance: crate::math::Color,
+        radiance: Color,
+        texture: Option<u32>,
         surface: Option<Material>,
     ) {
         debug_assert!(self.open_group.is_none(), "loaders refuse emitters in instanced groups");
+        let texture = texture.map(|t| EmissionTexture { texture: t, mean: self.textures[t as usize].mean() });
         let first = self.lights.len();
         let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
         for emitter in emitters {
@@ -221,16 +224,20 @@ impl SceneBuilder {
             }
             let light = self.lights.len() as u32;
             self.area_prims.push(Primitive { shape: emitter.shape(), material: m, light });
-            self.lights.push(Light::Area { emitter, radiance });
+            self.lights.push(Light::Area { emitter, radiance, texture });
         }
     }
 
     /// The surfaces of a triangle mesh as emitters, each emitting from the side its winding
-    /// faces (as the mesh's geometric normals do).
+    /// faces (as the mesh's geometric normals do), with the mesh's texture coordinates.
     pub fn mesh_emitters(mesh: &TriangleMesh) -> Vec<Emitter> {
         mesh.indices
             .iter()
-            .map(|t| Emitter::Triangle(t.map(|i| mesh.positions[i as usize])))
+            .enumerate()
+            .map(|(k, t)| Emitter::Triangle {
+                p: t.map(|i| mesh.positions[i as usize]),
+                uv: mesh.vertex_uvs(k).unwrap_or(crate::light::TRIANGLE_UV),
+            })
             .filter(|e| e.area() > 0.0)
             .collect()
     }
@@ -312,7 +319,10 @@ impl SceneBuilder {
             }
         }
         let any_transmissive = (0..materials.len() as u32).any(|m| materials.classic_of(m).transmits());
-        let any_projection = self.lights.iter().any(|l| l.projection_texture().is_some());
+        let any_light_texture = self
+            .lights
+            .iter()
+            .any(|l| l.projection_texture().is_some() || matches!(l, Light::Area { texture: Some(_), .. }));
         let scene = Scene {
             bvh,
             instances,
@@ -329,7 +339,7 @@ impl SceneBuilder {
             ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
             transparent_shadows: shading.transparent_shadows,
             any_transmissive,
-            any_projection,
+            any_light_texture,
             specular_targets: self.specular_targets,
         };
         Ok((scene, info))

@@ -70,8 +70,9 @@ pub struct Scene {
     pub transparent_shadows: bool,
     /// Some material transmits light (so shadow rays must look for transparent surfaces).
     pub any_transmissive: bool,
-    /// Some spot light or projector casts a texture (so light samples look it up).
-    pub any_projection: bool,
+    /// Some spot light or projector casts a texture, or some area light emits one (so light
+    /// samples look it up).
+    pub any_light_texture: bool,
     /// Bounding spheres (centre, radius) of objects with mirror or glass materials: where caustic
     /// photons are aimed.
     pub specular_targets: Vec<(crate::math::Vec3, f32)>,
@@ -79,17 +80,20 @@ pub struct Scene {
 
 impl Scene {
     /// Samples light `light` from `p` (see `Light::sample`), with the texture a spot or
-    /// projector casts.
+    /// projector casts or an area light emits.
     #[inline(always)]
     pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
         let mut s = light.sample(p, u)?;
-        if self.any_projection && light.is_delta() {
-            s.radiance *= self.projected_texture(light, -s.wi);
+        if self.any_light_texture {
+            s.radiance *= match *light {
+                Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(s.uv),
+                _ => self.projected_texture(light, -s.wi),
+            };
         }
         Some(s)
     }
 
-    /// Emits a photon from `light` (see `Light::emit`), with the texture it casts.
+    /// Emits a photon from `light` (see `Light::emit`), with the texture it casts or emits.
     pub fn emit_photon(
         &self,
         light: &Light,
@@ -97,8 +101,19 @@ impl Scene {
         u_dir: crate::math::Vec2,
     ) -> Option<EmittedPhoton> {
         let mut e = light.emit(u_pos, u_dir)?;
-        e.flux *= self.projected_texture(light, e.ray.d);
+        e.flux *= self.emission_texture(light, &e);
         Some(e)
+    }
+
+    /// The texture factor of photon `e` leaving `light`: the texture a spot or projector casts
+    /// in its direction, or an area light's radiance texture at its starting point; 1 for every
+    /// other light.
+    #[inline]
+    pub fn emission_texture(&self, light: &Light, e: &EmittedPhoton) -> Color {
+        match *light {
+            Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(e.uv),
+            _ => self.projected_texture(light, e.ray.d),
+        }
     }
 
     /// The colour of the texture a spot or projector casts in direction `d` (leaving it); 1 for
@@ -163,6 +178,9 @@ impl Scene {
     #[inline]
     pub fn emitted(&self, h: &Hit, w: crate::math::Vec3) -> Color {
         match self.lights.get(h.light as usize) {
+            Some(light @ Light::Area { emitter, texture: Some(t), .. }) => {
+                light.emitted(h.ng, w) * self.materials.textures[t.texture as usize].eval(emitter.texture_uv(h.uv()))
+            }
             Some(light) => light.emitted(h.ng, w),
             None => Color::ZERO,
         }

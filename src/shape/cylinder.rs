@@ -145,6 +145,8 @@ impl Cylinder {
             p_error: gamma(8) * (self.p0.abs() + along.abs() + radial.abs())
                 + Vec3::splat(gamma(8) * (along + radial).length()),
             n: n * self.normal_sign(),
+            // (phi / 2 pi, height), as `surface` reports them.
+            uv: Vec2::new(u.y, u.x),
         }
     }
 }

@@ -93,7 +93,13 @@ impl Disk {
         let d = concentric_disk(u);
         let p = self.center + self.a * d.x + self.b * d.y;
         let p = p - self.n * self.n.dot(p - self.center);
-        AreaSample { p, p_error: gamma(6) * (self.center.abs() + p.abs()), n: self.n }
+        // (r, phi / 2 pi) of the local point, as `surface` reports it.
+        let mut phi = d.y.atan2(d.x);
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        let uv = Vec2::new(d.length(), phi / TAU);
+        AreaSample { p, p_error: gamma(6) * (self.center.abs() + p.abs()), n: self.n, uv }
     }
 }
 

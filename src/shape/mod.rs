@@ -18,7 +18,7 @@ pub use sphere::Sphere;
 pub use triangle::{RayShear, Triangle, intersect_triangle};
 
 use crate::geometry::{Aabb, Ray, SurfaceParam};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// What the BVH needs to know about a candidate hit; the full `Hit` is built only for the winner.
 #[derive(Clone, Copy, Debug)]
@@ -48,6 +48,8 @@ pub struct AreaSample {
     pub p_error: Vec3,
     /// Unit normal there, on the side the shape's normals point to.
     pub n: Vec3,
+    /// The surface coordinates a hit at `p` reports (`SurfacePoint::param`'s uv).
+    pub uv: Vec2,
 }
 
 #[derive(Clone, Copy, Debug)]

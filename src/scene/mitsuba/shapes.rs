@@ -42,7 +42,11 @@ impl<'a> Cx<'a> {
                     "emitters inside a shapegroup are not supported (Mitsuba refuses them too: instancing of emitters)",
                 ));
             }
-            radiance = Some(self.color(&ep, "radiance")?.unwrap_or(Color::ONE));
+            radiance = Some(match self.color_param(&ep, "radiance", b)? {
+                None => (Color::ONE, None),
+                Some(crate::material::Param::Const(c)) => (c, None),
+                Some(crate::material::Param::Texture(t)) => (Color::ONE, Some(t)),
+            });
             self.finish(&ep)?;
         }
         // Material: a nested or referenced <bsdf>, or Mitsuba's default. A `null` BSDF is an
@@ -191,8 +195,10 @@ impl<'a> Cx<'a> {
                 }
                 // An emitting mesh is a light per triangle (one parallelogram stays one quad
                 // light, as the native format writes it).
-                if radiance.is_some() {
-                    match parallelogram(&mesh) {
+                if let Some((_, texture)) = radiance {
+                    // A textured parallelogram keeps its triangles: they carry its uv.
+                    let quad = if texture.is_some() && mesh.uvs.is_some() { None } else { parallelogram(&mesh) };
+                    match quad {
                         Some(q) => emitters_out.push(Emitter::Quad(q)),
                         None => emitters_out.extend(SceneBuilder::mesh_emitters(&mesh)),
                     }
@@ -220,18 +226,18 @@ impl<'a> Cx<'a> {
         }
         let Some(material) = material else {
             // A `null` BSDF: nothing to see, only the emission (if any).
-            if let Some(radiance) = radiance {
-                b.geometry.add_area_lights(emitters_out, radiance, None);
+            if let Some((radiance, texture)) = radiance {
+                b.geometry.add_area_lights(emitters_out, radiance, texture, None);
             }
             return self.finish(&p);
         };
         let m = *b.geometry.material(material);
-        if let Some(radiance) = radiance {
+        if let Some((radiance, texture)) = radiance {
             // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
             // exactly our plain emitter material.
             let reflects = !m.model.children().is_empty()
                 || !m.model.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty();
-            b.geometry.add_area_lights(emitters_out, radiance, reflects.then_some(m));
+            b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
             return self.finish(&p);
         }
         if let Some((mesh, mesh_name)) = mesh_out {

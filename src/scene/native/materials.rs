@@ -164,7 +164,12 @@ impl<'a> Cx<'a> {
         [&d.material, &d.first, &d.second, &d.front, &d.back].into_iter().flatten().collect()
     }
 
-    fn texture_index(&self, textures: &TextureNames, name: &str, span: Range<usize>) -> Result<u32, SceneError> {
+    pub(super) fn texture_index(
+        &self,
+        textures: &TextureNames,
+        name: &str,
+        span: Range<usize>,
+    ) -> Result<u32, SceneError> {
         textures.get(name).copied().ok_or_else(|| {
             let mut known: Vec<&str> = textures.keys().map(String::as_str).collect();
             known.sort();

@@ -57,7 +57,7 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
         None => Default::default(),
     };
     if let Some(v) = sections.remove("objects") {
-        cx.objects(v, &materials, &groups, &mut geometry)?;
+        cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
     }
     let geometry_files = geometry.files().to_vec();
     let (width, height) = (render.width.unwrap_or(DEFAULT_SIZE.0), render.height.unwrap_or(DEFAULT_SIZE.1));

@@ -2,7 +2,7 @@
 //! the scene builder.
 
 use super::Cx;
-use super::materials::MaterialNames;
+use super::materials::{MaterialNames, TextureNames};
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
 use crate::geometry::Transform;
 use crate::light::{Emitter, Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
@@ -187,7 +187,7 @@ impl<'a> Cx<'a> {
             };
             let index = geometry.begin_group().map_err(|e| self.at(span.clone(), e))?;
             for value in self.array(objects, "objects")? {
-                self.object_entry(value, names, None, geometry)?;
+                self.object_entry(value, names, &TextureNames::new(), None, geometry)?;
             }
             geometry.end_group();
             if geometry.group_len(index) == 0 {
@@ -203,11 +203,12 @@ impl<'a> Cx<'a> {
         &self,
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
+        textures: &TextureNames,
         groups: &HashMap<String, u32>,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
         for value in self.array(value, "objects")? {
-            self.object_entry(value, names, Some(groups), geometry)?;
+            self.object_entry(value, names, textures, Some(groups), geometry)?;
         }
         Ok(())
     }
@@ -218,6 +219,7 @@ impl<'a> Cx<'a> {
         &self,
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
+        textures: &TextureNames,
         groups: Option<&HashMap<String, u32>>,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
@@ -234,7 +236,29 @@ impl<'a> Cx<'a> {
             _ => {}
         }
         let material = self.material_of(d.material.as_ref(), names, geometry)?;
-        self.object(kind, &d, &transform, span, material, geometry)
+        let emission = self.emission(&d, textures)?;
+        if emission.is_some() && groups.is_none() {
+            return Err(self.at(
+                span,
+                "an object in a group cannot emit (instanced emitters are not supported, as in Mitsuba): put it in [[objects]]",
+            ));
+        }
+        self.object(kind, &d, &transform, span, material, emission, geometry)
+    }
+
+    /// What object `d` emits: `emission` (1 when only a texture is given) times its
+    /// `emission_texture`; `None` when it emits nothing.
+    fn emission(&self, d: &ObjectDesc, textures: &TextureNames) -> Result<Emission, SceneError> {
+        let texture = match &d.emission_texture {
+            Some(n) => Some(self.texture_index(textures, n.get_ref(), n.span())?),
+            None => None,
+        };
+        let radiance = d.emission.map(|c| c.0);
+        Ok(match (radiance, texture) {
+            (None, None) => None,
+            (Some(c), None) => (c.max_element() > 0.0).then_some((c, None)),
+            (c, Some(t)) => Some((c.unwrap_or(Color::ONE), Some(t))),
+        })
     }
 
     fn instance(
@@ -270,6 +294,7 @@ impl<'a> Cx<'a> {
         transform: &Transform,
         span: Range<usize>,
         material: u32,
+        emission: Emission,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
         match kind {
@@ -285,7 +310,7 @@ impl<'a> Cx<'a> {
                 if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
                     return Err(self.at(span, "sphere is degenerate after its transform"));
                 }
-                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], material, d);
+                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], material, d, emission);
             }
             "plane" => {
                 let point = transform.point(d.point.map_or(Vec3::ZERO, |p| p.0));
@@ -301,7 +326,7 @@ impl<'a> Cx<'a> {
                 let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, -2.0), |p| p.0);
                 let q = transformed_quad(transform, corner, e1, e2)
                     .ok_or_else(|| self.at(span, "quad edges are parallel or zero: it has no area"))?;
-                add_shapes(geometry, vec![Shape::Quad(q)], material, d);
+                add_shapes(geometry, vec![Shape::Quad(q)], material, d, emission);
             }
             "box" => {
                 let min = d.min.map_or(Vec3::splat(-1.0), |p| p.0);
@@ -315,7 +340,7 @@ impl<'a> Cx<'a> {
                         .ok_or_else(|| self.at(span.clone(), "box is degenerate after its transform"))?;
                     faces.push(Shape::Quad(q));
                 }
-                add_shapes(geometry, faces, material, d);
+                add_shapes(geometry, faces, material, d, emission);
             }
             "cylinder" => {
                 let p0 = d.p0.map_or(Vec3::ZERO, |p| p.0);
@@ -328,14 +353,14 @@ impl<'a> Cx<'a> {
                         "a cylinder can only be translated, rotated and scaled uniformly across its axis; use a mesh for an elliptic one",
                     ));
                 }
-                add_shapes(geometry, vec![Shape::Cylinder(c)], material, d);
+                add_shapes(geometry, vec![Shape::Cylinder(c)], material, d, emission);
             }
             "disk" => {
                 let center = d.center.map_or(Vec3::ZERO, |p| p.0);
                 let normal = d.normal.map_or(Vec3::Y, |n| n.0);
                 let disk = Disk::facing(center, normal, d.radius.map_or(1.0, |r| r.0), transform)
                     .ok_or_else(|| self.at(span, "disk is degenerate after its transform"))?;
-                add_shapes(geometry, vec![Shape::Disk(disk)], material, d);
+                add_shapes(geometry, vec![Shape::Disk(disk)], material, d, emission);
             }
             "mesh" | "torus_knot" => {
                 let mesh = if kind == "mesh" {
@@ -379,14 +404,14 @@ impl<'a> Cx<'a> {
                     Some(f) => f.get_ref().display().to_string(),
                     None => "torus_knot".to_string(),
                 };
-                match emission(d) {
-                    Some(radiance) => {
+                match emission {
+                    Some((radiance, texture)) => {
                         let emitters = SceneBuilder::mesh_emitters(&mesh);
                         if emitters.is_empty() {
                             return Err(self.at(span, "an emitting mesh has no triangle with an area"));
                         }
                         let surface = d.material.as_ref().map(|_| *geometry.material(material));
-                        geometry.add_area_lights(emitters, radiance, surface);
+                        geometry.add_area_lights(emitters, radiance, texture, surface);
                     }
                     None => geometry.add_mesh(mesh, material, &name),
                 }
@@ -413,15 +438,10 @@ impl<'a> Cx<'a> {
     }
 }
 
-/// The radiance an object emits, when it emits.
-fn emission(d: &ObjectDesc) -> Option<Color> {
-    d.emission.map(|c| c.0).filter(|c| c.max_element() > 0.0)
-}
-
-/// Adds an object's shapes, as area lights when it emits: an emitting object reflects with the
-/// material it names, and is a plain (black) emitter when it names none.
-fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d: &ObjectDesc) {
-    let Some(radiance) = emission(d) else {
+/// Adds an object's shapes, as area lights when it emits (`emission`): an emitting object
+/// reflects with the material it names, and is a plain (black) emitter when it names none.
+fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d: &ObjectDesc, emission: Emission) {
+    let Some((radiance, texture)) = emission else {
         geometry.add_object(shapes, material);
         return;
     };
@@ -430,11 +450,14 @@ fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d:
         .map(|s| match s {
             Shape::Sphere(s) => Emitter::Sphere(s),
             Shape::Quad(q) => Emitter::Quad(q),
-            Shape::Triangle(t) => Emitter::Triangle(t.p),
+            Shape::Triangle(t) => Emitter::Triangle { p: t.p, uv: crate::light::TRIANGLE_UV },
             Shape::Disk(d) => Emitter::Disk(d),
             Shape::Cylinder(c) => Emitter::Cylinder(c),
         })
         .collect();
     let surface = d.material.as_ref().map(|_| *geometry.material(material));
-    geometry.add_area_lights(emitters, radiance, surface);
+    geometry.add_area_lights(emitters, radiance, texture, surface);
 }
+
+/// What an object emits: radiance and an optional texture multiplying it; `None` when dark.
+type Emission = Option<(Color, Option<u32>)>;

@@ -47,14 +47,17 @@ pub const AREA_QUAD_KEYS: &[&str] = &["corner", "edge1", "edge2"];
 pub const AREA_SPHERE_KEYS: &[&str] = &["center", "radius"];
 
 pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
-    ("sphere", &["material", "transform", "emission", "center", "radius"]),
+    ("sphere", &["material", "transform", "emission", "emission_texture", "center", "radius"]),
     ("plane", &["material", "transform", "point", "normal"]),
-    ("quad", &["material", "transform", "emission", "corner", "edge1", "edge2"]),
-    ("box", &["material", "transform", "emission", "min", "max"]),
-    ("mesh", &["material", "transform", "emission", "file", "face_normals"]),
-    ("torus_knot", &["material", "transform", "emission", "p", "q", "radius", "tube", "segments", "sides"]),
-    ("cylinder", &["material", "transform", "emission", "p0", "p1", "radius"]),
-    ("disk", &["material", "transform", "emission", "center", "normal", "radius"]),
+    ("quad", &["material", "transform", "emission", "emission_texture", "corner", "edge1", "edge2"]),
+    ("box", &["material", "transform", "emission", "emission_texture", "min", "max"]),
+    ("mesh", &["material", "transform", "emission", "emission_texture", "file", "face_normals"]),
+    (
+        "torus_knot",
+        &["material", "transform", "emission", "emission_texture", "p", "q", "radius", "tube", "segments", "sides"],
+    ),
+    ("cylinder", &["material", "transform", "emission", "emission_texture", "p0", "p1", "radius"]),
+    ("disk", &["material", "transform", "emission", "emission_texture", "center", "normal", "radius"]),
     ("instance", &["group", "transform"]),
 ];
 
@@ -193,6 +196,9 @@ pub struct ObjectDesc {
     /// Radiance the object's surface emits (W/(m^2 sr)) from its outer side: it becomes an area
     /// light that also reflects with its material.
     pub emission: Option<Rgb>,
+    /// A texture (named in `[textures]`) the emission is multiplied by, read at the surface's
+    /// uv; `emission` defaults to 1 with it.
+    pub emission_texture: Option<Spanned<String>>,
     pub center: Option<Point>,
     pub radius: Option<Positive>,
     pub point: Option<Point>,
