@@ -243,7 +243,7 @@ impl<'a> Cx<'a> {
                 "an object in a group cannot emit (instanced emitters are not supported, as in Mitsuba): put it in [[objects]]",
             ));
         }
-        self.object(kind, &d, &transform, span, material, emission, geometry)
+        self.object(kind, &d, &transform, span, Surface { material, emission }, geometry)
     }
 
     /// What object `d` emits: `emission` (1 when only a texture is given) times its
@@ -293,10 +293,10 @@ impl<'a> Cx<'a> {
         d: &ObjectDesc,
         transform: &Transform,
         span: Range<usize>,
-        material: u32,
-        emission: Emission,
+        surface: Surface,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
+        let Surface { material, emission } = surface;
         match kind {
             "sphere" => {
                 let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
@@ -310,7 +310,7 @@ impl<'a> Cx<'a> {
                 if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
                     return Err(self.at(span, "sphere is degenerate after its transform"));
                 }
-                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], material, d, emission);
+                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], surface, d);
             }
             "plane" => {
                 let point = transform.point(d.point.map_or(Vec3::ZERO, |p| p.0));
@@ -326,7 +326,7 @@ impl<'a> Cx<'a> {
                 let e2 = d.edge2.map_or(Vec3::new(0.0, 0.0, -2.0), |p| p.0);
                 let q = transformed_quad(transform, corner, e1, e2)
                     .ok_or_else(|| self.at(span, "quad edges are parallel or zero: it has no area"))?;
-                add_shapes(geometry, vec![Shape::Quad(q)], material, d, emission);
+                add_shapes(geometry, vec![Shape::Quad(q)], surface, d);
             }
             "box" => {
                 let min = d.min.map_or(Vec3::splat(-1.0), |p| p.0);
@@ -340,7 +340,7 @@ impl<'a> Cx<'a> {
                         .ok_or_else(|| self.at(span.clone(), "box is degenerate after its transform"))?;
                     faces.push(Shape::Quad(q));
                 }
-                add_shapes(geometry, faces, material, d, emission);
+                add_shapes(geometry, faces, surface, d);
             }
             "cylinder" => {
                 let p0 = d.p0.map_or(Vec3::ZERO, |p| p.0);
@@ -353,14 +353,14 @@ impl<'a> Cx<'a> {
                         "a cylinder can only be translated, rotated and scaled uniformly across its axis; use a mesh for an elliptic one",
                     ));
                 }
-                add_shapes(geometry, vec![Shape::Cylinder(c)], material, d, emission);
+                add_shapes(geometry, vec![Shape::Cylinder(c)], surface, d);
             }
             "disk" => {
                 let center = d.center.map_or(Vec3::ZERO, |p| p.0);
                 let normal = d.normal.map_or(Vec3::Y, |n| n.0);
                 let disk = Disk::facing(center, normal, d.radius.map_or(1.0, |r| r.0), transform)
                     .ok_or_else(|| self.at(span, "disk is degenerate after its transform"))?;
-                add_shapes(geometry, vec![Shape::Disk(disk)], material, d, emission);
+                add_shapes(geometry, vec![Shape::Disk(disk)], surface, d);
             }
             "mesh" | "torus_knot" => {
                 let mesh = if kind == "mesh" {
@@ -440,7 +440,8 @@ impl<'a> Cx<'a> {
 
 /// Adds an object's shapes, as area lights when it emits (`emission`): an emitting object
 /// reflects with the material it names, and is a plain (black) emitter when it names none.
-fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d: &ObjectDesc, emission: Emission) {
+fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, surface: Surface, d: &ObjectDesc) {
+    let Surface { material, emission } = surface;
     let Some((radiance, texture)) = emission else {
         geometry.add_object(shapes, material);
         return;
@@ -461,3 +462,10 @@ fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, material: u32, d:
 
 /// What an object emits: radiance and an optional texture multiplying it; `None` when dark.
 type Emission = Option<(Color, Option<u32>)>;
+
+/// An object's material and what it emits.
+#[derive(Clone, Copy)]
+struct Surface {
+    material: u32,
+    emission: Emission,
+}
