@@ -112,6 +112,9 @@ pub struct Instances {
     bounds: Aabb,
     /// Instances in leaf order.
     instances: Vec<Instance>,
+    /// World bounds of each instance, in leaf order: a leaf of the top-level tree holds several
+    /// instances, and a ray that misses one's box skips moving into its space.
+    instance_boxes: Vec<Aabb>,
     groups: Vec<Bvh>,
 }
 
@@ -132,7 +135,8 @@ impl Instances {
         let mut order: Vec<u32> = build.iter().map(BuildPrim::index).collect();
         drop(build);
         permute(&mut instances, &mut order);
-        Instances { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, instances, groups }
+        let instance_boxes = instances.iter().map(|i| i.bounds_of(group_bounds[i.group as usize])).collect();
+        Instances { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, instances, instance_boxes, groups }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -164,6 +168,7 @@ impl Instances {
     /// Bytes held by the instances, the top-level tree and the groups' trees and primitives.
     pub fn memory_bytes(&self) -> usize {
         self.instances.capacity() * std::mem::size_of::<Instance>()
+            + self.instance_boxes.capacity() * std::mem::size_of::<Aabb>()
             + self.nodes.capacity() * std::mem::size_of::<WideNode>()
             + self.groups.iter().map(Bvh::memory_bytes).sum::<usize>()
     }
@@ -216,10 +221,29 @@ impl Instances {
     /// it was stopped.
     #[inline(always)]
     fn traverse(&self, ray: &Ray, closest: &mut f32, mut visit: impl FnMut(usize, &mut f32) -> bool) -> bool {
+        let inv = ray.d.recip();
         traverse::<true>(&self.nodes, self.depth, ray, closest, |first, count, closest| {
-            (first..first + count).any(|k| visit(k, closest))
+            if count == 1 {
+                return visit(first, closest);
+            }
+            (first..first + count).any(|k| enters(&self.instance_boxes[k], ray.o, inv, *closest) && visit(k, closest))
         })
     }
+}
+
+/// True when the ray (origin `o`, reciprocal direction `inv`) enters box `b` before `t_max`,
+/// with the wide nodes' robust widening of the exit distance. The near plane of each slab is
+/// picked by the sign of `inv` (so a -0 direction picks the right side), and a NaN plane
+/// distance (an origin on a plane the ray runs along) leaves that slab unconstrained: `f32::max`
+/// and `min` return the other operand.
+#[inline(always)]
+fn enters(b: &Aabb, o: Vec3, inv: Vec3, t_max: f32) -> bool {
+    let neg = inv.cmplt(Vec3::ZERO);
+    let t_near = (Vec3::select(neg, b.max, b.min) - o) * inv;
+    let t_far = (Vec3::select(neg, b.min, b.max) - o) * inv;
+    let near = 0.0f32.max(t_near.x).max(t_near.y).max(t_near.z);
+    let far = f32::INFINITY.min(t_far.x).min(t_far.y).min(t_far.z) * (1.0 + 2.0 * gamma(3));
+    near <= far && near < t_max
 }
 
 #[cfg(test)]
@@ -227,6 +251,22 @@ mod tests {
     use super::*;
     use crate::geometry::NO_LIGHT;
     use crate::shape::{RayShear, Shape, Sphere, Triangle};
+
+    #[test]
+    fn box_entry_test_keeps_rays_along_a_face_and_refuses_misses() {
+        let b = Aabb { min: Vec3::ZERO, max: Vec3::ONE };
+        let enter = |o: Vec3, d: Vec3, t_max: f32| enters(&b, o, d.recip(), t_max);
+        assert!(enter(Vec3::new(0.5, 0.5, -1.0), Vec3::Z, f32::INFINITY));
+        assert!(!enter(Vec3::new(0.5, 0.5, -1.0), Vec3::Z, 0.99), "entered beyond t_max");
+        assert!(!enter(Vec3::new(0.5, 0.5, -1.0), -Vec3::Z, f32::INFINITY), "box behind");
+        assert!(!enter(Vec3::new(1.5, 0.5, -1.0), Vec3::Z, f32::INFINITY));
+        // Along the face x = 0 (0 * inf is NaN there), with +0 and -0 directions in x.
+        assert!(enter(Vec3::new(0.0, 0.5, -1.0), Vec3::Z, f32::INFINITY));
+        assert!(enter(Vec3::new(0.0, 0.5, -1.0), Vec3::new(-0.0, 0.0, 1.0), f32::INFINITY));
+        assert!(enter(Vec3::new(1.0, 0.5, -1.0), Vec3::new(-0.0, 0.0, 1.0), f32::INFINITY));
+        // Starting inside.
+        assert!(enter(Vec3::splat(0.5), Vec3::new(0.3, -0.4, 0.8).normalize(), 1e-3));
+    }
 
     #[test]
     fn permute_in_place_matches_a_copy() {

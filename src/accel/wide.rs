@@ -16,10 +16,12 @@ use glam::Vec4;
 pub(super) const LEAF: u32 = 1 << 31;
 /// A tree of `depth` node levels needs at most `3 * depth + 1` stack entries (each level
 /// leaves at most three siblings behind, the deepest pushes four). Trees up to 21 levels use
-/// the small stack, trees up to 5 levels the tiny one (the stack is zeroed per ray: a room
-/// of a few dozen primitives should not pay for 64 entries); binary depth, and so `depth`, is at most
+/// the small stack, up to 10 the medium one and up to 5 the tiny one (the stack is zeroed per
+/// ray, and per instance a ray enters: a room of a few dozen primitives or an instanced mesh
+/// should not pay for 64 entries); binary depth, and so `depth`, is at most
 /// 32 SAH levels plus 28 median levels (`build::MEDIAN_DEPTH`, `build::MAX_PRIMS`).
 const TINY_STACK: usize = 16;
+const MEDIUM_STACK: usize = 32;
 const SMALL_STACK: usize = 64;
 const LARGE_STACK: usize = 256;
 /// pbrt-v4's widening of a box's exit distance, so rounding never drops a box the ray grazes.
@@ -105,6 +107,8 @@ pub(super) fn traverse<const ORDERED: bool>(
     }
     if 3 * (depth as usize) < TINY_STACK {
         walk::<ORDERED, TINY_STACK>(nodes, ray, t_max, leaf)
+    } else if 3 * (depth as usize) < MEDIUM_STACK {
+        walk::<ORDERED, MEDIUM_STACK>(nodes, ray, t_max, leaf)
     } else if 3 * (depth as usize) < SMALL_STACK {
         walk::<ORDERED, SMALL_STACK>(nodes, ray, t_max, leaf)
     } else {
