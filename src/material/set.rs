@@ -134,16 +134,20 @@ impl Materials {
     pub fn bsdf(&self, h: &Hit, wo: Vec3) -> Bsdf<'_> {
         let front = front_side(wo, h.ng);
         let m = h.material;
-        // The common case: a plain material.
-        if !matches!(
-            self.list[m as usize].model,
-            Model::TwoSided { .. }
-                | Model::BumpMap { .. }
-                | Model::NormalMap { .. }
-                | Model::Mask { .. }
-                | Model::Blend { .. }
-        ) {
-            let lobes = self.lobes(m, h_uv(h, &self.list[m as usize].model), front, false);
+        // The common cases: a plain untextured material (its lobes made once, no uv needed),
+        // then a plain textured one.
+        let cached = self.cached[m as usize].is_some();
+        if cached
+            || !matches!(
+                self.list[m as usize].model,
+                Model::TwoSided { .. }
+                    | Model::BumpMap { .. }
+                    | Model::NormalMap { .. }
+                    | Model::Mask { .. }
+                    | Model::Blend { .. }
+            )
+        {
+            let lobes = self.lobes(m, if cached { Vec2::ZERO } else { h.uv() }, front, false);
             return Bsdf::with_lobes(frame_for(h, &lobes), h.ng, front, lobes);
         }
         self.wrapped_bsdf(h, wo, front)
@@ -371,13 +375,6 @@ impl Materials {
             }
         }
     }
-}
-
-/// Texture coordinates of a hit, computed only for textured materials (a sphere's (u, v) costs
-/// trigonometry).
-#[inline]
-fn h_uv(h: &Hit, model: &Model) -> Vec2 {
-    if model.is_textured() { h.uv() } else { Vec2::ZERO }
 }
 
 /// The shading frame for `lobes`: isotropic lobes need only the normal (a frame from it alone

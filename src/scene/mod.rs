@@ -110,6 +110,9 @@ impl Scene {
     /// other light.
     #[inline]
     pub fn emission_texture(&self, light: &Light, e: &EmittedPhoton) -> Color {
+        if !self.any_light_texture {
+            return Color::ONE;
+        }
         match *light {
             Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(e.uv),
             _ => self.projected_texture(light, e.ray.d),
