@@ -188,6 +188,7 @@ fn emitters_match_mitsuba() {
             ("reflecting_emitter", 256),
             ("area_bitmap", 256),
             ("area_checker_sphere", 256),
+            ("area_checker_sphere_rotated", 256),
         ],
         64,
     );

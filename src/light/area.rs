@@ -2,7 +2,6 @@
 //! and triangles) or by the solid angle it subtends (spheres), with the error bounds of the
 //! sampled points so rays leaving them start off the surface.
 
-use crate::geometry::SurfaceParam;
 use crate::math::float::gamma;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::warp::{uniform_cone, uniform_sphere};
@@ -87,7 +86,7 @@ impl Emitter {
                 let n = uniform_sphere(u);
                 let local = n * s.radius;
                 let p = s.center + local;
-                let uv = SurfaceParam::Sphere { n, radius: s.radius }.uv();
+                let uv = s.param(n).uv();
                 SurfaceSample { p, p_error: gamma(5) * local.abs() + gamma(1) * p.abs(), n, uv }
             }
             Emitter::Triangle { p: [p0, p1, p2], .. } => {
@@ -145,7 +144,7 @@ impl Emitter {
                 let x = p + dir * t;
                 let n = (x - sphere.center).normalize();
                 let p_error = gamma(5) * (x - sphere.center).abs() + gamma(1) * x.abs();
-                let uv = SurfaceParam::Sphere { n, radius: sphere.radius }.uv();
+                let uv = sphere.param(n).uv();
                 Some((SurfaceSample { p: x, p_error, n, uv }, 1.0 / (2.0 * PI * (1.0 - cos_max))))
             }
         }

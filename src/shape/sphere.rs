@@ -1,19 +1,55 @@
-//! Sphere given by centre and radius.
+//! Sphere given by centre and radius, and the rotation of its (u, v) parameterisation.
 
 use super::{PrimHit, SurfacePoint};
-use crate::geometry::{Aabb, Ray, SurfaceParam};
+use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::Vec3;
 use crate::math::float::gamma;
+use glam::{Mat3, Quat};
+
+const IDENTITY: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
     pub center: Vec3,
     pub radius: f32,
+    /// From world directions to the sphere's own frame, where u runs around +z and v from the
+    /// +z pole (Mitsuba's sphere, turned by its `to_world`), as a quaternion (x, y, z, w); the
+    /// identity for most spheres. Plain floats keep the BVH's leaf shapes at 40 bytes.
+    pub to_local: [f32; 4],
 }
 
 impl Sphere {
     pub fn new(center: Vec3, radius: f32) -> Self {
-        Sphere { center, radius }
+        Sphere { center, radius, to_local: IDENTITY }
+    }
+
+    /// The sphere of `radius` about `center` in object space placed by `t` (a similarity, checked
+    /// by the caller): its texture coordinates turn with `t`'s rotation. A mirroring transform
+    /// keeps the world's orientation (`None` second value: the caller may warn).
+    pub fn transformed(t: &Transform, center: Vec3, radius: f32) -> (Self, bool) {
+        let scale = t.axis_scales().x;
+        let m = Mat3::from_mat4(t.m) * (1.0 / scale);
+        let mut s = Sphere::new(t.point(center), radius * scale);
+        let proper = m.determinant() > 0.0;
+        if proper {
+            let q = Quat::from_mat3(&m).normalize();
+            if q.is_finite() && !q.abs_diff_eq(Quat::IDENTITY, 1e-7) {
+                s.to_local = q.inverse().to_array();
+            }
+        }
+        (s, proper)
+    }
+
+    /// The (u, v) parameterisation at the point with outward unit normal `n` (world space).
+    #[inline]
+    pub fn param(&self, n: Vec3) -> SurfaceParam {
+        if self.to_local == IDENTITY {
+            return SurfaceParam::Sphere { n, radius: self.radius };
+        }
+        let to_local = Quat::from_array(self.to_local);
+        let local = SurfaceParam::Sphere { n: to_local * n, radius: self.radius };
+        let to_world = to_local.inverse();
+        SurfaceParam::Known { uv: local.uv(), dpdu: to_world * local.dpdu(), dpdv: to_world * local.dpdv() }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -61,7 +97,7 @@ impl Sphere {
         let p = self.center + local;
         let p_error = gamma(5) * local.abs() + gamma(1) * p.abs();
         let n = local / self.radius;
-        SurfacePoint { p, p_error, ng: n, ns: n, param: SurfaceParam::Sphere { n, radius: self.radius } }
+        SurfacePoint { p, p_error, ng: n, ns: n, param: self.param(n) }
     }
 }
 

@@ -103,12 +103,15 @@ impl<'a> Cx<'a> {
                 if flip {
                     self.warn(el, "flip_normals on a sphere is not supported and is ignored")?;
                 }
-                let c = to_world.point(center);
-                let r = radius * to_world.axis_scales().x;
+                let (sphere, proper) = Sphere::transformed(&to_world, center, radius);
+                let (c, r) = (sphere.center, sphere.radius);
                 if !(r > 0.0 && r.is_finite() && c.is_finite()) {
                     return Err(self.err(el, "sphere is degenerate after its to_world transform"));
                 }
-                emitters_out.push(Emitter::Sphere(Sphere::new(c, r)));
+                if !proper {
+                    self.warn(el, "a mirroring to_world on a sphere: its texture coordinates are not mirrored")?;
+                }
+                emitters_out.push(Emitter::Sphere(sphere));
             }
             "disk" => {
                 let d = Disk::from_transform(&to_world, flip)

@@ -140,9 +140,8 @@ impl<'a> Cx<'a> {
                                 self.at(span, "a spherical light can only be translated, rotated and scaled uniformly")
                             );
                         }
-                        let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
-                        let radius = d.radius.map_or(0.5, |r| r.0) * transform.axis_scales().x;
-                        Emitter::Sphere(Sphere::new(center, radius))
+                        let center = d.center.map_or(Vec3::ZERO, |p| p.0);
+                        Emitter::Sphere(Sphere::transformed(&transform, center, d.radius.map_or(0.5, |r| r.0)).0)
                     }
                     other => {
                         return Err(
@@ -299,18 +298,18 @@ impl<'a> Cx<'a> {
         let Surface { material, emission } = surface;
         match kind {
             "sphere" => {
-                let center = transform.point(d.center.map_or(Vec3::ZERO, |p| p.0));
                 if !transform.is_similarity() {
                     return Err(self.at(
                         span,
                         "a sphere can only be translated, rotated and scaled uniformly; use a mesh for an ellipsoid",
                     ));
                 }
-                let radius = d.radius.map_or(1.0, |r| r.0) * transform.axis_scales().x;
-                if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                let center = d.center.map_or(Vec3::ZERO, |p| p.0);
+                let (sphere, _) = Sphere::transformed(transform, center, d.radius.map_or(1.0, |r| r.0));
+                if !(sphere.radius > 0.0 && sphere.radius.is_finite() && sphere.center.is_finite()) {
                     return Err(self.at(span, "sphere is degenerate after its transform"));
                 }
-                add_shapes(geometry, vec![Shape::Sphere(Sphere::new(center, radius))], surface, d);
+                add_shapes(geometry, vec![Shape::Sphere(sphere)], surface, d);
             }
             "plane" => {
                 let point = transform.point(d.point.map_or(Vec3::ZERO, |p| p.0));
