@@ -174,6 +174,13 @@ impl<'a> Bsdf<'a> {
         Self::with_lobes(frame, ng, front, LobeSet::Owned(lobes))
     }
 
+    /// `new` with the material's own lobes, shared (no copy).
+    #[inline(always)]
+    pub fn shared(frame: Frame, ng: Vec3, front: bool, lobes: &'a Lobes) -> Self {
+        let (frame, ng) = if front { (frame, ng) } else { (frame.flipped(), -ng) };
+        Bsdf { frame, ng, lobes: LobeSet::Shared(lobes), opacity: 1.0, perturbed: None }
+    }
+
     /// `new` with lobes that may be shared with the material.
     #[inline]
     pub fn with_lobes(frame: Frame, ng: Vec3, front: bool, lobes: LobeSet<'a>) -> Self {

@@ -134,20 +134,28 @@ impl Materials {
     pub fn bsdf(&self, h: &Hit, wo: Vec3) -> Bsdf<'_> {
         let front = front_side(wo, h.ng);
         let m = h.material;
-        // The common cases: a plain untextured material (its lobes made once, no uv needed),
-        // then a plain textured one.
-        let cached = self.cached[m as usize].is_some();
-        if cached
-            || !matches!(
-                self.list[m as usize].model,
-                Model::TwoSided { .. }
-                    | Model::BumpMap { .. }
-                    | Model::NormalMap { .. }
-                    | Model::Mask { .. }
-                    | Model::Blend { .. }
-            )
-        {
-            let lobes = self.lobes(m, if cached { Vec2::ZERO } else { h.uv() }, front, false);
+        // The common case: a plain untextured material, whose lobes were made once. The BSDF
+        // is built around a reference to them here, field by field (moving a `LobeSet` through
+        // a function result copies all 248 bytes of its largest variant).
+        if let Some(c) = &self.cached[m as usize] {
+            let material = &self.list[m as usize];
+            let glass = material.model.is_glass();
+            if front || material.two_sided || glass {
+                let lobes = &c[usize::from(!(front || !glass))];
+                return Bsdf::shared(frame_for(h, lobes), h.ng, front, lobes);
+            }
+            return Bsdf::new(frame_for(h, &Lobes::default()), h.ng, front, Lobes::default());
+        }
+        // Then a plain textured one.
+        if !matches!(
+            self.list[m as usize].model,
+            Model::TwoSided { .. }
+                | Model::BumpMap { .. }
+                | Model::NormalMap { .. }
+                | Model::Mask { .. }
+                | Model::Blend { .. }
+        ) {
+            let lobes = self.lobes(m, h.uv(), front, false);
             return Bsdf::with_lobes(frame_for(h, &lobes), h.ng, front, lobes);
         }
         self.wrapped_bsdf(h, wo, front)
