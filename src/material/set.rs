@@ -141,7 +141,8 @@ impl Materials {
             let material = &self.list[m as usize];
             let glass = material.model.is_glass();
             if front || material.two_sided || glass {
-                let lobes = &c[usize::from(!(front || !glass))];
+                // Glass seen from inside has its index inverted (the second set).
+                let lobes = &c[usize::from(!front && glass)];
                 return Bsdf::shared(frame_for(h, lobes), h.ng, front, lobes);
             }
             return Bsdf::new(frame_for(h, &Lobes::default()), h.ng, front, Lobes::default());
