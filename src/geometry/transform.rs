@@ -37,6 +37,11 @@ impl Transform {
     /// the axis as written, not normalised (a longer axis also scales, as in Mitsuba; a unit axis
     /// gives `rotate`).
     pub fn rotate_as_written(axis: Vec3, degrees: f32) -> Self {
+        // A unit axis (nearly every scene) takes `rotate`'s rounding, so a Mitsuba scene and its
+        // native twin build the same transform bit for bit.
+        if (axis.length_squared() - 1.0).abs() < 1e-6 {
+            return Self::rotate(axis, degrees);
+        }
         let (s, c) = degrees.to_radians().sin_cos();
         let a = axis;
         let cross =
