@@ -320,16 +320,16 @@ impl Model {
         }
     }
 
-    /// True when light reflected or refracted by the model can focus into caustics: mirrors,
-    /// metals and glass, smooth or rough, and plastic's smooth coating (where caustic photons are aimed).
+    /// True when light reflected or refracted by the model can focus into caustics of the
+    /// caustic map (L S+ D paths, S a delta bounce): smooth mirrors, metals and glass, and
+    /// plastic's smooth coating, where caustic photons are aimed. Rough metal and glass are not:
+    /// a caustic photon ends at its first glossy bounce (their focused light is in the global
+    /// map), so photons aimed at them were all lost, up to the emission cap (200 times the
+    /// photons asked) in a scene whose only shiny object is rough.
     pub fn casts_caustics(&self) -> bool {
         match self {
             Model::Classic(c) => c.is_specular(),
-            Model::Conductor { .. }
-            | Model::RoughConductor { .. }
-            | Model::Dielectric { .. }
-            | Model::RoughDielectric { .. }
-            | Model::Plastic { .. } => true,
+            Model::Conductor { .. } | Model::Dielectric { .. } | Model::Plastic { .. } => true,
             _ => false,
         }
     }
