@@ -22,6 +22,7 @@
 use super::layers::LayerPath;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
+use crate::light::{Light, LightPicker};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
@@ -134,8 +135,17 @@ pub struct PhotonIntegrator {
     /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
     /// is off): filled once before rendering, then only read.
     cache: IrradianceCache,
+    /// With more area and environment lights than `LOOPED_AREA_LIGHTS` (an emitting mesh is a
+    /// light per triangle): their indices, and a picker among them by power.
+    area_lights: Vec<u32>,
+    area_picker: LightPicker,
     pub stats: PhotonStats,
 }
+
+/// Up to this many area and environment lights, direct light takes `light_samples` from each;
+/// beyond, `light_samples` times this many in all, each from a light chosen by power (a mesh of
+/// 10,000 emitting triangles would otherwise cost 10,000 shadow rays per shading point).
+const LOOPED_AREA_LIGHTS: usize = 4;
 
 /// One global photon in this many gets a precomputed irradiance record.
 const IRRADIANCE_STRIDE: usize = 4;
@@ -218,8 +228,16 @@ impl PhotonIntegrator {
             caustic: caustic_map,
             irradiance,
             cache: IrradianceCache::empty(a.max(1e-3)),
+            area_lights: Vec::new(),
+            area_picker: LightPicker::default(),
             stats,
         };
+        let area: Vec<u32> = (0..scene.lights.len() as u32).filter(|&i| !scene.lights[i as usize].is_delta()).collect();
+        if area.len() > LOOPED_AREA_LIGHTS {
+            let lights: Vec<Light> = area.iter().map(|&i| scene.lights[i as usize]).collect();
+            pm.area_picker = LightPicker::new(&lights);
+            pm.area_lights = area;
+        }
         if a > 0.0 && pm.config.gather_rays > 0 {
             let t2 = Instant::now();
             pm.cache = pm.fill_cache(scene, cancel, progress)?;
@@ -328,22 +346,38 @@ impl PhotonIntegrator {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Color {
+        let one = |light: &Light, sampler: &mut Sampler, stats: &mut RayStats| {
+            let Some(ls) = scene.sample_light(light, hit.p, sampler.rng().uniform2()) else { return Color::ZERO };
+            let f = bsdf.f(wo, ls.wi, Transport::Radiance);
+            if f == Color::ZERO {
+                return Color::ZERO;
+            }
+            stats.shadow_rays += 1;
+            let visible = scene.visibility(hit, ls.wi, ls.dist);
+            if !(visible > 0.0) {
+                return Color::ZERO;
+            }
+            f * ls.weight() * (ls.wi.dot(bsdf.normal()).abs() * visible)
+        };
+        let picked = !self.area_lights.is_empty();
         let mut sum = Color::ZERO;
         for light in &scene.lights {
+            if picked && !light.is_delta() {
+                continue;
+            }
             let n_samples = if light.is_delta() { 1 } else { self.config.light_samples.max(1) };
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
-                let Some(ls) = scene.sample_light(light, hit.p, sampler.rng().uniform2()) else { continue };
-                let f = bsdf.f(wo, ls.wi, Transport::Radiance);
-                if f == Color::ZERO {
-                    continue;
-                }
-                stats.shadow_rays += 1;
-                let visible = scene.visibility(hit, ls.wi, ls.dist);
-                if !(visible > 0.0) {
-                    continue;
-                }
-                acc += f * ls.weight() * (ls.wi.dot(bsdf.normal()).abs() * visible);
+                acc += one(light, sampler, stats);
+            }
+            sum += acc / n_samples as f32;
+        }
+        if picked {
+            let n_samples = self.config.light_samples.max(1) * LOOPED_AREA_LIGHTS as u32;
+            let mut acc = Color::ZERO;
+            for _ in 0..n_samples {
+                let Some((k, p)) = self.area_picker.pick(sampler.rng().uniform()) else { break };
+                acc += one(&scene.lights[self.area_lights[k] as usize], sampler, stats) / p;
             }
             sum += acc / n_samples as f32;
         }
