@@ -58,6 +58,22 @@ SPOT = """    <emitter type="spot">
 {texture}    </emitter>
 """
 
+def checker_sphere(transform):
+    """The stage with its sphere emitting a checkerboard radiance, placed by `transform`."""
+    return STAGE.replace("""    <shape type="sphere">
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>
+    </shape>""", """    <shape type="sphere">""" + transform + """
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area">
+            <texture type="checkerboard" name="radiance">
+                <rgb name="color0" value="1, 0.8, 0.5"/>
+                <rgb name="color1" value="0.1, 0.3, 0.9"/>
+                <transform name="to_uv"><scale x="4" y="4"/></transform>
+            </texture>
+        </emitter>
+    </shape>""").format(lights="")
+
+
 CASES = {
     "spot_ramp": ("a spot light with a wide linear fall-off (cutoff 35, beam width 8 degrees).",
                   STAGE.format(lights=SPOT.format(cutoff=35, beam=8, texture=""))),
@@ -101,34 +117,11 @@ CASES = {
     </shape>
 """)),
     "area_checker_sphere": ("the sphere itself emitting a checkerboard radiance (4 x 4 checks in uv), lighting "
-                            "the floor.",
-                            STAGE.replace("""    <shape type="sphere">
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>
-    </shape>""", """    <shape type="sphere">
-        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-        <emitter type="area">
-            <texture type="checkerboard" name="radiance">
-                <rgb name="color0" value="1, 0.8, 0.5"/>
-                <rgb name="color1" value="0.1, 0.3, 0.9"/>
-                <transform name="to_uv"><scale x="4" y="4"/></transform>
-            </texture>
-        </emitter>
-    </shape>""").format(lights="")),
+                            "the floor.", checker_sphere("")),
     "area_checker_sphere_rotated": ("the checkerboard-emitting sphere turned by its to_world (60 degrees about x, "
                                     "then 25 about z): its texture coordinates turn with it.",
-                                    STAGE.replace("""    <shape type="sphere">
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.55, 0.5"/></bsdf>
-    </shape>""", """    <shape type="sphere">
-        <transform name="to_world"><rotate x="1" angle="60"/><rotate z="1" angle="25"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-        <emitter type="area">
-            <texture type="checkerboard" name="radiance">
-                <rgb name="color0" value="1, 0.8, 0.5"/>
-                <rgb name="color1" value="0.1, 0.3, 0.9"/>
-                <transform name="to_uv"><scale x="4" y="4"/></transform>
-            </texture>
-        </emitter>
-    </shape>""").format(lights="")),
+                                    checker_sphere("""
+        <transform name="to_world"><rotate x="1" angle="60"/><rotate z="1" angle="25"/></transform>""")),
 }
 
 

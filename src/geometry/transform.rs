@@ -126,12 +126,21 @@ mod tests {
     }
 
     /// Mitsuba 3 (scalar_rgb, 3.x) prints these matrices for `ScalarTransform4f().rotate(axis,
-    /// angle)`: a unit axis gives the rotation, a longer one is used as written.
+    /// angle)`: the axis is used as written.
     #[test]
     fn rotate_as_written_matches_mitsuba() {
-        let unit = Transform::rotate_as_written(Vec3::new(0.6, 0.0, 0.8), 37.0);
-        let r = Transform::rotate(Vec3::new(0.6, 0.0, 0.8), 37.0);
-        assert!(unit.m.abs_diff_eq(r.m, 1e-6));
+        // A general axis of length 1.42 (rows as Mitsuba prints them).
+        let t = Transform::rotate_as_written(Vec3::new(0.3, -1.2, 0.7), 37.0);
+        let rows = [
+            [0.8167583, -0.4937617, -0.6798914],
+            [0.3487793, 1.0886004, -0.3496907],
+            [0.7644646, 0.0113983, 0.8973041],
+        ];
+        for (i, row) in rows.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                assert!((t.m.col(j)[i] - v).abs() < 1e-6, "({i}, {j}): {} vs {v}", t.m.col(j)[i]);
+            }
+        }
         let t = Transform::rotate_as_written(Vec3::new(2.0, 0.0, 0.0), 90.0);
         let want = Mat4::from_cols_array_2d(&[
             [4.0, 0.0, 0.0, 0.0],

@@ -116,17 +116,21 @@ impl Materials {
     /// decided the side already).
     #[inline]
     fn lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool) -> LobeSet<'_> {
-        let material = &self.list[m as usize];
-        let visible = front || as_front || material.two_sided || material.model.is_glass();
-        if !visible {
-            return LobeSet::Owned(Lobes::default());
-        }
-        // Glass inverts its index seen from inside; everything else looks the same both sides.
-        let outward = front || !material.model.is_glass();
+        let Some(outward) = self.outward(m, front, as_front) else { return LobeSet::Owned(Lobes::default()) };
         if let Some(c) = &self.cached[m as usize] {
             return LobeSet::Shared(&c[usize::from(!outward)]);
         }
-        LobeSet::Owned(material.model.lobes(outward, uv, &self.textures))
+        LobeSet::Owned(self.list[m as usize].model.lobes(outward, uv, &self.textures))
+    }
+
+    /// Which lobes plain material `m` shows on side `front` (`as_front` as in `lobes`): its
+    /// outward ones (`true`), its inward ones (glass seen from inside, whose index is
+    /// inverted), or none (`None`: the back of a one-sided material).
+    #[inline]
+    fn outward(&self, m: u32, front: bool, as_front: bool) -> Option<bool> {
+        let material = &self.list[m as usize];
+        let glass = material.model.is_glass();
+        (front || as_front || material.two_sided || glass).then_some(front || !glass)
     }
 
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
@@ -138,14 +142,11 @@ impl Materials {
         // is built around a reference to them here, field by field (moving a `LobeSet` through
         // a function result copies all 248 bytes of its largest variant).
         if let Some(c) = &self.cached[m as usize] {
-            let material = &self.list[m as usize];
-            let glass = material.model.is_glass();
-            if front || material.two_sided || glass {
-                // Glass seen from inside has its index inverted (the second set).
-                let lobes = &c[usize::from(!front && glass)];
-                return Bsdf::shared(frame_for(h, lobes), h.ng, front, lobes);
-            }
-            return Bsdf::new(frame_for(h, &Lobes::default()), h.ng, front, Lobes::default());
+            let Some(outward) = self.outward(m, front, false) else {
+                return Bsdf::new(frame_for(h, &Lobes::default()), h.ng, front, Lobes::default());
+            };
+            let lobes = &c[usize::from(!outward)];
+            return Bsdf::shared(frame_for(h, lobes), h.ng, front, lobes);
         }
         // Then a plain textured one.
         if !matches!(

@@ -84,12 +84,7 @@ impl Scene {
     #[inline(always)]
     pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
         let mut s = light.sample(p, u)?;
-        if self.any_light_texture {
-            s.radiance *= match *light {
-                Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(s.uv),
-                _ => self.projected_texture(light, -s.wi),
-            };
-        }
+        s.radiance *= self.light_texture(light, s.uv, -s.wi);
         Some(s)
     }
 
@@ -110,12 +105,20 @@ impl Scene {
     /// other light.
     #[inline]
     pub fn emission_texture(&self, light: &Light, e: &EmittedPhoton) -> Color {
+        self.light_texture(light, e.uv, e.ray.d)
+    }
+
+    /// The texture factor of light leaving `light` in direction `d` from the point with texture
+    /// coordinates `uv` (on an area light): an area light's radiance texture at `uv`, the texture
+    /// a spot or projector casts along `d`, 1 otherwise.
+    #[inline(always)]
+    fn light_texture(&self, light: &Light, uv: crate::math::Vec2, d: Vec3) -> Color {
         if !self.any_light_texture {
             return Color::ONE;
         }
         match *light {
-            Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(e.uv),
-            _ => self.projected_texture(light, e.ray.d),
+            Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(uv),
+            _ => self.projected_texture(light, d),
         }
     }
 
