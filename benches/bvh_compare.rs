@@ -200,7 +200,7 @@ fn build_cwbvh(otris: &[obvhs::triangle::Triangle], p: BvhBuildParams) -> (CwBvh
 static DATA: LazyLock<Data> = LazyLock::new(|| {
     let prims = knot_prims(1600);
     let otris = obvhs_tris(&prims);
-    let ours = Bvh::build(prims.clone());
+    let ours = Bvh::build(prims.clone(), &[]);
     let old = binary::Bvh::build(prims.clone());
     let bvh2 = TRACED.iter().map(|p| build_bvh2(&otris, preset(p))).collect();
     let cwbvh = TRACED.iter().map(|p| build_cwbvh(&otris, preset(p))).collect();
@@ -327,7 +327,7 @@ fn check_occlusion(d: &Data) {
 #[divan::bench(sample_count = 10)]
 fn build_ours(bencher: divan::Bencher) {
     let prims = knot_prims(1600);
-    bencher.with_inputs(|| prims.clone()).bench_local_values(Bvh::build);
+    bencher.with_inputs(|| prims.clone()).bench_local_values(|p| Bvh::build(p, &[]));
 }
 
 #[divan::bench(sample_count = 10)]
@@ -339,7 +339,10 @@ fn build_old(bencher: divan::Bencher) {
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn build_ours_5m(bencher: divan::Bencher) {
     let prims = knot_prims(80_000);
-    bencher.counter(ItemsCount::new(prims.len())).with_inputs(|| prims.clone()).bench_local_values(Bvh::build);
+    bencher
+        .counter(ItemsCount::new(prims.len()))
+        .with_inputs(|| prims.clone())
+        .bench_local_values(|p| Bvh::build(p, &[]));
 }
 
 #[divan::bench(sample_count = 3, sample_size = 1)]

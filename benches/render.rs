@@ -18,7 +18,7 @@ fn bvh_build_100k_triangles(bencher: divan::Bencher) {
         .into_iter()
         .map(|t| Primitive { shape: Shape::Triangle(t), material: 0, light: caustic::geometry::NO_LIGHT })
         .collect();
-    bencher.bench(|| Bvh::build(divan::black_box(prims.clone())));
+    bencher.bench(|| Bvh::build(divan::black_box(prims.clone()), &[]));
 }
 
 #[divan::bench(sample_count = 10)]

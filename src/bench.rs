@@ -230,7 +230,7 @@ pub fn run_all(repeats: u32) {
         .map(|_| {
             let p = prims.clone();
             let t = Instant::now();
-            let bvh = Bvh::build(p);
+            let bvh = Bvh::build(p, &[]);
             (t.elapsed(), bvh.node_bytes())
         })
         .min_by_key(|r| r.0)

@@ -33,8 +33,8 @@ fn random_scene(rng: &mut Rng32) -> Vec<Primitive> {
 fn bvh_matches_brute_force_on_10000_rays() {
     let mut rng = Rng32::new(2024);
     let prims = random_scene(&mut rng);
-    let bvh = Bvh::build(prims.clone());
-    assert_eq!(bvh.prims.len(), prims.len());
+    let bvh = Bvh::build(prims.clone(), &[]);
+    assert_eq!(bvh.len(), prims.len());
     let mut hits = 0;
     for _ in 0..10_000 {
         let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 30.0 - 15.0;
@@ -46,7 +46,7 @@ fn bvh_matches_brute_force_on_10000_rays() {
                 best = Some((h.t, p.material));
             }
         }
-        let got = bvh.intersect(&ray, f32::INFINITY).map(|(i, h)| (h.t, bvh.prims[i as usize].material));
+        let got = bvh.intersect(&ray, f32::INFINITY).map(|(i, h)| (h.t, bvh.material_light(i).0));
         assert_eq!(got, best, "ray {ray:?}");
         assert_eq!(bvh.occluded(&ray, f32::INFINITY), best.is_some());
         if let Some((t, _)) = best {
@@ -62,13 +62,13 @@ fn bvh_matches_brute_force_on_10000_rays() {
 #[test]
 fn degenerate_inputs_build() {
     // Empty, one primitive, and many primitives with the same centroid.
-    assert!(Bvh::build(vec![]).intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
+    assert!(Bvh::build(vec![], &[]).intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
     let s = Primitive {
         shape: Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 1.0)),
         material: 0,
         light: caustic::geometry::NO_LIGHT,
     };
-    let one = Bvh::build(vec![s]);
+    let one = Bvh::build(vec![s], &[]);
     assert!((one.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).unwrap().1.t - 2.0).abs() < 1e-6);
     let same: Vec<Primitive> = (0..1000)
         .map(|i| Primitive {
@@ -77,9 +77,9 @@ fn degenerate_inputs_build() {
             light: caustic::geometry::NO_LIGHT,
         })
         .collect();
-    let bvh = Bvh::build(same);
+    let bvh = Bvh::build(same, &[]);
     let (i, h) = bvh.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).unwrap();
-    assert_eq!(bvh.prims[i as usize].material, 999);
+    assert_eq!(bvh.material_light(i).0, 999);
     assert!((h.t - (3.0 - 1.999)).abs() < 1e-5);
 }
 
@@ -89,7 +89,7 @@ fn degenerate_inputs_build() {
 fn large_mesh_matches_brute_force() {
     let prims = caustic::bench::knot_primitives(2400);
     assert!(prims.len() > 150_000);
-    let bvh = Bvh::build(prims.clone());
+    let bvh = Bvh::build(prims.clone(), &[]);
     let b = bvh.bounds();
     let rays = caustic::bench::incoherent_rays(b, 300);
     let mut hits = 0;
@@ -105,7 +105,10 @@ fn large_mesh_matches_brute_force() {
         assert_eq!(got.map_or(f32::INFINITY, |(_, h)| h.t), best, "ray {ray:?}");
         if let Some((i, h)) = got {
             // The index names the primitive that was hit.
-            assert_eq!(bvh.prims[i as usize].shape.intersect(ray, &shear, f32::INFINITY).map(|g| g.t), Some(h.t));
+            assert_eq!(
+                bvh.prims().get(i as usize, &[]).shape.intersect(ray, &shear, f32::INFINITY).map(|g| g.t),
+                Some(h.t)
+            );
             hits += 1;
         }
         assert_eq!(bvh.occluded(ray, f32::INFINITY), best.is_finite());
@@ -127,7 +130,7 @@ fn axis_aligned_rays_on_shared_faces() {
             }
         }
     }
-    let bvh = Bvh::build(prims.clone());
+    let bvh = Bvh::build(prims.clone(), &[]);
     let mut hits = 0;
     for k in 0..2000u32 {
         let axis = (k % 3) as usize;
@@ -174,12 +177,12 @@ fn nan_primitive_does_not_hide_the_others() {
             light: caustic::geometry::NO_LIGHT,
         },
     );
-    let bvh = Bvh::build(prims);
+    let bvh = Bvh::build(prims, &[]);
     assert!(bvh.bounds().min.is_finite() && bvh.bounds().max.is_finite());
     for i in 0..200 {
         let ray = Ray::new(Vec3::new(i as f32 * 3.0, 0.0, 5.0), -Vec3::Z);
         let (k, h) = bvh.intersect(&ray, f32::INFINITY).expect("every sphere is hit");
-        assert_eq!(bvh.prims[k as usize].material, i);
+        assert_eq!(bvh.material_light(k).0, i);
         assert!((h.t - 4.0).abs() < 1e-4);
     }
 }

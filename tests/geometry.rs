@@ -433,7 +433,7 @@ fn a_million_instances_cost_the_transforms_not_the_mesh() {
         let h = scene.intersect(&Ray::new(Vec3::new(-10.0, 0.0, z), Vec3::X), f32::INFINITY).unwrap();
         assert!(h.p.x < 2.0 && (h.p.z - z).abs() < 1.5, "{} for row {k}", h.p);
     }
-    assert!(scene.bvh.prims.is_empty() && info.triangles == 10_000);
+    assert!(scene.bvh.is_empty() && info.triangles == 10_000);
 }
 
 /// `n` x `n` instances of a 10,000-triangle knot on a grid, each turned differently.
@@ -505,12 +505,12 @@ mod spawned {
         let (sp, trace): (_, Trace) = match instance {
             None => {
                 let Some(h) = shape.intersect(&ray, &RayShear::new(&ray), f32::INFINITY) else { return Ok(0) };
-                let bvh = caustic::accel::Bvh::build(prims);
+                let bvh = caustic::accel::Bvh::build(prims, &[]);
                 (shape.surface(&ray, &h, &[]), Box::new(move |r: &Ray| bvh.intersect(r, f32::INFINITY).map(|h| h.1.t)))
             }
             Some(t) => {
                 let Some(inst) = Instance::new(0, t) else { return Ok(0) };
-                let all = Instances::build(vec![prims], vec![inst]);
+                let all = Instances::build(vec![prims.into()], vec![inst], &[]);
                 let Some(h) = all.intersect(&ray, f32::INFINITY) else { return Ok(0) };
                 let sp = all.surface(&h, &[]).1;
                 (sp, Box::new(move |r: &Ray| all.intersect(r, f32::INFINITY).map(|h| h.t)))

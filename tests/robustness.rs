@@ -985,7 +985,7 @@ fn check_no_self_hit(
     let n = sp.ng;
     prop_assert!(sp.p.is_finite() && sp.p_error.is_finite() && n.is_finite(), "bad surface point {sp:?}");
     // A single-primitive BVH, as the scene traverses it (compact shapes, box tests).
-    let bvh = Bvh::build(vec![Primitive { shape, material: 0, light: caustic::geometry::NO_LIGHT }]);
+    let bvh = Bvh::build(vec![Primitive { shape, material: 0, light: caustic::geometry::NO_LIGHT }], &[]);
 
     let tangent = n.any_orthonormal_vector();
     let mut ws: Vec<Vec3> = dirs.iter().map(|&(u, v)| unit_from(u, v)).collect();

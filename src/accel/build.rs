@@ -354,13 +354,52 @@ fn traversal_cost(n: usize) -> f32 {
 /// Up to this many primitives a tree is built with the small scenes' traversal cost.
 const SMALL_SCENE: usize = 256;
 
-/// A built tree: node 0 is the root.
+/// A built tree: node 0 is the root. Its nodes are still in the pieces the threads built
+/// (`nodes` joins them), so that the build records can be freed before the nodes are copied
+/// together: copying them at each parallel level during the build held the nodes twice beside
+/// the records, the peak of loading a big mesh.
 pub(super) struct Tree {
-    pub(super) nodes: Vec<WideNode>,
+    chunk: Chunk,
     /// Number of node levels.
     pub(super) depth: u32,
     /// The exact bounds of all primitives.
     pub(super) bounds: Aabb,
+}
+
+impl Tree {
+    /// The nodes in one array, each piece after the one that refers to it (depth first).
+    pub(super) fn nodes(self) -> Vec<WideNode> {
+        let mut out = Vec::with_capacity(self.chunk.total());
+        self.chunk.flatten(&mut out);
+        out
+    }
+}
+
+/// Nodes one thread built: their references to each other are indices into `nodes`; the
+/// subtrees other threads built hang off child slots and are placed after them.
+#[derive(Default)]
+struct Chunk {
+    nodes: Vec<WideNode>,
+    /// (node in `nodes`, child slot, the subtree there).
+    subtrees: Vec<(usize, usize, Chunk)>,
+}
+
+impl Chunk {
+    fn total(&self) -> usize {
+        self.nodes.len() + self.subtrees.iter().map(|(_, _, c)| c.total()).sum::<usize>()
+    }
+
+    fn flatten(self, out: &mut Vec<WideNode>) {
+        let base = out.len() as u32;
+        out.extend(self.nodes.into_iter().map(|mut c| {
+            c.child.iter_mut().filter(|c| **c & LEAF == 0 && **c != WideNode::NONE).for_each(|c| *c += base);
+            c
+        }));
+        for (node, slot, sub) in self.subtrees {
+            out[base as usize + node].child[slot] = out.len() as u32;
+            sub.flatten(out);
+        }
+    }
 }
 
 /// The wide tree over `prims`, which are reordered into leaf order (each leaf's offset
@@ -368,23 +407,20 @@ pub(super) struct Tree {
 pub(super) fn build_wide(prims: &mut [BuildPrim]) -> Tree {
     assert!(prims.len() < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} primitives");
     if prims.is_empty() {
-        return Tree { nodes: Vec::new(), depth: 0, bounds: Aabb::EMPTY };
+        return Tree { chunk: Chunk::default(), depth: 0, bounds: Aabb::EMPTY };
     }
     let b = Bounds::of(prims);
     let trav = traversal_cost(prims.len());
     let root = Item { start: 0, len: prims.len(), b, depth: 0, split: plan(prims, &b, 0, trav), trav };
-    // About one node per eight primitives; untouched capacity costs no memory.
-    let mut nodes = Vec::with_capacity(prims.len() / 6 + 1);
-    let depth = node(prims, 0, root, &mut nodes, (prims.len() / 16).max(PAR_TREE));
-    nodes.shrink_to_fit();
-    Tree { nodes, depth, bounds: Aabb { min: b.lo.truncate(), max: b.hi.truncate() } }
+    let mut chunk = Chunk::default();
+    let depth = node(prims, 0, root, &mut chunk, (prims.len() / 16).max(PAR_TREE));
+    Tree { chunk, depth, bounds: Aabb { min: b.lo.truncate(), max: b.hi.truncate() } }
 }
 
 /// Appends the wide node for `item` (covering all of `prims`, whose first element is at
 /// `offset` in the full array) and its subtree to `out`; returns the subtree's node levels.
-/// Children larger than `par` are built as separate tasks (each then copied into `out`, so
-/// only the top levels, which make enough tasks for the threads, do that).
-fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNode>, par: usize) -> u32 {
+/// Children larger than `par` are built as separate tasks, each into a chunk of its own.
+fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Chunk, par: usize) -> u32 {
     let mut items = [item; 4];
     let mut count = 1;
     items[0].start = 0;
@@ -412,8 +448,8 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
     let items = &mut items[..count];
     items.sort_unstable_by_key(|it| it.start);
 
-    let at = out.len();
-    out.push(WideNode::new(&[], [WideNode::NONE; 4]));
+    let at = out.nodes.len();
+    out.nodes.push(WideNode::new(&[], [WideNode::NONE; 4]));
     let mut child = [WideNode::NONE; 4];
     for (k, it) in items.iter().enumerate() {
         if it.split.is_none() {
@@ -434,31 +470,27 @@ fn node(prims: &mut [BuildPrim], offset: usize, item: Item, out: &mut Vec<WideNo
         }
     }
     if interior >= 2 && big >= 1 {
-        let subtrees: Vec<(usize, Vec<WideNode>, u32)> = parts
+        let subtrees: Vec<(usize, Chunk, u32)> = parts
             .into_par_iter()
             .map(|(k, s, it)| {
-                let mut v = Vec::with_capacity(it.len / 6 + 1);
-                let d = node(s, offset + it.start, Item { start: 0, ..it }, &mut v, par);
-                (k, v, d)
+                // About one node per eight primitives; untouched capacity costs no memory.
+                let mut c = Chunk { nodes: Vec::with_capacity(it.len / 6 + 1), subtrees: Vec::new() };
+                let d = node(s, offset + it.start, Item { start: 0, ..it }, &mut c, par);
+                (k, c, d)
             })
             .collect();
-        for (k, v, d) in subtrees {
+        for (k, c, d) in subtrees {
             depth = depth.max(d);
-            let base = out.len() as u32;
-            child[k] = base;
-            out.extend(v.into_iter().map(|mut c| {
-                c.child.iter_mut().filter(|c| **c & LEAF == 0 && **c != WideNode::NONE).for_each(|c| *c += base);
-                c
-            }));
+            out.subtrees.push((at, k, c));
         }
     } else {
         for (k, s, it) in parts {
-            child[k] = out.len() as u32;
+            child[k] = out.nodes.len() as u32;
             depth = depth.max(node(s, offset + it.start, Item { start: 0, ..it }, out, par));
         }
     }
     let boxes: Vec<(Vec4, Vec4)> = items.iter().map(|it| (it.b.lo, it.b.hi)).collect();
-    out[at] = WideNode::new(&boxes, child);
+    out.nodes[at] = WideNode::new(&boxes, child);
     depth + 1
 }
 

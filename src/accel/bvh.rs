@@ -1,12 +1,12 @@
 //! Bounding volume hierarchy over all bounded primitives: a 4-wide tree (built by `build`,
-//! nodes and traversal in `wide`). The intersection data of the primitives is copied into leaf
-//! order so each leaf is a contiguous run of at most `build::MAX_LEAF` compact shapes; the
-//! primitives themselves stay in the order given.
+//! nodes and traversal in `wide`). The primitives are reordered into leaf order and their
+//! intersection data copied beside them, so each leaf is a contiguous run of at most
+//! `build::MAX_LEAF` compact shapes and a hit's index names its primitive directly.
 
 use super::build::{BuildPrim, build_wide};
 use super::wide::{WideNode, traverse};
 use crate::geometry::{Aabb, Ray};
-use crate::shape::{CompactShape, PrimHit, Primitive, RayShear};
+use crate::shape::{CompactShape, PrimHit, Primitives, RayShear, SurfacePoint, TriangleMesh};
 use rayon::prelude::*;
 
 /// Up to this many primitives every ray tests them all in leaf order: no box test beats a
@@ -20,21 +20,54 @@ pub struct Bvh {
     bounds: Aabb,
     /// Intersection data in leaf order (hot).
     shapes: Vec<CompactShape>,
-    /// Index in `prims` of each leaf shape.
-    order: Vec<u32>,
-    /// The primitives in the order given, read once per closest hit.
-    pub prims: Vec<Primitive>,
+    /// The primitives in leaf order, read once per closest hit.
+    prims: Primitives,
 }
 
 impl Bvh {
-    pub fn build(prims: Vec<Primitive>) -> Self {
+    /// The tree over `prims`, whose mesh triangles index `meshes` (the scene's meshes, which
+    /// every later call that takes them must be given).
+    pub fn build(prims: impl Into<Primitives>, meshes: &[TriangleMesh]) -> Self {
+        let mut prims = prims.into();
+        prims.shrink_to_fit();
+        let n = prims.len();
         let mut build: Vec<BuildPrim> =
-            prims.par_iter().enumerate().map(|(i, p)| BuildPrim::new(p.shape.bounds(), i)).collect();
+            (0..n).into_par_iter().map(|i| BuildPrim::new(prims.bounds(i, meshes), i)).collect();
         let tree = build_wide(&mut build);
         let order: Vec<u32> = build.par_iter().map(BuildPrim::index).collect();
+        // The build records go before the nodes are joined, the primitives reordered and the
+        // leaves made: at the peak a mesh triangle holds only its primitive, leaf and node share.
         drop(build);
-        let shapes = order.par_iter().map(|&i| prims[i as usize].shape.compact()).collect();
-        Bvh { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, shapes, order, prims }
+        let (depth, bounds, nodes) = (tree.depth, tree.bounds, tree.nodes());
+        prims.reorder(&order);
+        drop(order);
+        let shapes = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
+        Bvh { nodes, depth, bounds, shapes, prims }
+    }
+
+    /// The primitives, in the order hits name them.
+    pub fn prims(&self) -> &Primitives {
+        &self.prims
+    }
+
+    pub fn len(&self) -> usize {
+        self.prims.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+
+    /// Material and light of the primitive a hit names.
+    #[inline]
+    pub fn material_light(&self, i: u32) -> (u32, u32) {
+        self.prims.material_light(i as usize)
+    }
+
+    /// Surface data at a hit `intersect` returned.
+    #[inline]
+    pub fn surface(&self, i: u32, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
+        self.prims.surface(i as usize, ray, h, meshes)
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -47,10 +80,7 @@ impl Bvh {
 
     /// Bytes held by the tree, its leaf shapes and its primitives.
     pub fn memory_bytes(&self) -> usize {
-        self.node_bytes()
-            + self.shapes.capacity() * std::mem::size_of::<CompactShape>()
-            + self.order.capacity() * std::mem::size_of::<u32>()
-            + self.prims.capacity() * std::mem::size_of::<Primitive>()
+        self.node_bytes() + self.shapes.capacity() * std::mem::size_of::<CompactShape>() + self.prims.memory_bytes()
     }
 
     /// Bytes held by the tree's nodes alone.
@@ -58,7 +88,7 @@ impl Bvh {
         self.nodes.capacity() * std::mem::size_of::<WideNode>()
     }
 
-    /// Closest hit in (0, t_max): the primitive index (into `prims`) and its hit.
+    /// Closest hit in (0, t_max): the primitive's index (into `prims()`) and its hit.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
         let shear = RayShear::new(ray);
@@ -78,7 +108,7 @@ impl Bvh {
         } else {
             traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
         }
-        best.map(|(i, h)| (self.order[i], h))
+        best.map(|(i, h)| (i as u32, h))
     }
 
     /// True when anything is hit in (0, t_max). Stops at the first hit found.

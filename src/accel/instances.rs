@@ -14,7 +14,7 @@ use super::wide::{WideNode, traverse};
 use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::Vec3;
 use crate::math::float::gamma;
-use crate::shape::{PrimHit, Primitive, SurfacePoint};
+use crate::shape::{PrimHit, Primitives, SurfacePoint, TriangleMesh};
 use glam::Affine3;
 
 /// A group placed in the scene.
@@ -121,8 +121,9 @@ pub struct Instances {
 impl Instances {
     /// Builds each group's BVH once and the tree over the instances; instances of empty groups
     /// are dropped.
-    pub fn build(groups: Vec<Vec<Primitive>>, mut instances: Vec<Instance>) -> Self {
-        let groups: Vec<Bvh> = groups.into_iter().map(Bvh::build).collect();
+    /// `meshes` are the scene's meshes, which the groups' mesh triangles index.
+    pub fn build(groups: Vec<Primitives>, mut instances: Vec<Instance>, meshes: &[TriangleMesh]) -> Self {
+        let groups: Vec<Bvh> = groups.into_iter().map(|g| Bvh::build(g, meshes)).collect();
         let group_bounds: Vec<Aabb> = groups.iter().map(Bvh::bounds).collect();
         instances.retain(|i| !group_bounds[i.group as usize].is_empty());
         instances.shrink_to_fit();
@@ -136,7 +137,7 @@ impl Instances {
         drop(build);
         permute(&mut instances, &mut order);
         let instance_boxes = instances.iter().map(|i| i.bounds_of(group_bounds[i.group as usize])).collect();
-        Instances { nodes: tree.nodes, depth: tree.depth, bounds: tree.bounds, instances, instance_boxes, groups }
+        Instances { depth: tree.depth, bounds: tree.bounds, nodes: tree.nodes(), instances, instance_boxes, groups }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -173,14 +174,14 @@ impl Instances {
             + self.groups.iter().map(Bvh::memory_bytes).sum::<usize>()
     }
 
-    /// The primitive of a hit and its surface point in world space; `meshes` supplies vertex
-    /// normals and uv.
+    /// The material and light of a hit's primitive, and its surface point in world space;
+    /// `meshes` are the scene's meshes.
     #[inline]
-    pub fn surface(&self, h: &InstanceHit, meshes: &[crate::shape::TriangleMesh]) -> (&Primitive, SurfacePoint) {
+    pub fn surface(&self, h: &InstanceHit, meshes: &[TriangleMesh]) -> ((u32, u32), SurfacePoint) {
         let inst = &self.instances[h.instance as usize];
-        let prim = &self.groups[inst.group as usize].prims[h.prim as usize];
-        let sp = prim.shape.surface(&h.ray, &h.hit, meshes);
-        (prim, inst.surface_to_world(&sp))
+        let group = &self.groups[inst.group as usize];
+        let sp = group.surface(h.prim, &h.ray, &h.hit, meshes);
+        (group.material_light(h.prim), inst.surface_to_world(&sp))
     }
 
     /// Closest hit in (0, t_max) on any instance.
@@ -250,7 +251,7 @@ fn enters(b: &Aabb, o: Vec3, inv: Vec3, t_max: f32) -> bool {
 mod tests {
     use super::*;
     use crate::geometry::NO_LIGHT;
-    use crate::shape::{RayShear, Shape, Sphere, Triangle};
+    use crate::shape::{Primitive, RayShear, Shape, Sphere, Triangle};
 
     #[test]
     fn box_entry_test_keeps_rays_along_a_face_and_refuses_misses() {
@@ -291,8 +292,9 @@ mod tests {
             .then(Transform::rotate(Vec3::new(1.0, 2.0, 0.5), 37.0))
             .then(Transform::translate(Vec3::new(0.3, -0.2, -5.0)));
         let inst = Instances::build(
-            vec![vec![prim(Shape::Triangle(tri)), prim(Shape::Sphere(sphere))]],
+            vec![vec![prim(Shape::Triangle(tri)), prim(Shape::Sphere(sphere))].into()],
             vec![Instance::new(0, &t).unwrap()],
+            &[],
         );
         let placed = Triangle::new(t.point(tri.p[0]), t.point(tri.p[1]), t.point(tri.p[2]));
         let mut hits = 0;
@@ -302,7 +304,8 @@ mod tests {
             let expect = placed.intersect(&ray, &RayShear::new(&ray), f32::INFINITY);
             let got = inst.intersect(&ray, f32::INFINITY);
             if let (Some(e), Some(g)) = (expect, got)
-                && let (Primitive { shape: Shape::Triangle(_), .. }, sp) = inst.surface(&g, &[])
+                && matches!(inst.groups[0].prims().get(g.prim as usize, &[]).shape, Shape::Triangle(_))
+                && let (_, sp) = inst.surface(&g, &[])
             {
                 hits += 1;
                 assert!((e.t - g.t).abs() < 1e-4 * e.t, "{} vs {}", e.t, g.t);
@@ -328,7 +331,8 @@ mod tests {
             3.0, 0.7, 0.1, 0.0, -0.4, 2.0, 0.3, 0.0, 0.2, 0.5, 4.0, 0.0, 1.0e4, -3.0e3, 2.0e4, 1.0,
         ]);
         let t = Transform::from_mat4(m);
-        let inst = Instances::build(vec![vec![prim(Shape::Triangle(tri))]], vec![Instance::new(0, &t).unwrap()]);
+        let inst =
+            Instances::build(vec![vec![prim(Shape::Triangle(tri))].into()], vec![Instance::new(0, &t).unwrap()], &[]);
         let target = t.point(Vec3::ZERO);
         let mut tested = 0;
         for i in 0..500 {

@@ -13,7 +13,7 @@ use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{EmissionTexture, Emitter, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials};
 use crate::math::{Color, Vec3};
-use crate::shape::{Plane, Primitive, Shape, Triangle, TriangleMesh};
+use crate::shape::{Plane, Primitive, Primitives, Shape, Triangle, TriangleMesh};
 use crate::texture::Texture;
 use std::time::Instant;
 
@@ -23,14 +23,14 @@ pub struct SceneBuilder {
     materials: Vec<Material>,
     material_names: Vec<String>,
     textures: Vec<Texture>,
-    prims: Vec<Primitive>,
+    prims: Primitives,
     planes: Vec<(Plane, u32)>,
     meshes: Vec<TriangleMesh>,
     lights: Vec<Light>,
     /// The environment (map or constant), added after all other lights by `finish`.
     environment: Option<Environment>,
     /// Primitives of area lights, placed after all other primitives by `finish`.
-    area_prims: Vec<Primitive>,
+    area_prims: Primitives,
     /// Bounding spheres of mirror and glass objects: where caustic photons are aimed.
     specular_targets: Vec<(Vec3, f32)>,
     triangles: usize,
@@ -39,7 +39,7 @@ pub struct SceneBuilder {
     files: Vec<std::path::PathBuf>,
     mesh_info: Vec<MeshInfo>,
     /// Primitives of each group of instanced geometry, in the group's own space.
-    groups: Vec<Vec<Primitive>>,
+    groups: Vec<Primitives>,
     /// Whether each group holds a mirror, metal or glass object.
     group_specular: Vec<bool>,
     /// The group objects and meshes go to (between `begin_group` and `end_group`).
@@ -98,7 +98,7 @@ impl SceneBuilder {
         if self.open_group.is_some() {
             return Err("groups of instanced shapes cannot be nested".into());
         }
-        self.groups.push(Vec::new());
+        self.groups.push(Primitives::new());
         self.group_specular.push(false);
         self.open_group = Some(self.groups.len() - 1);
         Ok((self.groups.len() - 1) as u32)
@@ -115,7 +115,7 @@ impl SceneBuilder {
 
     /// Number of primitives in group `group`.
     pub fn group_len(&self, group: u32) -> usize {
-        self.groups.get(group as usize).map_or(0, Vec::len)
+        self.groups.get(group as usize).map_or(0, Primitives::len)
     }
 
     /// Places group `group` in the scene, moved by `t`.
@@ -129,7 +129,7 @@ impl SceneBuilder {
     }
 
     /// Where objects go now: the open group or the scene.
-    fn target(&mut self) -> &mut Vec<Primitive> {
+    fn target(&mut self) -> &mut Primitives {
         match self.open_group {
             Some(g) => &mut self.groups[g],
             None => &mut self.prims,
@@ -139,29 +139,29 @@ impl SceneBuilder {
     /// Adds one object made of `shapes` (a sphere, a quad, the six faces of a box).
     pub fn add_object(&mut self, shapes: impl IntoIterator<Item = Shape>, material: u32) {
         let first = self.target().len();
-        self.target().extend(shapes.into_iter().map(|shape| Primitive { shape, material, light: NO_LIGHT }));
+        for shape in shapes {
+            self.target().push(Primitive { shape, material, light: NO_LIGHT });
+        }
         self.note_specular(first, material);
     }
 
     /// Adds a triangle mesh (zero-area triangles are skipped and counted); `name` says where it
-    /// came from, for the log. Its primitives are made straight from the mesh, with no list of
-    /// triangles in between.
+    /// came from, for the log. Its triangles become primitives that index the mesh (8 bytes
+    /// each), with no list of triangles in between.
     pub fn add_mesh(&mut self, mut mesh: TriangleMesh, material: u32, name: &str) {
         let first = self.target().len();
         let id = self.meshes.len() as u32;
         mesh.shrink_to_fit();
-        let target = self.target();
-        target.reserve_exact(mesh.indices.len());
-        let mut skipped = 0;
-        for (k, idx) in mesh.indices.iter().enumerate() {
-            let t = Triangle { p: idx.map(|i| mesh.positions[i as usize]), mesh: id, index: k as u32 };
-            if t.area() > 0.0 {
-                target.push(Primitive { shape: Shape::Triangle(t), material, light: NO_LIGHT });
-            } else {
-                skipped += 1;
-            }
+        let has_area =
+            |idx: &[u32; 3]| Triangle { p: idx.map(|i| mesh.positions[i as usize]), mesh: id, index: 0 }.area() > 0.0;
+        let kept = mesh.indices.iter().filter(|idx| has_area(idx)).count();
+        let triangles = (0..mesh.indices.len() as u32).filter(|&k| has_area(&mesh.indices[k as usize]));
+        let triangles = ExactLen { inner: triangles, len: kept };
+        match self.open_group {
+            Some(g) => self.groups[g].push_mesh(id, material, triangles),
+            None => self.prims.push_mesh(id, material, triangles),
         }
-        let kept = self.target().len() - first;
+        let skipped = mesh.indices.len() - kept;
         self.mesh_info.push(MeshInfo {
             name: name.to_string(),
             triangles: kept,
@@ -259,9 +259,10 @@ impl SceneBuilder {
             self.group_specular[g] = true;
             return;
         }
-        let target = match self.prims[first].shape {
-            Shape::Sphere(s) if self.prims.len() == first + 1 => (s.center, s.radius),
-            _ => self.prims[first..].iter().fold(Aabb::EMPTY, |b, p| b.union(p.shape.bounds())).bounding_sphere(),
+        let (prims, meshes) = (&self.prims, &self.meshes);
+        let target = match prims.get(first, meshes).shape {
+            Shape::Sphere(s) if prims.len() == first + 1 => (s.center, s.radius),
+            _ => (first..prims.len()).fold(Aabb::EMPTY, |b, i| b.union(prims.bounds(i, meshes))).bounding_sphere(),
         };
         self.specular_targets.push(target);
     }
@@ -286,14 +287,15 @@ impl SceneBuilder {
     /// other or to textures wrongly.
     pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> Result<(Scene, LoadInfo), String> {
         let materials = Materials::new(self.materials, self.material_names, self.textures)?;
-        self.prims.append(&mut self.area_prims);
+        self.prims.append(std::mem::take(&mut self.area_prims));
         let t0 = Instant::now();
-        let bvh = Bvh::build(std::mem::take(&mut self.prims));
-        let instances = Instances::build(std::mem::take(&mut self.groups), std::mem::take(&mut self.instances));
+        let bvh = Bvh::build(std::mem::take(&mut self.prims), &self.meshes);
+        let instances =
+            Instances::build(std::mem::take(&mut self.groups), std::mem::take(&mut self.instances), &self.meshes);
         self.specular_targets.extend(Self::instance_targets(&self.group_specular, &instances));
         let info = LoadInfo {
             meshes: self.mesh_info,
-            primitives: bvh.prims.len(),
+            primitives: bvh.len(),
             triangles: self.triangles,
             degenerate_triangles: self.degenerate_triangles,
             bvh_nodes: bvh.node_count() + instances.node_count(),
@@ -361,3 +363,24 @@ fn photon_disk(bounds: Aabb, planes: &[(Plane, u32)], eye: Vec3) -> PhotonDisk {
     let radius = if radius > 0.0 && radius.is_finite() { radius } else { 1.0 };
     PhotonDisk::new(center, radius, !planes.is_empty())
 }
+
+/// An iterator whose length is known ahead (a filter whose matches were counted), so the
+/// primitives it fills are reserved exactly.
+struct ExactLen<I> {
+    inner: I,
+    len: usize,
+}
+
+impl<I: Iterator> Iterator for ExactLen<I> {
+    type Item = I::Item;
+    fn next(&mut self) -> Option<I::Item> {
+        let x = self.inner.next()?;
+        self.len -= 1;
+        Some(x)
+    }
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.len, Some(self.len))
+    }
+}
+
+impl<I: Iterator> ExactSizeIterator for ExactLen<I> {}

@@ -4,19 +4,20 @@
 //! face lines without keeping them, and instances are counted from the scene text. `caustic
 //! render` refuses a scene whose estimate exceeds `--max-memory` before loading it.
 //!
-//! The estimate is of the peak resident memory while loading, which is while the BVH is built:
-//! the mesh, its primitives (twice while the BVH orders them), the BVH's build records, leaf
-//! shapes and nodes. The PLY and OBJ readers stream into the mesh's arrays and need nothing
+//! The estimate is of the peak resident memory while loading, which is when the BVH's leaves
+//! are made: the mesh, its primitives, the BVH's nodes and leaf shapes (the build records,
+//! freed just before, take less). The PLY and OBJ readers stream into the mesh's arrays and need nothing
 //! per triangle beyond them, so reading never peaks higher.
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-/// Peak bytes per triangle while a scene is loaded: its indices in the mesh (12), its primitive
-/// (60), the BVH's 40-byte leaf shape, 4-byte primitive index and node share (about 19); the
-/// 32-byte build records are freed before the leaves are made (measured on the 5 M-triangle
-/// knot: 152 bytes per triangle with its vertices, BENCHMARKS.md "Big meshes, merged").
-pub const BYTES_PER_TRIANGLE: u64 = 140;
+/// Peak bytes per triangle while a scene is loaded: its indices in the mesh (12), its 8-byte
+/// primitive (mesh and triangle indices), the BVH's 40-byte leaf shape and node share (about
+/// 19); the 32-byte build records are freed before the nodes are joined and the leaves made
+/// (measured on the 5 M-triangle knot: 91 bytes per triangle with its vertices, BENCHMARKS.md
+/// "Big meshes: 8-byte primitives").
+pub const BYTES_PER_TRIANGLE: u64 = 80;
 /// Bytes per mesh vertex kept (position and normal; uv when the file has them).
 pub const BYTES_PER_VERTEX: u64 = 24;
 /// Bytes per instance: two transforms, bounds and the top-level BVH's share.

@@ -166,13 +166,13 @@ impl Scene {
             return Some(Self::hit(h.t, &sp, *material, NO_LIGHT, u32::MAX - k as u32));
         }
         if let Some(h) = instanced {
-            let (prim, sp) = self.instances.surface(&h, &self.meshes);
-            return Some(Self::hit(h.t, &sp, prim.material, prim.light, h.prim));
+            let ((material, light), sp) = self.instances.surface(&h, &self.meshes);
+            return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }
         let (i, h) = best?;
-        let prim = &self.bvh.prims[i as usize];
-        let sp = prim.shape.surface(ray, &h, &self.meshes);
-        Some(Self::hit(h.t, &sp, prim.material, prim.light, i))
+        let sp = self.bvh.surface(i, ray, &h, &self.meshes);
+        let (material, light) = self.bvh.material_light(i);
+        Some(Self::hit(h.t, &sp, material, light, i))
     }
 
     #[inline]
