@@ -147,8 +147,8 @@ struct RenderArgs {
     gather_k: Option<usize>,
     /// Irradiance cache error threshold (Ward's a): indirect diffuse light is interpolated
     /// between final gathers made before rendering where it is smooth; smaller is more accurate
-    /// and slower; 0 gathers at every sample [default: 0, off; 0.25 is a good value, see
-    /// docs/scene-format.md for its known bias].
+    /// and slower; 0 turns the cache off and gathers at every sample [default: 0.25; see
+    /// docs/scene-format.md for what it trades].
     #[arg(long, value_name = "A")]
     irradiance_cache: Option<f32>,
     /// Final-gather rays per irradiance-cache record [default: 512].

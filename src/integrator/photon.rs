@@ -77,6 +77,13 @@ pub struct PhotonConfig {
 }
 
 impl PhotonConfig {
+    /// Photon bounces the precomputed irradiance records hold: what the depth limit leaves at
+    /// a final-gather hit seen from a camera ray's first surface (bounce 2), the common case.
+    /// A gather hit deeper in the camera path, which allows fewer, reads the photons instead.
+    pub fn record_depth(&self) -> u32 {
+        trace::photon_depth_limit(self.max_depth, 2).unwrap_or(0)
+    }
+
     /// Full settings for `scene`: radii default to fractions of the scene's size (so any scene
     /// scale works), counts to values that render the bundled Cornell boxes cleanly.
     pub fn new(o: &PhotonOptions, desc: &IntegratorDesc, scene: &Scene, seed: u64) -> Self {
@@ -157,7 +164,7 @@ pub fn estimated_map_bytes(n: u64) -> u64 {
 }
 
 fn to_photons(pass: &PhotonPass) -> Vec<Photon> {
-    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, h.flags)).collect()
+    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, trace::map_flags(h))).collect()
 }
 
 impl PhotonIntegrator {
@@ -206,6 +213,7 @@ impl PhotonIntegrator {
             &global_map,
             config.gather_k,
             config.max_radius,
+            config.record_depth(),
             Watch { cancel, progress: Some(&bar) },
         )?;
         bar.finish(&format!("{records} irradiance records precomputed"));
@@ -250,8 +258,13 @@ impl PhotonIntegrator {
     /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
     /// precomputed irradiance record facing the same way (L = albedo / pi * E); where photons
     /// are too sparse for a record to be near (far out on a floor plane, whose photons thin
-    /// out with distance), from the photons themselves.
-    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
+    /// out with distance), or where the depth limit allows fewer photon bounces than the
+    /// records hold (`depth`, see `PhotonConfig::record_depth`), from the photons themselves.
+    fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, depth: u32, scratch: &mut Gathered) -> Color {
+        let c = &self.config;
+        if depth < c.record_depth() {
+            return Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch);
+        }
         let r = self.config.max_radius;
         let n = by.normal();
         // Records lie a few photon spacings apart: the nearest few within half the estimate
@@ -263,15 +276,13 @@ impl PhotonIntegrator {
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some(&(_, i)) => by.diffuse_albedo() * self.irradiance.photon(i).power() * std::f32::consts::FRAC_1_PI,
-            None => {
-                let c = &self.config;
-                Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
-            }
+            None => Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch),
         }
     }
 
     /// Radiance leaving `p` towards `wo` estimated from `map` (see the module docs). Photons
-    /// with any of the `exclude` flags are skipped; `cone` applies the cone filter.
+    /// with any of the `exclude` flags, or that scattered more than `depth` times, are skipped;
+    /// `cone` applies the cone filter.
     #[allow(clippy::too_many_arguments)]
     fn estimate(
         map: &PhotonMap,
@@ -281,6 +292,7 @@ impl PhotonIntegrator {
         k: usize,
         max_r: f32,
         exclude: u8,
+        depth: u32,
         cone: Option<f32>,
         scratch: &mut Gathered,
     ) -> Color {
@@ -306,7 +318,7 @@ impl PhotonIntegrator {
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
             let ph = map.photon(i);
-            if ph.flags() & exclude != 0 {
+            if ph.flags() & exclude != 0 || trace::map_depth(ph.flags()) > depth {
                 continue;
             }
             let dir = ph.direction();
@@ -384,14 +396,15 @@ impl PhotonIntegrator {
         sum
     }
 
-    /// Radiance leaving a final-gather hit `y` towards `wo_y`: from the precomputed irradiance for
-    /// a Lambertian surface, from a full estimate of the global map otherwise.
-    fn radiance_at_gather_hit(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, scratch: &mut Gathered) -> Color {
+    /// Radiance leaving a final-gather hit `y` towards `wo_y` from photons that scattered at
+    /// most `depth` times: from the precomputed irradiance for a Lambertian surface, from a
+    /// full estimate of the global map otherwise.
+    fn radiance_at_gather_hit(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, depth: u32, scratch: &mut Gathered) -> Color {
         if by.lambert_albedo().is_some() {
-            return self.gathered_radiance(y, by, wo_y, scratch);
+            return self.gathered_radiance(y, by, wo_y, depth, scratch);
         }
         let c = &self.config;
-        Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, None, scratch)
+        Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch)
     }
 
     /// Indirect light at a hit by final gathering: rays sampled from the BSDF's non-delta part,
@@ -402,6 +415,7 @@ impl PhotonIntegrator {
         &self,
         scene: &Scene,
         hit: &Hit,
+        bounce: u32,
         bsdf: &Bsdf,
         wo: Vec3,
         sampler: &mut Sampler,
@@ -428,7 +442,7 @@ impl PhotonIntegrator {
             if beta == Color::ZERO {
                 continue;
             }
-            sum += beta * self.gather_ray(scene, hit, wi, sampler.rng(), scratch, stats).l;
+            sum += beta * self.gather_ray(scene, hit, bounce, wi, sampler.rng(), scratch, stats).l;
         }
         sum / n.max(1) as f32
     }
@@ -441,6 +455,7 @@ impl PhotonIntegrator {
         &self,
         scene: &Scene,
         hit: &Hit,
+        bounce: u32,
         wi: Vec3,
         rng: &mut crate::sampling::Rng32,
         scratch: &mut Gathered,
@@ -450,10 +465,13 @@ impl PhotonIntegrator {
         let mut beta = Color::ONE;
         let mut dist = f32::INFINITY;
         let mut l = Color::ZERO;
-        for bounce in 0..4 {
+        for k in 0..4 {
+            // y is bounce `bounce + 1 + k` of the camera path: photons may add what the depth
+            // limit leaves.
+            let Some(depth) = trace::photon_depth_limit(self.config.max_depth, bounce + 1 + k) else { break };
             stats.rays += 1;
             let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
-            if bounce == 0 {
+            if k == 0 {
                 dist = y.t * ray.d.length();
             }
             let wo_y = -ray.d;
@@ -468,7 +486,7 @@ impl PhotonIntegrator {
                 ray = scene.spawn(&y, s.wi);
                 continue;
             }
-            l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, scratch);
+            l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, depth, scratch);
             // The mirror or glass part of a mixed material reflects more indirect light.
             if !by.has_delta() {
                 break;
@@ -490,6 +508,7 @@ impl PhotonIntegrator {
         &self,
         scene: &Scene,
         hit: &Hit,
+        bounce: u32,
         bsdf: &Bsdf,
         wo: Vec3,
         use_cache: bool,
@@ -504,7 +523,7 @@ impl PhotonIntegrator {
         {
             return albedo * e * std::f32::consts::FRAC_1_PI;
         }
-        self.final_gather(scene, hit, bsdf, wo, sampler, scratch, stats)
+        self.final_gather(scene, hit, bounce, bsdf, wo, sampler, scratch, stats)
     }
 }
 
@@ -519,13 +538,14 @@ fn disc_radius2(found: usize, k: usize, r2: f32, max_r: f32) -> f32 {
 }
 
 /// Irradiance at every `IRRADIANCE_STRIDE`-th global photon from its `k` nearest neighbours
-/// (facing the same way and near its tangent plane), stored as a map of its own; `None` when
-/// cancelled.
+/// (facing the same way, near its tangent plane and of at most `depth` bounces), stored as a
+/// map of its own; `None` when cancelled.
 fn precompute_irradiance(
     hits: &[trace::PhotonHit],
     map: &PhotonMap,
     k: usize,
     max_r: f32,
+    depth: u32,
     watch: Watch,
 ) -> Option<PhotonMap> {
     use rayon::prelude::*;
@@ -548,7 +568,10 @@ fn precompute_irradiance(
                         let thickness = 0.25 * r2.sqrt();
                         for &(_, i) in found {
                             let ph = map.photon(i);
-                            if ph.direction().dot(h.n) < 0.0 && (ph.position() - h.p).dot(h.n).abs() <= thickness {
+                            if ph.direction().dot(h.n) < 0.0
+                                && (ph.position() - h.p).dot(h.n).abs() <= thickness
+                                && trace::map_depth(ph.flags()) <= depth
+                            {
                                 e += ph.power();
                             }
                         }
@@ -633,6 +656,9 @@ impl RayIntegrator for PhotonIntegrator {
                 continue;
             }
             let c = &self.config;
+            // This surface is bounce depth + 1, within the limit (checked above).
+            let bounce = depth + 1;
+            let photon_depth = trace::photon_depth_limit(c.max_depth, bounce).unwrap_or(0);
             layers[layer.caustic_photons()] += beta
                 * Self::estimate(
                     &self.caustic,
@@ -642,6 +668,7 @@ impl RayIntegrator for PhotonIntegrator {
                     c.caustic_k,
                     c.caustic_radius,
                     0,
+                    photon_depth,
                     Some(c.cone_k),
                     scratch,
                 );
@@ -654,11 +681,12 @@ impl RayIntegrator for PhotonIntegrator {
                     c.gather_k,
                     c.max_radius,
                     trace::DIRECT | trace::CAUSTIC,
+                    photon_depth,
                     None,
                     scratch,
                 )
             } else {
-                self.indirect(scene, &hit, &bsdf, wo, !glossy_prefix, sampler, scratch, stats)
+                self.indirect(scene, &hit, bounce, &bsdf, wo, !glossy_prefix, sampler, scratch, stats)
             };
             layers[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.

@@ -32,6 +32,32 @@ pub const DIRECT: u8 = 1;
 /// Flag: the photon came from the light only through specular bounces (L S+ D).
 pub const CAUSTIC: u8 = 2;
 
+/// Photon depths are stored up to this (a photon scatters at most `MAX_BOUNCES` times, and a
+/// map keeps six bits of it).
+pub const MAX_PHOTON_DEPTH: u32 = MAX_BOUNCES - 1;
+const _: () = assert!(MAX_PHOTON_DEPTH < 64);
+
+/// The most scattering events a photon may have had before arriving at a surface that is
+/// bounce `bounce` of a camera path, so that the whole path has at most `max_depth` bounces
+/// (the path tracer's limit); `None` when no photon's light may count there. Photon depths
+/// are all within `MAX_PHOTON_DEPTH`, so a larger result filters nothing.
+#[inline]
+pub fn photon_depth_limit(max_depth: u32, bounce: u32) -> Option<u32> {
+    max_depth.checked_sub(bounce).map(|d| d.min(MAX_PHOTON_DEPTH))
+}
+
+/// A photon map's flags byte: the flags in the low two bits, the depth in the other six.
+#[inline]
+pub fn map_flags(h: &PhotonHit) -> u8 {
+    h.flags | h.depth << 2
+}
+
+/// The depth stored in a photon map's flags byte (`map_flags`).
+#[inline]
+pub fn map_depth(flags: u8) -> u32 {
+    u32::from(flags >> 2)
+}
+
 /// A photon hit before packing: where, travelling which way, with what flux (watts).
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonHit {
@@ -40,6 +66,8 @@ pub struct PhotonHit {
     pub dir: Vec3,
     pub flux: Color,
     pub flags: u8,
+    /// Scattering events before this hit (0: straight from the light).
+    pub depth: u8,
     /// Surface normal at the hit, on the side the photon arrived from.
     pub n: Vec3,
 }
@@ -217,7 +245,7 @@ pub fn trace_photon(
             let n = bsdf.normal();
             if caustic_only {
                 if caustic {
-                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, n });
+                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, depth: depth as u8, n });
                 }
                 // The mirror or glass part of a mixed material (or plastic's coating) can still
                 // send it on along an L S+ D path.
@@ -232,7 +260,7 @@ pub fn trace_photon(
                 } else {
                     0
                 };
-                out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, n });
+                out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
             }
         }
         let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };

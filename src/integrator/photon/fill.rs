@@ -44,6 +44,8 @@ pub(super) struct Candidate<'a> {
     pub bsdf: Bsdf<'a>,
     /// Length of the camera path to it (through mirrors and glass).
     pub dist: f32,
+    /// Its bounce in the camera path (1 for the first surface).
+    pub bounce: u32,
 }
 
 impl PhotonIntegrator {
@@ -70,7 +72,7 @@ impl PhotonIntegrator {
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            return bsdf.lambert_albedo().is_some().then_some(Candidate { hit, bsdf, dist });
+            return bsdf.lambert_albedo().is_some().then_some(Candidate { hit, bsdf, dist, bounce: depth + 1 });
         }
         None
     }
@@ -92,7 +94,7 @@ impl PhotonIntegrator {
                 samples.push(if below {
                     GatherSample { l: Color::ZERO, dist: f32::INFINITY }
                 } else {
-                    self.gather_ray(scene, &c.hit, wi, rng, scratch, &mut stats)
+                    self.gather_ray(scene, &c.hit, c.bounce, wi, rng, scratch, &mut stats)
                 });
             }
         }

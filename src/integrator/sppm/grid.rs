@@ -95,6 +95,7 @@ mod tests {
                 dir: -Vec3::Y,
                 flux: Color::ONE,
                 flags: 0,
+                depth: 0,
                 n: Vec3::Y,
             })
             .collect();

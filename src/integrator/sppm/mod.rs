@@ -141,6 +141,9 @@ struct VisiblePoint<'a> {
     dist: f32,
     /// The layers of the light gathered there.
     layer: LayerPath,
+    /// Most scattering events a photon gathered there may have had, so that whole paths keep
+    /// to the depth limit (`trace::photon_depth_limit`).
+    photon_depth: u32,
 }
 
 /// What one iteration's camera sample of a pixel found.
@@ -393,7 +396,9 @@ impl Sppm {
                 ray = scene.spawn(&hit, s.wi);
                 continue;
             }
-            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, layer });
+            // This surface is bounce depth + 1, within the limit (checked above).
+            let photon_depth = trace::photon_depth_limit(config.max_depth, depth + 1).unwrap_or(0);
+            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, layer, photon_depth });
             return CameraSample { ld, ld_layers, point };
         }
         CameraSample { ld, ld_layers, point: None }
@@ -416,7 +421,7 @@ fn gather(v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
         m += 1;
-        if !both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0 {
+        if (!both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0) || u32::from(ph.depth) > v.photon_depth {
             return;
         }
         let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
@@ -499,9 +504,16 @@ mod tests {
         let mut lobes = Lobes::default();
         lobes.add(Bxdf::Lambert(Lambert { r: Color::splat(0.5) }));
         let bsdf = Bsdf::new(crate::math::Frame::from_z(Vec3::Z), Vec3::Z, true, lobes);
-        let v =
-            VisiblePoint { p: Vec3::ZERO, wo: Vec3::Z, bsdf, beta: Color::ONE, dist: 1.0, layer: LayerPath::CAMERA };
-        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, n: Vec3::Z };
+        let v = VisiblePoint {
+            p: Vec3::ZERO,
+            wo: Vec3::Z,
+            bsdf,
+            beta: Color::ONE,
+            dist: 1.0,
+            layer: LayerPath::CAMERA,
+            photon_depth: trace::MAX_PHOTON_DEPTH,
+        };
+        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, depth: 0, n: Vec3::Z };
         let hits = [
             hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
             hit(Vec3::new(0.0, -0.2, 0.0), Vec3::Z), // in range, from below: no light, counted
