@@ -18,6 +18,10 @@
 //! of the farthest of a few would overestimate), counting only photons arriving on the surface's
 //! side and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do
 //! not leak light into each other. Everything is in physical units; nothing is scaled by hand.
+//!
+//! Depth: a photon remembers how often it scattered, and an estimate at bounce b of a camera
+//! path counts only photons of at most `max_depth - b` bounces, so every light path keeps to
+//! the limit the path tracer keeps to (`trace::photon_depth_limit`).
 
 use super::layers::LayerPath;
 use crate::film::Layers;
@@ -136,9 +140,13 @@ pub struct PhotonIntegrator {
     global: PhotonMap,
     caustic: PhotonMap,
     /// Irradiance precomputed at a subset of the global photons (Christensen 1999): records
-    /// whose `direction` is the surface normal and whose `power` is the irradiance. Final-gather
-    /// rays read the nearest record instead of making a full radiance estimate.
+    /// whose `direction` is the surface normal. Final-gather rays read the nearest record
+    /// instead of making a full radiance estimate.
     irradiance: PhotonMap,
+    /// Each record's irradiance (in the map's order) from photons of at most
+    /// `PhotonConfig::record_depth() - j` bounces, for j < `RECORD_LEVELS`: a gather hit deeper
+    /// in the camera path allows photons fewer bounces.
+    irradiance_levels: Vec<[Color; RECORD_LEVELS]>,
     /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
     /// is off): filled once before rendering, then only read.
     cache: IrradianceCache,
@@ -156,6 +164,8 @@ const LOOPED_AREA_LIGHTS: usize = 4;
 
 /// One global photon in this many gets a precomputed irradiance record.
 const IRRADIANCE_STRIDE: usize = 4;
+/// Depth limits each record holds an irradiance for: gather hits at camera bounces 2 to 5.
+const RECORD_LEVELS: usize = 4;
 
 /// Bytes a map of `n` photons needs, for the memory check made before tracing.
 pub fn estimated_map_bytes(n: u64) -> u64 {
@@ -208,7 +218,7 @@ impl PhotonIntegrator {
         bar.finish("photon maps built");
         let records = global.hits.len().div_ceil(IRRADIANCE_STRIDE) as u64;
         let bar = Progress::new(progress, "gather", records, None);
-        let irradiance = precompute_irradiance(
+        let (irradiance, irradiance_levels) = precompute_irradiance(
             &global.hits,
             &global_map,
             config.gather_k,
@@ -235,6 +245,7 @@ impl PhotonIntegrator {
             global: global_map,
             caustic: caustic_map,
             irradiance,
+            irradiance_levels,
             cache: IrradianceCache::empty(a.max(1e-3)),
             area_lights: Vec::new(),
             area_picker: LightPicker::default(),
@@ -262,7 +273,8 @@ impl PhotonIntegrator {
     /// records hold (`depth`, see `PhotonConfig::record_depth`), from the photons themselves.
     fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, depth: u32, scratch: &mut Gathered) -> Color {
         let c = &self.config;
-        if depth < c.record_depth() {
+        let level = c.record_depth().saturating_sub(depth) as usize;
+        if level >= RECORD_LEVELS {
             return Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch);
         }
         let r = self.config.max_radius;
@@ -275,7 +287,9 @@ impl PhotonIntegrator {
             .filter(|(_, i)| self.irradiance.photon(*i).direction().dot(n) > 0.8)
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
-            Some(&(_, i)) => by.diffuse_albedo() * self.irradiance.photon(i).power() * std::f32::consts::FRAC_1_PI,
+            Some(&(_, i)) => {
+                by.diffuse_albedo() * self.irradiance_levels[i as usize][level] * std::f32::consts::FRAC_1_PI
+            }
             None => Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch),
         }
     }
@@ -451,6 +465,7 @@ impl PhotonIntegrator {
     /// four bounces), then the radiance leaving the first other surface read from the global map,
     /// times the specular bounces' weights (and on through that surface's own mirror or glass
     /// part, if it has one); and the distance to the first surface it met.
+    #[allow(clippy::too_many_arguments)]
     fn gather_ray(
         &self,
         scene: &Scene,
@@ -537,9 +552,10 @@ fn disc_radius2(found: usize, k: usize, r2: f32, max_r: f32) -> f32 {
     if found < k { max_r * max_r } else { r2 }
 }
 
-/// Irradiance at every `IRRADIANCE_STRIDE`-th global photon from its `k` nearest neighbours
-/// (facing the same way, near its tangent plane and of at most `depth` bounces), stored as a
-/// map of its own; `None` when cancelled.
+/// Irradiance records at every `IRRADIANCE_STRIDE`-th global photon: a map of their positions
+/// and normals, and for each (in the map's order) the irradiance from its `k` nearest photons
+/// (facing the same way and near its tangent plane) of at most `depth - j` bounces for each
+/// level j; `None` when cancelled.
 fn precompute_irradiance(
     hits: &[trace::PhotonHit],
     map: &PhotonMap,
@@ -547,37 +563,45 @@ fn precompute_irradiance(
     max_r: f32,
     depth: u32,
     watch: Watch,
-) -> Option<PhotonMap> {
+) -> Option<(PhotonMap, Vec<[Color; RECORD_LEVELS]>)> {
     use rayon::prelude::*;
-    let records: Vec<Photon> = hits
-        .par_chunks(4096 * IRRADIANCE_STRIDE)
+    let records: Vec<Photon> =
+        hits.par_iter().step_by(IRRADIANCE_STRIDE).map(|h| Photon::new(h.p, h.n, Color::ZERO, 0)).collect();
+    let records = PhotonMap::build_cancellable(records, watch.cancel)?;
+    let levels: Vec<[Color; RECORD_LEVELS]> = records
+        .photons()
+        .par_chunks(4096)
         .flat_map_iter(|chunk| {
             let mut g = Gathered::new(k);
             if watch.cancelled() {
                 return Vec::new();
             }
-            watch.advance(chunk.len().div_ceil(IRRADIANCE_STRIDE) as u64);
+            watch.advance(chunk.len() as u64);
             chunk
                 .iter()
-                .step_by(IRRADIANCE_STRIDE)
-                .map(|h| {
-                    let (found, r2) = map.gather(h.p, k, max_r * max_r, &mut g);
+                .map(|rec| {
+                    let (p, n) = (rec.position(), rec.direction());
+                    let (found, r2) = map.gather(p, k, max_r * max_r, &mut g);
                     let r2 = disc_radius2(found.len(), k, r2, max_r);
-                    let mut e = Color::ZERO;
+                    let mut e = [Color::ZERO; RECORD_LEVELS];
                     if r2 > 0.0 {
                         let thickness = 0.25 * r2.sqrt();
                         for &(_, i) in found {
                             let ph = map.photon(i);
-                            if ph.direction().dot(h.n) < 0.0
-                                && (ph.position() - h.p).dot(h.n).abs() <= thickness
-                                && trace::map_depth(ph.flags()) <= depth
-                            {
-                                e += ph.power();
+                            // Counted at each level j whose limit depth - j its bounces keep to.
+                            let Some(spare) = depth.checked_sub(trace::map_depth(ph.flags())) else { continue };
+                            if ph.direction().dot(n) < 0.0 && (ph.position() - p).dot(n).abs() <= thickness {
+                                let power = ph.power();
+                                for level in e.iter_mut().take(spare as usize + 1) {
+                                    *level += power;
+                                }
                             }
                         }
-                        e /= PI * r2;
+                        for level in &mut e {
+                            *level /= PI * r2;
+                        }
                     }
-                    Photon::new(h.p, h.n, e, 0)
+                    e
                 })
                 .collect::<Vec<_>>()
         })
@@ -585,7 +609,7 @@ fn precompute_irradiance(
     if watch.cancelled() {
         return None;
     }
-    PhotonMap::build_cancellable(records, watch.cancel)
+    Some((records, levels))
 }
 
 impl RayIntegrator for PhotonIntegrator {

@@ -150,10 +150,11 @@ mod tests {
     use crate::shape::Sphere;
 
     fn mesh() -> TriangleMesh {
-        let mut m = TriangleMesh::default();
-        m.positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
-        m.indices = vec![[0, 1, 2], [1, 3, 2]];
-        m
+        TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
+            indices: vec![[0, 1, 2], [1, 3, 2]],
+            ..Default::default()
+        }
     }
 
     /// A mesh triangle held as indices gives the shape, material and bounds of the same
