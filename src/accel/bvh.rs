@@ -64,10 +64,10 @@ impl Bvh {
         self.prims.material_light(i as usize)
     }
 
-    /// Surface data at a hit `intersect` returned.
+    /// Surface data, material and light at a hit `intersect` returned.
     #[inline]
-    pub fn surface(&self, i: u32, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
-        self.prims.surface(i as usize, ray, h, meshes)
+    pub fn surface(&self, i: u32, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> (SurfacePoint, u32, u32) {
+        self.prims.surface(i as usize, &self.shapes[i as usize], ray, h, meshes)
     }
 
     pub fn bounds(&self) -> Aabb {

@@ -180,8 +180,8 @@ impl Instances {
     pub fn surface(&self, h: &InstanceHit, meshes: &[TriangleMesh]) -> ((u32, u32), SurfacePoint) {
         let inst = &self.instances[h.instance as usize];
         let group = &self.groups[inst.group as usize];
-        let sp = group.surface(h.prim, &h.ray, &h.hit, meshes);
-        (group.material_light(h.prim), inst.surface_to_world(&sp))
+        let (sp, material, light) = group.surface(h.prim, &h.ray, &h.hit, meshes);
+        ((material, light), inst.surface_to_world(&sp))
     }
 
     /// Closest hit in (0, t_max) on any instance.

@@ -117,6 +117,12 @@ impl Camera {
         )
     }
 
+    /// Whether `generate_ray` reads its lens sample (a thin lens of non-zero radius).
+    #[inline]
+    pub fn uses_lens(&self) -> bool {
+        self.projection != Projection::Orthographic && self.lens_radius > 0.0
+    }
+
     /// The ray for raster position `raster` and lens sample `lens` in [0,1)^2.
     /// With a zero lens radius this is exactly the pinhole ray, whatever `lens` is.
     #[inline]

@@ -144,9 +144,9 @@ pub struct PhotonIntegrator {
     /// instead of making a full radiance estimate.
     irradiance: PhotonMap,
     /// Each record's irradiance (in the map's order) from photons of at most
-    /// `PhotonConfig::record_depth() - j` bounces, for j < `RECORD_LEVELS`: a gather hit deeper
-    /// in the camera path allows photons fewer bounces.
-    irradiance_levels: Vec<[Color; RECORD_LEVELS]>,
+    /// `PhotonConfig::record_depth() - j` bounces, for 1 <= j < `RECORD_LEVELS` (j = 0 is the
+    /// record's own power): a gather hit deeper in the camera path allows photons fewer bounces.
+    irradiance_levels: Vec<[Color; RECORD_LEVELS - 1]>,
     /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
     /// is off): filled once before rendering, then only read.
     cache: IrradianceCache,
@@ -288,7 +288,11 @@ impl PhotonIntegrator {
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some(&(_, i)) => {
-                by.diffuse_albedo() * self.irradiance_levels[i as usize][level] * std::f32::consts::FRAC_1_PI
+                let e = match level {
+                    0 => self.irradiance.photon(i).power(),
+                    _ => self.irradiance_levels[i as usize][level - 1],
+                };
+                by.diffuse_albedo() * e * std::f32::consts::FRAC_1_PI
             }
             None => Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch),
         }
@@ -563,11 +567,11 @@ fn precompute_irradiance(
     max_r: f32,
     depth: u32,
     watch: Watch,
-) -> Option<(PhotonMap, Vec<[Color; RECORD_LEVELS]>)> {
+) -> Option<(PhotonMap, Vec<[Color; RECORD_LEVELS - 1]>)> {
     use rayon::prelude::*;
     let records: Vec<Photon> =
         hits.par_iter().step_by(IRRADIANCE_STRIDE).map(|h| Photon::new(h.p, h.n, Color::ZERO, 0)).collect();
-    let records = PhotonMap::build_cancellable(records, watch.cancel)?;
+    let mut records = PhotonMap::build_cancellable(records, watch.cancel)?;
     let levels: Vec<[Color; RECORD_LEVELS]> = records
         .photons()
         .par_chunks(4096)
@@ -609,7 +613,9 @@ fn precompute_irradiance(
     if watch.cancelled() {
         return None;
     }
-    Some((records, levels))
+    // The common level is read with the record itself (one cache line); the others beside it.
+    records.set_powers(|i| levels[i][0]);
+    Some((records, levels.iter().map(|l| std::array::from_fn(|j| l[j + 1])).collect()))
 }
 
 impl RayIntegrator for PhotonIntegrator {

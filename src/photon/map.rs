@@ -149,6 +149,16 @@ impl Photon {
         Photon { position: p.to_array(), packed: bits.to_le_bytes() }
     }
 
+    /// The same photon carrying `power` instead (its direction and flags kept bit for bit).
+    pub fn with_power(&self, power: Color) -> Photon {
+        let mask = (1u64 << (3 * CHANNEL_BITS)) - 1;
+        let bits = (self.bits() & !mask)
+            | encode_channel(power.x)
+            | encode_channel(power.y) << CHANNEL_BITS
+            | encode_channel(power.z) << (2 * CHANNEL_BITS);
+        Photon { position: self.position, packed: bits.to_le_bytes() }
+    }
+
     #[inline]
     fn bits(&self) -> u64 {
         u64::from_le_bytes(self.packed)
@@ -406,6 +416,12 @@ impl PhotonMap {
     #[inline]
     pub fn len(&self) -> usize {
         self.photons.len()
+    }
+
+    /// Sets the power of each photon (in the map's order) to `power(i)`; positions, directions
+    /// and flags, and so the tree, stay as they are.
+    pub fn set_powers(&mut self, power: impl Fn(usize) -> Color + Sync) {
+        self.photons.par_iter_mut().enumerate().for_each(|(i, p)| *p = p.with_power(power(i)));
     }
 
     #[inline]

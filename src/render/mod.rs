@@ -113,7 +113,12 @@ impl RenderSettings {
         } else {
             (crate::math::Vec2::splat(0.5), 1.0)
         };
-        let lens = sampler.lens();
+        let lens = if scene.camera.uses_lens() {
+            sampler.lens()
+        } else {
+            sampler.skip_lens();
+            crate::math::Vec2::ZERO
+        };
         let ray = scene.camera.generate_ray(crate::math::Vec2::new(x as f32, y as f32) + offset, lens);
         (sampler, ray, weight)
     }

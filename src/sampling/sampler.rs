@@ -83,6 +83,17 @@ impl Sampler {
         self.next_pair(true)
     }
 
+    /// Moves past the lens sample without making it (for a camera that reads none), leaving
+    /// the sampler exactly where `lens` would: the jittered sampler's stratum permutation is
+    /// most of a pinhole camera sample's cost.
+    #[inline]
+    pub fn skip_lens(&mut self) {
+        self.pair += 1;
+        if self.kind == SamplerKind::Jittered {
+            self.rng.uniform2();
+        }
+    }
+
     /// A further 2-D sample for the integrator (uniform, not stratified, with the jittered sampler).
     pub fn next_2d(&mut self) -> Vec2 {
         self.next_pair(false)
@@ -136,6 +147,24 @@ const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Skipping the lens sample leaves every later sample as drawing it does.
+    #[test]
+    fn skip_lens_keeps_the_stream() {
+        for kind in [SamplerKind::Jittered, SamplerKind::Sobol] {
+            for index in [0, 5, 17, 100] {
+                let mut a = Sampler::new(kind, 3, 4, 5, index, 4);
+                let mut b = Sampler::new(kind, 3, 4, 5, index, 4);
+                assert_eq!(a.pixel(), b.pixel());
+                a.lens();
+                b.skip_lens();
+                for _ in 0..3 {
+                    assert_eq!(a.next_2d(), b.next_2d());
+                    assert_eq!(a.rng().next_u32(), b.rng().next_u32());
+                }
+            }
+        }
+    }
 
     fn check_stratified(kind: SamplerKind, n: u32, lens: bool) {
         for (x, y) in [(0, 0), (17, 3), (500, 900)] {

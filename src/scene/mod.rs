@@ -170,8 +170,7 @@ impl Scene {
             return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }
         let (i, h) = best?;
-        let sp = self.bvh.surface(i, ray, &h, &self.meshes);
-        let (material, light) = self.bvh.material_light(i);
+        let (sp, material, light) = self.bvh.surface(i, ray, &h, &self.meshes);
         Some(Self::hit(h.t, &sp, material, light, i))
     }
 

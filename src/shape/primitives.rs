@@ -109,10 +109,33 @@ impl Primitives {
         self.get(i, meshes).shape.compact()
     }
 
-    /// Surface data of primitive `i` at a hit `intersect` found.
+    /// Surface data, material and light of primitive `i` at a hit `intersect` found on `leaf`,
+    /// its compact shape: a mesh triangle takes its vertices from the leaf, which the test just
+    /// read, rather than through the mesh's indices.
     #[inline]
-    pub fn surface(&self, i: usize, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
-        self.get(i, meshes).shape.surface(ray, h, meshes)
+    pub fn surface(
+        &self,
+        i: usize,
+        leaf: &CompactShape,
+        ray: &Ray,
+        h: &PrimHit,
+        meshes: &[TriangleMesh],
+    ) -> (SurfacePoint, u32, u32) {
+        let r = self.refs[i];
+        match (r.group, leaf) {
+            (WHOLE, _) => {
+                let p = &self.shapes[r.index as usize];
+                (p.shape.surface(ray, h, meshes), p.material, p.light)
+            }
+            (g, CompactShape::Triangle(p)) => {
+                let g = self.groups[g as usize];
+                (Triangle { p: *p, mesh: g.mesh, index: r.index }.surface(h, meshes), g.material, NO_LIGHT)
+            }
+            _ => {
+                let p = self.get(i, meshes);
+                (p.shape.surface(ray, h, meshes), p.material, p.light)
+            }
+        }
     }
 
     /// Reorders the primitives so that primitive `i` becomes the old `order[i]` (a gather on
