@@ -164,3 +164,45 @@ material = "glass"
     }
     assert!(darkest > 0.99, "darkest pixel {darkest}: a ring from total internal reflection");
 }
+
+/// A shadow ray straight down through the centre of a glass sphere crosses it twice at normal
+/// incidence: the floor below gets (1 - F0)^2 of the light (F0 = ((n - 1) / (n + 1))^2), and
+/// k_t^2 under a `transparent` sphere. Checked with the one-traversal crossing walk and with the
+/// closest-hit walk it falls back to (a cylinder elsewhere in the scene forces it).
+#[test]
+fn glass_shadows_pass_the_fresnel_product() {
+    let light = Vec3::new(0.0, 4.0, 0.0);
+    for (glass, expected) in [
+        ("type = \"dielectric\"\nior = 1.5", (1.0f32 - 0.04) * (1.0 - 0.04)),
+        ("type = \"transparent\"\nkt = 0.7\nkr = 0\nior = 1.5", 0.7 * 0.7),
+    ] {
+        for cylinder in [false, true] {
+            let mut text = format!(
+                "[camera]\neye = [0, 5, 5]\nlook_at = [0, 0, 0]\n[materials.floor]\ntype = \"diffuse\"\n\
+                 [materials.glass]\n{glass}\n[[lights]]\ntype = \"point\"\nposition = [0, 4, 0]\nintensity = 10\n\
+                 [[objects]]\ntype = \"plane\"\nmaterial = \"floor\"\n\
+                 [[objects]]\ntype = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.5\nmaterial = \"glass\"\n"
+            );
+            if cylinder {
+                text += "[[objects]]\ntype = \"cylinder\"\np0 = [5, 0, 5]\np1 = [5, 1, 5]\nradius = 0.2\nmaterial = \"floor\"\n";
+            }
+            let s = common::scene(&text);
+            let hit = s.scene.intersect(&Ray::new(Vec3::new(0.0, 1.0, 0.0), -Vec3::Y), f32::INFINITY).expect("floor");
+            let to_light = light - hit.p;
+            let mut stats = RayStats::default();
+            let t = caustic::integrator::whitted::shadow_transmittance(
+                &s.scene,
+                &hit,
+                to_light.normalize(),
+                to_light.length(),
+                &mut stats,
+            );
+            assert!(
+                (t - Color::splat(expected)).abs().max_element() < 1e-4,
+                "{glass}, cylinder {cylinder}: {t} vs {expected}"
+            );
+            // The walk counts one shadow ray; the closest-hit walk one per surface met.
+            assert_eq!(stats.shadow_rays, if cylinder { 3 } else { 1 });
+        }
+    }
+}

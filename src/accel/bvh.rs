@@ -22,6 +22,8 @@ pub struct Bvh {
     shapes: Vec<CompactShape>,
     /// The primitives in leaf order, read once per closest hit.
     prims: Primitives,
+    /// `for_each_crossing` finds every crossing (no leaf is a cylinder).
+    crossings_enumerable: bool,
 }
 
 impl Bvh {
@@ -41,8 +43,9 @@ impl Bvh {
         let (depth, bounds, nodes) = (tree.depth, tree.bounds, tree.nodes());
         prims.reorder(&order);
         drop(order);
-        let shapes = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
-        Bvh { nodes, depth, bounds, shapes, prims }
+        let shapes: Vec<CompactShape> = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
+        let crossings_enumerable = shapes.par_iter().all(CompactShape::crossings_enumerable);
+        Bvh { nodes, depth, bounds, shapes, prims, crossings_enumerable }
     }
 
     /// The primitives, in the order hits name them.
@@ -109,6 +112,32 @@ impl Bvh {
             traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
         }
         best.map(|(i, h)| (i as u32, h))
+    }
+
+    /// Calls `visit(primitive, hit)` for every surface crossing in (0, t_max), in no particular
+    /// order, until it returns false; returns whether it went through all of them. `None` when
+    /// the tree holds a shape whose later crossings are not found (`crossings_enumerable`).
+    #[inline]
+    pub fn for_each_crossing(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, PrimHit) -> bool,
+    ) -> Option<bool> {
+        if !self.crossings_enumerable {
+            return None;
+        }
+        let shear = RayShear::new(ray);
+        let mut leaf = |first: usize, count: usize, t: &mut f32| {
+            (first..first + count).any(|i| !self.shapes[i].for_each_crossing(ray, &shear, *t, |h| visit(i as u32, h)))
+        };
+        let mut t = t_max;
+        let stopped = if self.shapes.len() <= LINEAR_MAX {
+            leaf(0, self.shapes.len(), &mut t)
+        } else {
+            traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
+        };
+        Some(!stopped)
     }
 
     /// True when anything is hit in (0, t_max). Stops at the first hit found.

@@ -160,7 +160,32 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
         stats.shadow_rays += 1;
         return if scene.occluded(&ray, t_max(&ray)) { Color::ZERO } else { Color::ONE };
     }
+    // Transmittance is a product, so the crossings can be taken in any order, all from one
+    // traversal along the first ray.
     let mut atten = Color::ONE;
+    let tm = t_max(&ray);
+    if !(tm > 0.0) {
+        stats.shadow_rays += 1;
+        return atten;
+    }
+    let mut crossings = 0;
+    let walked = scene.for_each_crossing(&ray, tm, |material, ng| {
+        crossings += 1;
+        let m = scene.materials.classic_of(material);
+        atten *= match m.kind {
+            ClassicKind::Transparent => m.kt,
+            ClassicKind::Dielectric => {
+                let eta = if wi.dot(ng) < 0.0 { m.ior } else { 1.0 / m.ior };
+                1.0 - fresnel_dielectric(ng.dot(wi), eta)
+            }
+            _ => 0.0,
+        };
+        atten != Color::ZERO && crossings <= MAX_SHADOW_CROSSINGS
+    });
+    if let Some(all) = walked {
+        stats.shadow_rays += 1;
+        return if all { atten } else { Color::ZERO };
+    }
     for _ in 0..MAX_SHADOW_CROSSINGS {
         stats.shadow_rays += 1;
         let tm = t_max(&ray);

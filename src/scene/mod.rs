@@ -174,6 +174,38 @@ impl Scene {
         Some(Self::hit(h.t, &sp, material, light, i))
     }
 
+    /// Calls `visit(material, ng)` (ng the outward geometric normal) for every surface `ray`
+    /// crosses in (0, t_max), in no particular order, until it returns false; returns whether
+    /// it went through all of them. `None` for scenes with instances or cylinders, whose
+    /// crossings callers walk one closest hit at a time. One traversal instead of one per
+    /// crossing: a shadow ray through a glass sphere crosses it twice.
+    #[inline]
+    pub fn for_each_crossing(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, crate::math::Vec3) -> bool,
+    ) -> Option<bool> {
+        if !self.instances.is_empty() {
+            return None;
+        }
+        let all = self.bvh.for_each_crossing(ray, t_max, |i, h| {
+            let (sp, material, _) = self.bvh.surface(i, ray, &h, &self.meshes);
+            visit(material, sp.ng)
+        })?;
+        if !all {
+            return Some(false);
+        }
+        for (plane, material) in &self.planes {
+            if let Some(h) = plane.intersect(ray, t_max)
+                && !visit(*material, plane.surface(ray, &h).ng)
+            {
+                return Some(false);
+            }
+        }
+        Some(true)
+    }
+
     #[inline]
     fn hit(t: f32, sp: &SurfacePoint, material: u32, light: u32, prim: u32) -> Hit {
         Hit { t, p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, param: sp.param, material, light, prim }

@@ -81,6 +81,21 @@ pub enum CompactShape {
 }
 
 impl CompactShape {
+    /// Calls `f` for every crossing of the surface in (0, t_max) until it returns false (then
+    /// returns false). Only a cylinder's first crossing is found (see `crossings_enumerable`).
+    #[inline(always)]
+    pub fn for_each_crossing(&self, ray: &Ray, shear: &RayShear, t_max: f32, f: impl FnMut(PrimHit) -> bool) -> bool {
+        match self {
+            CompactShape::Sphere(s) => s.for_each_crossing(ray, t_max, f),
+            _ => self.intersect(ray, shear, t_max).is_none_or(f),
+        }
+    }
+
+    /// False for shapes a ray can cross more than once that `for_each_crossing` does not walk.
+    pub fn crossings_enumerable(&self) -> bool {
+        !matches!(self, CompactShape::Cylinder { .. })
+    }
+
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
         match self {

@@ -61,6 +61,34 @@ impl Sphere {
     /// Tracing Gems ch. 7), and the far root comes from c/q to avoid cancellation.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let (t0, t1, t_eps) = self.roots(ray)?;
+        let t = if t0 > t_eps {
+            t0
+        } else if t1 > t_eps {
+            t1
+        } else {
+            return None;
+        };
+        (t < t_max).then_some(PrimHit { t, u: 0.0, v: 0.0 })
+    }
+
+    /// Calls `f` for each crossing of the surface in (0, t_max), nearer first, until it returns
+    /// false (then returns false). The roots are those `intersect` chooses from.
+    #[inline(always)]
+    pub fn for_each_crossing(&self, ray: &Ray, t_max: f32, mut f: impl FnMut(PrimHit) -> bool) -> bool {
+        let Some((t0, t1, t_eps)) = self.roots(ray) else { return true };
+        for t in [t0, t1] {
+            if t > t_eps && t < t_max && !f(PrimHit { t, u: 0.0, v: 0.0 }) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The two roots along `ray` in increasing order, and the distance within which a root is
+    /// the surface the ray starts on; `None` when the ray's line misses.
+    #[inline(always)]
+    fn roots(&self, ray: &Ray) -> Option<(f32, f32, f32)> {
         let f = ray.o - self.center;
         let a = ray.d.length_squared();
         let b = -f.dot(ray.d);
@@ -79,14 +107,7 @@ impl Sphere {
         }
         // A root within the rounding error of t of zero is the surface the ray starts on.
         let t_eps = gamma(8) * (f.abs().max_element() + self.radius) / a.sqrt();
-        let t = if t0 > t_eps {
-            t0
-        } else if t1 > t_eps {
-            t1
-        } else {
-            return None;
-        };
-        (t < t_max).then_some(PrimHit { t, u: 0.0, v: 0.0 })
+        Some((t0, t1, t_eps))
     }
 
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
@@ -107,6 +128,42 @@ mod tests {
     use crate::math::Vec2;
     use crate::shape::{RayShear, Shape};
     use std::f32::consts::PI;
+
+    /// A ray through a sphere crosses it at both roots, the nearer first and equal to the
+    /// closest hit; from inside (or from the surface, outwards through it) only the exit counts;
+    /// `t_max` cuts crossings beyond it, and a false return stops the walk.
+    #[test]
+    fn crossings_are_both_roots() {
+        let s = Sphere::new(Vec3::new(1.0, 2.0, 3.0), 2.0);
+        let walk = |o: Vec3, d: Vec3, t_max: f32| {
+            let mut ts = Vec::new();
+            let ray = Ray::new(o, d);
+            s.for_each_crossing(&ray, t_max, |h| {
+                ts.push(h.t);
+                true
+            });
+            (ts, s.intersect(&ray, t_max).map(|h| h.t))
+        };
+        let (ts, first) = walk(Vec3::new(1.0, 2.0, -7.0), Vec3::Z, f32::INFINITY);
+        assert_eq!(ts.len(), 2);
+        assert_eq!(Some(ts[0]), first);
+        assert!((ts[0] - 8.0).abs() < 1e-5 && (ts[1] - 12.0).abs() < 1e-5, "{ts:?}");
+        let (ts, _) = walk(Vec3::new(1.0, 2.0, -7.0), Vec3::Z, 10.0);
+        assert_eq!(ts.len(), 1);
+        let (ts, first) = walk(Vec3::new(1.0, 2.5, 3.0), Vec3::Y, f32::INFINITY);
+        assert_eq!((ts.len(), Some(ts[0])), (1, first));
+        assert!((ts[0] - 1.5).abs() < 1e-5);
+        let on_surface = s.surface(&Ray::new(Vec3::new(1.0, 2.0, -7.0), Vec3::Z), &PrimHit { t: 8.0, u: 0.0, v: 0.0 });
+        let (ts, _) =
+            walk(Ray::spawn(on_surface.p, on_surface.p_error, on_surface.ng, -Vec3::Z, 0.0).o, -Vec3::Z, f32::INFINITY);
+        assert!(ts.is_empty(), "{ts:?}");
+        let mut calls = 0;
+        let done = s.for_each_crossing(&Ray::new(Vec3::new(1.0, 2.0, -7.0), Vec3::Z), f32::INFINITY, |_| {
+            calls += 1;
+            false
+        });
+        assert!(!done && calls == 1);
+    }
 
     fn hit(s: &Sphere, o: Vec3, d: Vec3) -> Option<f32> {
         let r = Ray::new(o, d.normalize());
