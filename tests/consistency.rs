@@ -231,10 +231,11 @@ material = "test"
 }
 
 /// Camera samples per pixel of every integrator (SPPM's iterations; the photon integrator
-/// gathers 2 rays at each). With the same count and seed, the three integrators start the same
-/// camera rays, so what a pixel covers (a light's reflection smaller than a pixel in the mirror
-/// sphere) is the same in every render and cancels in their difference, which is measured per
-/// seed.
+/// gathers 2 rays at each). On mirrors and glass, with the same count and seed the three
+/// integrators start the same camera rays, so what a pixel covers (a light's reflection smaller
+/// than a pixel in the mirror sphere) is the same in every render and cancels in their
+/// difference, which is measured per seed (elsewhere the path tracer takes more samples:
+/// `PATH_SPP_FACTOR`).
 const SPP: u32 = 48;
 /// On materials without a mirror or glass part the path tracer takes this many times the
 /// samples: it is the cheapest of the three here, and its noise in the glossy reflections and

@@ -512,7 +512,7 @@ mod spawned {
                 let Some(inst) = Instance::new(0, t) else { return Ok(0) };
                 let all = Instances::build(vec![prims.into()], vec![inst], &[]);
                 let Some(h) = all.intersect(&ray, f32::INFINITY) else { return Ok(0) };
-                let sp = all.surface(&h, &[]).1;
+                let sp = all.surface(&h, &[]).0;
                 (sp, Box::new(move |r: &Ray| all.intersect(r, f32::INFINITY).map(|h| h.t)))
             }
         };

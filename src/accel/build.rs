@@ -412,7 +412,8 @@ pub(super) fn build_wide(prims: &mut [BuildPrim]) -> Tree {
     let b = Bounds::of(prims);
     let trav = traversal_cost(prims.len());
     let root = Item { start: 0, len: prims.len(), b, depth: 0, split: plan(prims, &b, 0, trav), trav };
-    let mut chunk = Chunk::default();
+    // About one node per eight primitives; untouched capacity costs no memory.
+    let mut chunk = Chunk { nodes: Vec::with_capacity(prims.len() / 6 + 1), subtrees: Vec::new() };
     let depth = node(prims, 0, root, &mut chunk, (prims.len() / 16).max(PAR_TREE));
     Tree { chunk, depth, bounds: Aabb { min: b.lo.truncate(), max: b.hi.truncate() } }
 }

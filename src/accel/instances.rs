@@ -174,14 +174,14 @@ impl Instances {
             + self.groups.iter().map(Bvh::memory_bytes).sum::<usize>()
     }
 
-    /// The material and light of a hit's primitive, and its surface point in world space;
-    /// `meshes` are the scene's meshes.
+    /// A hit's surface point in world space and its primitive's material and light; `meshes`
+    /// are the scene's meshes.
     #[inline]
-    pub fn surface(&self, h: &InstanceHit, meshes: &[TriangleMesh]) -> ((u32, u32), SurfacePoint) {
+    pub fn surface(&self, h: &InstanceHit, meshes: &[TriangleMesh]) -> (SurfacePoint, u32, u32) {
         let inst = &self.instances[h.instance as usize];
         let group = &self.groups[inst.group as usize];
         let (sp, material, light) = group.surface(h.prim, &h.ray, &h.hit, meshes);
-        ((material, light), inst.surface_to_world(&sp))
+        (inst.surface_to_world(&sp), material, light)
     }
 
     /// Closest hit in (0, t_max) on any instance.
@@ -305,7 +305,7 @@ mod tests {
             let got = inst.intersect(&ray, f32::INFINITY);
             if let (Some(e), Some(g)) = (expect, got)
                 && matches!(inst.groups[0].prims().get(g.prim as usize, &[]).shape, Shape::Triangle(_))
-                && let (_, sp) = inst.surface(&g, &[])
+                && let (sp, _, _) = inst.surface(&g, &[])
             {
                 hits += 1;
                 assert!((e.t - g.t).abs() < 1e-4 * e.t, "{} vs {}", e.t, g.t);
@@ -340,7 +340,7 @@ mod tests {
             let o = target + Vec3::new(a.cos(), a.sin(), 1.0 + (i % 7) as f32) * 10.0;
             let ray = Ray::new(o, (target + Vec3::new(0.01 * (i % 13) as f32, 0.0, 0.0) - o).normalize());
             let Some(h) = inst.intersect(&ray, f32::INFINITY) else { continue };
-            let (_, sp) = inst.surface(&h, &[]);
+            let (sp, _, _) = inst.surface(&h, &[]);
             for w in [ray.d - 2.0 * ray.d.dot(sp.ng) * sp.ng, ray.d] {
                 let r = Ray::spawn(sp.p, sp.p_error, sp.ng, w, 0.0);
                 assert!(inst.intersect(&r, f32::INFINITY).is_none(), "re-hit from {} along {w}", sp.p);

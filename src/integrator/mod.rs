@@ -98,8 +98,11 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
         IntegratorKind::Whitted | IntegratorKind::Path => 0,
         IntegratorKind::Photon => {
             let c = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
-            // Up to four stored bounces per global photon, plus the irradiance records.
-            photon::estimated_map_bytes(c.photons.saturating_mul(5)) + photon::estimated_map_bytes(c.caustic_photons)
+            // Up to four stored bounces per global photon, plus the irradiance records (one per
+            // four stored bounces) and their depth levels.
+            photon::estimated_map_bytes(c.photons.saturating_mul(5))
+                + photon::estimated_record_level_bytes(c.photons)
+                + photon::estimated_map_bytes(c.caustic_photons)
         }
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, settings.pixels());

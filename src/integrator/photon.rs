@@ -173,8 +173,14 @@ pub fn estimated_map_bytes(n: u64) -> u64 {
     n * (std::mem::size_of::<Photon>() as u64 + 8 + std::mem::size_of::<trace::PhotonHit>() as u64)
 }
 
+/// Bytes the depth levels of `n` precomputed irradiance records need beside their map, at the
+/// peak (the levels kept and those computed before the first moves into the records).
+pub fn estimated_record_level_bytes(n: u64) -> u64 {
+    n * (std::mem::size_of::<[Color; RECORD_LEVELS]>() + std::mem::size_of::<[Color; RECORD_LEVELS - 1]>()) as u64
+}
+
 fn to_photons(pass: &PhotonPass) -> Vec<Photon> {
-    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, trace::map_flags(h))).collect()
+    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, trace::packed_flags(h))).collect()
 }
 
 impl PhotonIntegrator {
@@ -267,10 +273,11 @@ impl PhotonIntegrator {
     }
 
     /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
-    /// precomputed irradiance record facing the same way (L = albedo / pi * E); where photons
-    /// are too sparse for a record to be near (far out on a floor plane, whose photons thin
-    /// out with distance), or where the depth limit allows fewer photon bounces than the
-    /// records hold (`depth`, see `PhotonConfig::record_depth`), from the photons themselves.
+    /// precomputed irradiance record facing the same way (L = albedo / pi * E), at the level of
+    /// the photon bounces `depth` allows; where photons are too sparse for a record to be near
+    /// (far out on a floor plane, whose photons thin out with distance), or where the depth
+    /// limit allows fewer bounces than the records' last level (`RECORD_LEVELS`), from the
+    /// photons themselves.
     fn gathered_radiance(&self, y: &Hit, by: &Bsdf, wo_y: Vec3, depth: u32, scratch: &mut Gathered) -> Color {
         let c = &self.config;
         let level = c.record_depth().saturating_sub(depth) as usize;
@@ -336,7 +343,7 @@ impl PhotonIntegrator {
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
             let ph = map.photon(i);
-            if ph.flags() & exclude != 0 || trace::map_depth(ph.flags()) > depth {
+            if ph.flags() & exclude != 0 || trace::packed_depth(ph.flags()) > depth {
                 continue;
             }
             let dir = ph.direction();
@@ -538,7 +545,7 @@ impl PhotonIntegrator {
         if use_cache
             && !self.cache.is_empty()
             && let Some(albedo) = bsdf.lambert_albedo()
-            && let Some(e) = self.cache.lookup(hit.p, bsdf.normal())
+            && let Some(e) = self.cache.lookup(hit.p, bsdf.normal(), bounce)
         {
             return albedo * e * std::f32::consts::FRAC_1_PI;
         }
@@ -593,7 +600,7 @@ fn precompute_irradiance(
                         for &(_, i) in found {
                             let ph = map.photon(i);
                             // Counted at each level j whose limit depth - j its bounces keep to.
-                            let Some(spare) = depth.checked_sub(trace::map_depth(ph.flags())) else { continue };
+                            let Some(spare) = depth.checked_sub(trace::packed_depth(ph.flags())) else { continue };
                             if ph.direction().dot(n) < 0.0 && (ph.position() - p).dot(n).abs() <= thickness {
                                 let power = ph.power();
                                 for level in e.iter_mut().take(spare as usize + 1) {

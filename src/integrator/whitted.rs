@@ -186,7 +186,8 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
         stats.shadow_rays += 1;
         return if all { atten } else { Color::ZERO };
     }
-    for _ in 0..MAX_SHADOW_CROSSINGS {
+    // As many crossings pass as in the walk above; a further one blocks.
+    for _ in 0..=MAX_SHADOW_CROSSINGS {
         stats.shadow_rays += 1;
         let tm = t_max(&ray);
         if !(tm > 0.0) {

@@ -48,13 +48,13 @@ pub fn photon_depth_limit(max_depth: u32, bounce: u32) -> Option<u32> {
 
 /// A photon map's flags byte: the flags in the low two bits, the depth in the other six.
 #[inline]
-pub fn map_flags(h: &PhotonHit) -> u8 {
+pub fn packed_flags(h: &PhotonHit) -> u8 {
     h.flags | h.depth << 2
 }
 
-/// The depth stored in a photon map's flags byte (`map_flags`).
+/// The depth stored in a photon map's flags byte (`packed_flags`).
 #[inline]
-pub fn map_depth(flags: u8) -> u32 {
+pub fn packed_depth(flags: u8) -> u32 {
     u32::from(flags >> 2)
 }
 

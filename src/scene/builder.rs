@@ -154,13 +154,12 @@ impl SceneBuilder {
         mesh.shrink_to_fit();
         let has_area =
             |idx: &[u32; 3]| Triangle { p: idx.map(|i| mesh.positions[i as usize]), mesh: id, index: 0 }.area() > 0.0;
-        let kept = mesh.indices.iter().filter(|idx| has_area(idx)).count();
         let triangles = (0..mesh.indices.len() as u32).filter(|&k| has_area(&mesh.indices[k as usize]));
-        let triangles = ExactLen { inner: triangles, len: kept };
         match self.open_group {
             Some(g) => self.groups[g].push_mesh(id, material, triangles),
             None => self.prims.push_mesh(id, material, triangles),
         }
+        let kept = self.target().len() - first;
         let skipped = mesh.indices.len() - kept;
         self.mesh_info.push(MeshInfo {
             name: name.to_string(),
@@ -363,24 +362,3 @@ fn photon_disk(bounds: Aabb, planes: &[(Plane, u32)], eye: Vec3) -> PhotonDisk {
     let radius = if radius > 0.0 && radius.is_finite() { radius } else { 1.0 };
     PhotonDisk::new(center, radius, !planes.is_empty())
 }
-
-/// An iterator whose length is known ahead (a filter whose matches were counted), so the
-/// primitives it fills are reserved exactly.
-struct ExactLen<I> {
-    inner: I,
-    len: usize,
-}
-
-impl<I: Iterator> Iterator for ExactLen<I> {
-    type Item = I::Item;
-    fn next(&mut self) -> Option<I::Item> {
-        let x = self.inner.next()?;
-        self.len -= 1;
-        Some(x)
-    }
-    fn size_hint(&self) -> (usize, Option<usize>) {
-        (self.len, Some(self.len))
-    }
-}
-
-impl<I: Iterator> ExactSizeIterator for ExactLen<I> {}

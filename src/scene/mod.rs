@@ -166,7 +166,7 @@ impl Scene {
             return Some(Self::hit(h.t, &sp, *material, NO_LIGHT, u32::MAX - k as u32));
         }
         if let Some(h) = instanced {
-            let ((material, light), sp) = self.instances.surface(&h, &self.meshes);
+            let (sp, material, light) = self.instances.surface(&h, &self.meshes);
             return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }
         let (i, h) = best?;
@@ -174,11 +174,13 @@ impl Scene {
         Some(Self::hit(h.t, &sp, material, light, i))
     }
 
-    /// Calls `visit(material, ng)` (ng the outward geometric normal) for every surface `ray`
-    /// crosses in (0, t_max), in no particular order, until it returns false; returns whether
-    /// it went through all of them. `None` for scenes with instances or cylinders, whose
-    /// crossings callers walk one closest hit at a time. One traversal instead of one per
-    /// crossing: a shadow ray through a glass sphere crosses it twice.
+    /// Calls `visit(material, ng)` (ng the geometric normal a closest hit there reports,
+    /// `Hit::ng`) for every surface `ray` crosses in (0, t_max), in no particular order, until
+    /// it returns false; returns whether it went through all of them. `None` for scenes with
+    /// instances or cylinders, whose crossings callers walk one closest hit at a time. One
+    /// traversal instead of one per crossing: a shadow ray through a glass sphere crosses it
+    /// twice. A ray exactly along an edge shared by two triangles (or tangent to a sphere)
+    /// crosses both (both roots), where a walk of closest hits would count one.
     #[inline]
     pub fn for_each_crossing(
         &self,

@@ -52,11 +52,13 @@ impl Primitives {
     }
 
     /// Adds triangles `triangles` of mesh `mesh` (an index into the scene's meshes, which every
-    /// later call is given as `meshes`), all with `material`.
-    pub fn push_mesh(&mut self, mesh: u32, material: u32, triangles: impl ExactSizeIterator<Item = u32>) {
+    /// later call is given as `meshes`), all with `material`; room is reserved for as many as
+    /// the iterator may give.
+    pub fn push_mesh(&mut self, mesh: u32, material: u32, triangles: impl Iterator<Item = u32>) {
         let group = self.groups.len() as u32;
         self.groups.push(MeshGroup { mesh, material });
-        self.refs.reserve_exact(triangles.len());
+        let (low, high) = triangles.size_hint();
+        self.refs.reserve_exact(high.unwrap_or(low));
         self.refs.extend(triangles.map(|index| PrimRef { group, index }));
     }
 
@@ -131,6 +133,7 @@ impl Primitives {
                 let g = self.groups[g as usize];
                 (Triangle { p: *p, mesh: g.mesh, index: r.index }.surface(h, meshes), g.material, NO_LIGHT)
             }
+            // (A mesh triangle's leaf is always a triangle; kept total rather than panicking.)
             _ => {
                 let p = self.get(i, meshes);
                 (p.shape.surface(ray, h, meshes), p.material, p.light)

@@ -103,7 +103,7 @@ impl PhotonIntegrator {
         let lo = (MIN_REACH_PX * fp).min(MIN_REACH_DIST * c.dist);
         let hi = (MAX_REACH_PX * fp).min(MAX_REACH_DIST * c.dist);
         let range = (lo / a, hi / a);
-        make_record(c.hit.p, &frame, m, n, &samples, &dirs, range)
+        Record { bounce: c.bounce, ..make_record(c.hit.p, &frame, m, n, &samples, &dirs, range) }
     }
 
     /// Fills the irradiance cache (see the module docs); `None` when cancelled.
@@ -134,7 +134,7 @@ impl PhotonIntegrator {
                             }
                             let mut rng = Rng32::new(hash_seed(&[seed, 0x1c_ac4e, u64::from(x), u64::from(y)]));
                             let c = self.first_diffuse(scene, x, y, &mut rng)?;
-                            if cache.covers(c.hit.p, c.bsdf.normal(), COVER * a) {
+                            if cache.covers(c.hit.p, c.bsdf.normal(), COVER * a, c.bounce) {
                                 return None;
                             }
                             Some(self.record_at(scene, &c, &mut rng, &mut scratch))

@@ -40,6 +40,9 @@ pub struct Record {
     /// E + (n_i x n) . grad_r to first order) and the translational one (E + (x - x_i) . grad_t).
     pub grad_r: [Vec3; 3],
     pub grad_t: [Vec3; 3],
+    /// The camera bounce it was made at: its gathers read photons of the bounces the depth
+    /// limit leaves there, so it serves only points at the same bounce.
+    pub bounce: u32,
 }
 
 impl Record {
@@ -194,7 +197,7 @@ pub fn make_record(
     }
     let r = clamped;
     let world = |v: Vec3| frame.to_world(v);
-    Record { p, n: frame.z, e, r, grad_r: grad_r.map(world), grad_t: grad_t.map(world) }
+    Record { p, n: frame.z, e, r, grad_r: grad_r.map(world), grad_t: grad_t.map(world), bounce: 1 }
 }
 
 /// The records and a multi-level hash grid over their reach: a record whose reach (radius
@@ -295,10 +298,13 @@ impl IrradianceCache {
     /// Irradiance at (p, n) interpolated from the records within the error threshold, `None`
     /// where there is none. Allocates nothing.
     #[inline]
-    pub fn lookup(&self, p: Vec3, n: Vec3) -> Option<Color> {
+    pub fn lookup(&self, p: Vec3, n: Vec3, bounce: u32) -> Option<Color> {
         let inv_a = 1.0 / self.a;
         let (mut sum, mut sum_w) = (Color::ZERO, 0.0f32);
         self.for_each_near(p, |rec| {
+            if rec.bounce != bounce {
+                return;
+            }
             let Some(eps) = rec.error(p, n) else { return };
             if eps < self.a {
                 let w = 1.0 / eps.max(1e-4) - inv_a;
@@ -310,10 +316,10 @@ impl IrradianceCache {
     }
 
     /// True when some record reaches (p, n) with an error below `limit`.
-    pub fn covers(&self, p: Vec3, n: Vec3, limit: f32) -> bool {
+    pub fn covers(&self, p: Vec3, n: Vec3, limit: f32, bounce: u32) -> bool {
         let mut found = false;
         self.for_each_near(p, |rec| {
-            found |= rec.error(p, n).is_some_and(|e| e < limit);
+            found |= rec.bounce == bounce && rec.error(p, n).is_some_and(|e| e < limit);
         });
         found
     }

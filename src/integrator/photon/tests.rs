@@ -112,7 +112,7 @@ fn the_cache_reproduces_the_gather_within_its_error_bound() {
         for x in (2..48).step_by(3) {
             let mut rng = Rng32::new(hash_seed(&[77, x, y]));
             let Some(c) = pm.first_diffuse(&scene, x as u32, y as u32, &mut rng) else { continue };
-            let Some(e) = pm.cache.lookup(c.hit.p, c.bsdf.normal()) else {
+            let Some(e) = pm.cache.lookup(c.hit.p, c.bsdf.normal(), c.bounce) else {
                 misses += 1;
                 continue;
             };

@@ -11,7 +11,7 @@
 //! (v, vt, vn) triple made a vertex of its own, through a hash map: reading then peaks at 69
 //! bytes per triangle on the 5 M-triangle knot with its normals numbered apart, against 23 when
 //! they are not (the file's lists, the triangles' normal indices and the map, freed before
-//! the BVH is built, whose own peak is far higher; BENCHMARKS.md, "Big meshes"). Numbers with at most 7 significant digits and a small exponent are converted
+//! the BVH is built, whose own peak is 91; BENCHMARKS.md, "Big meshes"). Numbers with at most 7 significant digits and a small exponent are converted
 //! exactly by Clinger's fast path (an integer over a power of ten, both exact in f32); others go
 //! through the standard library's correctly rounded parser.
 

@@ -114,7 +114,7 @@ fn the_radius_is_the_harmonic_mean_distance() {
 }
 
 fn flat_record(p: Vec3, e: f32, r: f32) -> Record {
-    Record { p, n: Vec3::Z, e: Color::splat(e), r, grad_r: [Vec3::ZERO; 3], grad_t: [Vec3::ZERO; 3] }
+    Record { p, n: Vec3::Z, e: Color::splat(e), r, grad_r: [Vec3::ZERO; 3], grad_t: [Vec3::ZERO; 3], bounce: 1 }
 }
 
 #[test]
@@ -122,26 +122,28 @@ fn lookups_weight_records_by_their_error_and_stop_at_the_threshold() {
     let a = 0.3;
     let cache = IrradianceCache::new(vec![flat_record(Vec3::ZERO, 2.0, 1.0), flat_record(Vec3::X, 4.0, 1.0)], a);
     // At a record: its value exactly (the other is out of reach).
-    assert_eq!(cache.lookup(Vec3::ZERO, Vec3::Z), Some(Color::splat(2.0)));
+    assert_eq!(cache.lookup(Vec3::ZERO, Vec3::Z, 1), Some(Color::splat(2.0)));
+    // A point at another camera bounce reads no record (its photons keep to another limit).
+    assert_eq!(cache.lookup(Vec3::ZERO, Vec3::Z, 2), None);
     // Within reach of the first only (|x| < a R = 0.3).
-    assert_eq!(cache.lookup(Vec3::new(0.29, 0.0, 0.0), Vec3::Z), Some(Color::splat(2.0)));
+    assert_eq!(cache.lookup(Vec3::new(0.29, 0.0, 0.0), Vec3::Z, 1), Some(Color::splat(2.0)));
     // Between them: out of reach of both.
-    assert_eq!(cache.lookup(Vec3::new(0.5, 0.0, 0.0), Vec3::Z), None);
+    assert_eq!(cache.lookup(Vec3::new(0.5, 0.0, 0.0), Vec3::Z, 1), None);
     // A normal turned by acos(1 - a^2) is at the edge: sqrt(1 - cos) = a.
     let cos: f32 = 1.0 - 0.29 * 0.29;
     let n = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
-    assert!(cache.lookup(Vec3::ZERO, n).is_some());
+    assert!(cache.lookup(Vec3::ZERO, n, 1).is_some());
     let cos: f32 = 1.0 - 0.31 * 0.31;
     let n = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
-    assert_eq!(cache.lookup(Vec3::ZERO, n), None);
+    assert_eq!(cache.lookup(Vec3::ZERO, n, 1), None);
     // The other side of a wall: nothing.
-    assert_eq!(cache.lookup(Vec3::ZERO, -Vec3::Z), None);
+    assert_eq!(cache.lookup(Vec3::ZERO, -Vec3::Z, 1), None);
     // Two records of equal error weigh equally.
     let cache = IrradianceCache::new(vec![flat_record(Vec3::ZERO, 2.0, 1.0), flat_record(Vec3::X * 0.2, 4.0, 1.0)], a);
-    let mid = cache.lookup(Vec3::X * 0.1, Vec3::Z).unwrap();
+    let mid = cache.lookup(Vec3::X * 0.1, Vec3::Z, 1).unwrap();
     assert!((mid.x - 3.0).abs() < 1e-5, "{mid:?}");
-    assert!(cache.covers(Vec3::X * 0.1, Vec3::Z, 0.7 * a));
-    assert!(!cache.covers(Vec3::X * 0.1, Vec3::Z, 0.05));
+    assert!(cache.covers(Vec3::X * 0.1, Vec3::Z, 0.7 * a, 1));
+    assert!(!cache.covers(Vec3::X * 0.1, Vec3::Z, 0.05, 1));
 }
 
 #[test]
@@ -149,8 +151,8 @@ fn records_in_front_of_a_point_are_not_used() {
     // A record on a floor and a point 0.1 above it (a box standing on the floor): the record
     // sees light the point cannot (or the other way round); Ward's test refuses it.
     let cache = IrradianceCache::new(vec![flat_record(Vec3::ZERO, 2.0, 1.0)], 0.3);
-    assert!(cache.lookup(Vec3::new(0.05, 0.0, -0.1), Vec3::Z).is_none());
-    assert!(cache.lookup(Vec3::new(0.05, 0.0, 0.01), Vec3::Z).is_some());
+    assert!(cache.lookup(Vec3::new(0.05, 0.0, -0.1), Vec3::Z, 1).is_none());
+    assert!(cache.lookup(Vec3::new(0.05, 0.0, 0.01), Vec3::Z, 1).is_some());
 }
 
 #[test]
@@ -166,12 +168,12 @@ fn the_grid_finds_records_of_every_size() {
         for s in [-0.99f32, -0.5, 0.0, 0.5, 0.99] {
             for axis in [Vec3::X, Vec3::Y] {
                 let p = r.p + axis * (s * reach);
-                let got = cache.lookup(p, Vec3::Z).map(|c| c.x);
+                let got = cache.lookup(p, Vec3::Z, 1).map(|c| c.x);
                 // (e w) / w: exact up to rounding.
                 let ok = got.is_some_and(|g| (g - r.e.x).abs() <= 1e-5 * r.e.x);
                 assert!(ok, "record at {:?}, offset {s} along {axis:?}: {got:?}", r.p);
             }
         }
-        assert_eq!(cache.lookup(r.p + Vec3::Y * (1.01 * reach), Vec3::Z), None);
+        assert_eq!(cache.lookup(r.p + Vec3::Y * (1.01 * reach), Vec3::Z, 1), None);
     }
 }
