@@ -70,6 +70,12 @@ const FLAGS_SHIFT: u32 = 56;
 const THETA_BINS: usize = 256;
 const PHI_BINS: usize = 512;
 
+/// The three channels of `power` in the low `3 * CHANNEL_BITS` bits.
+#[inline]
+fn encode_power(power: Color) -> u64 {
+    encode_channel(power.x) | encode_channel(power.y) << CHANNEL_BITS | encode_channel(power.z) << (2 * CHANNEL_BITS)
+}
+
 /// Encodes one non-negative power channel into 13 bits, rounding to nearest.
 #[inline]
 fn encode_channel(v: f32) -> u64 {
@@ -140,22 +146,15 @@ impl Photon {
         // phi = pi lands on bin PHI_BINS, which wraps to bin 0 (the same direction).
         let phi_bin =
             (((phi + std::f32::consts::PI) * (PHI_BINS as f32 / std::f32::consts::TAU)) as u64) & (PHI_BINS as u64 - 1);
-        let bits = encode_channel(power.x)
-            | encode_channel(power.y) << CHANNEL_BITS
-            | encode_channel(power.z) << (2 * CHANNEL_BITS)
-            | theta_bin << THETA_SHIFT
-            | phi_bin << PHI_SHIFT
-            | u64::from(flags) << FLAGS_SHIFT;
+        let bits =
+            encode_power(power) | theta_bin << THETA_SHIFT | phi_bin << PHI_SHIFT | u64::from(flags) << FLAGS_SHIFT;
         Photon { position: p.to_array(), packed: bits.to_le_bytes() }
     }
 
     /// The same photon carrying `power` instead (its direction and flags kept bit for bit).
     pub fn with_power(&self, power: Color) -> Photon {
         let mask = (1u64 << (3 * CHANNEL_BITS)) - 1;
-        let bits = (self.bits() & !mask)
-            | encode_channel(power.x)
-            | encode_channel(power.y) << CHANNEL_BITS
-            | encode_channel(power.z) << (2 * CHANNEL_BITS);
+        let bits = (self.bits() & !mask) | encode_power(power);
         Photon { position: self.position, packed: bits.to_le_bytes() }
     }
 

@@ -439,6 +439,21 @@ mod tests {
     use super::*;
     use crate::material::{Classic, ClassicKind};
 
+    /// A whole path keeps to max_depth: at camera bounce b photons may have scattered
+    /// max_depth - b times, none beyond the limit, and the packed byte keeps flags and depth.
+    #[test]
+    fn photon_depths_keep_paths_within_the_limit() {
+        assert_eq!(photon_depth_limit(8, 1), Some(7));
+        assert_eq!(photon_depth_limit(8, 8), Some(0));
+        assert_eq!(photon_depth_limit(8, 9), None);
+        assert_eq!(photon_depth_limit(1000, 2), Some(MAX_PHOTON_DEPTH));
+        for (flags, depth) in [(0, 0), (DIRECT, 5), (CAUSTIC, MAX_PHOTON_DEPTH as u8)] {
+            let h = PhotonHit { p: Vec3::ZERO, dir: Vec3::Z, flux: Color::ONE, flags, depth, n: Vec3::Z };
+            let packed = packed_flags(&h);
+            assert_eq!((packed & (DIRECT | CAUSTIC), packed_depth(packed)), (flags, u32::from(depth)));
+        }
+    }
+
     #[test]
     fn photon_roulette_keeps_mean_power() {
         // Russian roulette on the throughput: the expected scattered power equals the albedo times

@@ -25,7 +25,7 @@ impl Sphere {
 
     /// The sphere of `radius` about `center` in object space placed by `t` (a similarity, checked
     /// by the caller): its texture coordinates turn with `t`'s rotation. A mirroring transform
-    /// keeps the world's orientation (`None` second value: the caller may warn).
+    /// keeps the world's orientation (second value false: the caller may warn).
     pub fn transformed(t: &Transform, center: Vec3, radius: f32) -> (Self, bool) {
         let scale = t.axis_scales().x;
         let m = Mat3::from_mat4(t.m) * (1.0 / scale);

@@ -524,6 +524,13 @@ mod tests {
         let (m, phi, _) = gather(&v, 0.5, &grid, &hits);
         assert_eq!(m, 3);
         assert!((phi.x - 0.5 / PI).abs() < 1e-6, "{phi}");
+        // A photon of more bounces than the point allows is counted in M but brings no light.
+        let deep = [PhotonHit { depth: 3, ..hits[0] }];
+        let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
+        let (m, phi, _) = gather(&VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
+        assert_eq!((m, phi), (1, Color::ZERO));
+        let (m, phi, _) = gather(&VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
+        assert!(m == 1 && (phi.x - 0.5 / PI).abs() < 1e-6, "{phi}");
     }
 
     #[test]

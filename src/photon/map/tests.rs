@@ -291,3 +291,14 @@ mod property {
         }
     }
 }
+
+/// Replacing a photon's power keeps its position, direction and flags bit for bit, and the new
+/// power reads back as a photon made with it does.
+#[test]
+fn with_power_changes_only_the_power() {
+    let p = Photon::new(Vec3::new(1.0, -2.0, 3.5), Vec3::new(0.3, -0.8, 0.2), Color::new(1.0, 2.0, 3.0), (5 << 2) | 1);
+    let q = p.with_power(Color::new(0.25, 7.0, 0.0));
+    assert_eq!((q.position(), q.direction(), q.flags()), (p.position(), p.direction(), p.flags()));
+    let fresh = Photon::new(p.position(), Vec3::new(0.3, -0.8, 0.2), Color::new(0.25, 7.0, 0.0), 0);
+    assert_eq!(q.power(), fresh.power());
+}
