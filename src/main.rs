@@ -118,6 +118,10 @@ struct RenderArgs {
     /// refraction (overrides the scene).
     #[arg(long, value_name = "D")]
     max_depth: Option<u32>,
+    /// Whitted: reflected and refracted rays of less weight in the pixel than this go on by
+    /// Russian roulette (POV-Ray's adc_bailout; 0 traces all) [default: 1/255].
+    #[arg(long, value_name = "W", value_parser = unit_interval)]
+    adc_bailout: Option<f32>,
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -228,6 +232,13 @@ fn parse_define(s: &str) -> Result<(String, String), String> {
     }
 }
 
+fn unit_interval(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a number from 0 to 1, found `{s}`")),
+    }
+}
+
 fn seconds(v: Option<f64>, name: &str) -> Result<Option<Duration>> {
     match v {
         None => Ok(None),
@@ -251,6 +262,7 @@ impl RenderArgs {
         opt("spp-axis", self.spp_axis.map(|v| v.to_string()));
         opt("spp", self.spp.map(|v| v.to_string()));
         opt("max-depth", self.max_depth.map(|v| v.to_string()));
+        opt("adc-bailout", self.adc_bailout.map(|v| format!("{v:?}")));
         opt("threads", self.threads.map(|v| v.to_string()));
         opt("seed", self.seed.map(|v| v.to_string()));
         opt("integrator", self.integrator.map(|v| format!("{v:?}").to_lowercase()));
@@ -295,6 +307,7 @@ impl RenderArgs {
                 spp_axis: args.spp_axis,
                 spp: args.spp.or(args.iterations),
                 max_depth: args.max_depth,
+                adc_bailout: args.adc_bailout,
                 seed: args.seed,
                 integrator: args.integrator.map(IntegratorKind::from),
                 sampler: args.sampler,

@@ -21,6 +21,7 @@ fn cases() -> Vec<(&'static str, String, &'static str, usize)> {
         ("unknown key", with_cam("[render]\nwidht = 3\n"), "widht", 5),
         ("wrong type", with_cam("[render]\nwidth = \"big\"\n"), "invalid type", 5),
         ("negative integer", with_cam("[render]\nheight = -4\n"), "-4", 5),
+        ("adc_bailout above 1", with_cam("[render]\nmax_depth = 4\nadc_bailout = 2\n"), "from 0 to 1", 6),
         ("NaN colour", with_cam("[render]\nbackground = [nan, 0, 0]\n"), "finite", 5),
         ("infinite point", "[camera]\neye = [0, inf, 5]\nlook_at = [0, 0, 0]\n".into(), "finite", 2),
         ("missing camera", "[render]\nwidth = 10\n".into(), "missing [camera]", 1),

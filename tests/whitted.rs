@@ -10,15 +10,28 @@ use caustic::render::{RayIntegrator, RayStats};
 use caustic::sampling::{Sampler, SamplerKind};
 
 fn radiance(s: &caustic::app::LoadedScene, ray: Ray, depth: u32) -> Color {
-    let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, 0, 1);
-    let l = Whitted { max_depth: depth, area_samples: 16 }.radiance(
+    radiance_counted(s, ray, depth, 0.0, 0).0
+}
+
+/// Radiance with adaptive depth control at `bailout` (sample `index` of the random stream), and
+/// the rays it took.
+fn radiance_counted(
+    s: &caustic::app::LoadedScene,
+    ray: Ray,
+    depth: u32,
+    bailout: f32,
+    index: u32,
+) -> (Color, RayStats) {
+    let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, index, 1);
+    let mut stats = RayStats::default();
+    let l = Whitted { max_depth: depth, area_samples: 16, adc_bailout: bailout }.radiance(
         &s.scene,
         &ray,
         &mut sampler,
         &mut (),
-        &mut RayStats::default(),
+        &mut stats,
     );
-    l.iter().sum()
+    (l.iter().sum(), stats)
 }
 
 const PLANE_UNDER_LIGHT: &str = r#"
@@ -132,6 +145,60 @@ material = "glass"
         let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 41);
         assert!((c - Vec3::ONE).abs().max_element() < 1e-3, "offset {y}: {c}");
     }
+}
+
+/// Adaptive depth control ends rays of little weight by Russian roulette, so it keeps the
+/// expected radiance: through a glass sphere over a lit floor, seen off axis so that internal
+/// reflections branch, the mean of many samples at a bailout high enough to end most rays
+/// matches the radiance with every ray traced, within four standard errors, at fewer rays.
+#[test]
+fn adaptive_depth_control_keeps_the_mean_with_fewer_rays() {
+    let s = common::scene(
+        r#"
+[render]
+background = [0.3, 0.5, 0.8]
+[camera]
+eye = [0, 1, 5]
+look_at = [0, 1, 0]
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[materials.floor]
+type = "diffuse"
+color = [0.9, 0.6, 0.3]
+ka = 0
+[[lights]]
+type = "point"
+position = [2, 5, 3]
+intensity = 40
+[[objects]]
+type = "plane"
+material = "floor"
+[[objects]]
+type = "sphere"
+center = [0, 1, 0]
+radius = 1
+material = "glass"
+"#,
+    );
+    let ray = Ray::new(Vec3::new(0.0, 1.0, 5.0), Vec3::new(0.0, -0.12, -1.0).normalize());
+    let depth = 10;
+    let (exact, all) = radiance_counted(&s, ray, depth, 0.0, 0);
+    let n = 20_000;
+    let (mut sum, mut sum2, mut rays) = (Vec3::ZERO, Vec3::ZERO, 0u64);
+    for i in 0..n {
+        let (c, stats) = radiance_counted(&s, ray, depth, 0.2, i);
+        sum += c;
+        sum2 += c * c;
+        rays += stats.rays;
+    }
+    let mean = sum / n as f32;
+    let std_err = ((sum2 / n as f32 - mean * mean).max(Vec3::ZERO) / n as f32).powf(0.5);
+    assert!(std_err.min_element() > 0.0, "no ray was ended: {std_err}");
+    let err = (mean - exact).abs();
+    assert!(err.cmple(std_err * 4.0).all(), "mean {mean} vs {exact} (standard error {std_err})");
+    let per_sample = rays as f64 / n as f64;
+    assert!(per_sample < 0.6 * all.rays as f64, "{per_sample} rays per sample, {} with every ray traced", all.rays);
 }
 
 #[test]

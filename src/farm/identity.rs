@@ -50,6 +50,7 @@ impl RenderId {
             ("antialias".into(), settings.antialias.to_string()),
             ("max_depth".into(), opt(integrator.max_depth.map(|d| d.to_string()))),
             ("light_samples".into(), integrator.light_samples.to_string()),
+            ("adc_bailout".into(), format!("{:?}", integrator.adc_bailout)),
             ("photons".into(), opt(p.photons.map(|v| v.to_string()))),
             ("caustic_photons".into(), opt(p.caustic_photons.map(|v| v.to_string()))),
             ("gather".into(), opt(p.gather.map(|v| v.to_string()))),

@@ -23,7 +23,7 @@ impl Ray {
     /// A ray leaving a surface point: the origin is pushed outside the point's error bound on the
     /// side `d` leaves towards (`ng` is the geometric normal), then `bias` further along `d`
     /// (the seed report's ray bias; the scene may set it, 0 disables it).
-    #[inline]
+    #[inline(always)]
     pub fn spawn(p: Vec3, p_error: Vec3, ng: Vec3, d: Vec3, bias: f32) -> Self {
         let o = offset_ray_origin(p, p_error, ng, d) + d * bias;
         Ray { o, d }

@@ -28,6 +28,13 @@ pub struct Whitted {
     pub max_depth: u32,
     /// Shadow rays per area light at each shading point.
     pub area_samples: u32,
+    /// Adaptive depth control (Hall and Greenberg 1983; POV-Ray's `adc_bailout`): a reflected
+    /// or refracted ray whose weight in the pixel (the product of the reflection and
+    /// transmission coefficients along its path) is below this goes on only with probability
+    /// weight / `adc_bailout`, and then counts 1 / probability as much (Russian roulette, Arvo
+    /// and Kirk 1990). The image's expected value is unchanged; the rays that could add little
+    /// to it are mostly not traced. 0 traces every ray.
+    pub adc_bailout: f32,
 }
 
 impl RayIntegrator for Whitted {
@@ -37,23 +44,48 @@ impl RayIntegrator for Whitted {
     /// refraction bring is `SPECULAR`.
     fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
         let mut layers = [Color::ZERO; 4];
-        (layers[DIRECT], layers[SPECULAR]) = self.trace(scene, ray, 0, sampler, stats);
+        (layers[DIRECT], layers[SPECULAR]) = self.trace(scene, ray, 0, 1.0, sampler, stats);
         layers
     }
 }
 
 impl Whitted {
-    fn trace_total(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
-        let (local, secondary) = self.trace(scene, ray, depth, sampler, stats);
-        local + secondary
+    /// What a reflected or refracted ray brings, times its coefficient `k`; `weight` is the
+    /// weight of the path up to the surface it leaves. Ends the ray by Russian roulette below
+    /// the bailout weight (see `adc_bailout`).
+    #[allow(clippy::too_many_arguments)]
+    fn secondary(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        depth: u32,
+        weight: f32,
+        k: f32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Color {
+        let mut w = weight * k;
+        let mut scale = k;
+        if w < self.adc_bailout {
+            let survive = w / self.adc_bailout;
+            if sampler.rng().uniform() >= survive {
+                return Color::ZERO;
+            }
+            scale = k / survive;
+            w = self.adc_bailout;
+        }
+        let (local, secondary) = self.trace(scene, ray, depth, w, sampler, stats);
+        scale * (local + secondary)
     }
 
-    /// Radiance along `ray` as (local shading, what reflection and refraction bring).
+    /// Radiance along `ray` as (local shading, what reflection and refraction bring); `weight`
+    /// is the path's weight in the pixel.
     fn trace(
         &self,
         scene: &Scene,
         ray: &Ray,
         depth: u32,
+        weight: f32,
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> (Color, Color) {
@@ -105,15 +137,15 @@ impl Whitted {
         }
         let local = c;
         c = Color::ZERO;
-        let reflected = |sampler: &mut Sampler, stats: &mut RayStats| {
+        let reflected = |k: f32, sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.trace_total(scene, &scene.spawn(&hit, d), depth + 1, sampler, stats)
+            self.secondary(scene, &scene.spawn(&hit, d), depth + 1, weight, k, sampler, stats)
         };
         match m.kind {
             ClassicKind::Diffuse => {}
             ClassicKind::Reflective => {
                 if m.kr > 0.0 {
-                    c += m.kr * reflected(sampler, stats);
+                    c += reflected(m.kr, sampler, stats);
                 }
             }
             ClassicKind::Transparent => {
@@ -121,24 +153,24 @@ impl Whitted {
                 match refract(ray.d, n, eta) {
                     Some(t) => {
                         if m.kr > 0.0 {
-                            c += m.kr * reflected(sampler, stats);
+                            c += reflected(m.kr, sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += m.kt * self.trace_total(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
+                            c += self.secondary(scene, &scene.spawn(&hit, t), depth + 1, weight, m.kt, sampler, stats);
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
-                    None => c += reflected(sampler, stats),
+                    None => c += reflected(1.0, sampler, stats),
                 }
             }
             ClassicKind::Dielectric => {
                 let eta = if front { m.ior } else { 1.0 / m.ior };
                 let ks = fresnel_dielectric(n.dot(wo), eta);
-                c += ks * reflected(sampler, stats);
+                c += reflected(ks, sampler, stats);
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += (1.0 - ks) * self.trace_total(scene, &scene.spawn(&hit, t), depth + 1, sampler, stats);
+                    c += self.secondary(scene, &scene.spawn(&hit, t), depth + 1, weight, 1.0 - ks, sampler, stats);
                 }
             }
         }

@@ -170,6 +170,24 @@ pub struct LightSample {
     pub uv: Vec2,
 }
 
+/// A sample of a delta light: no area, so no density.
+#[inline(always)]
+fn delta_sample(wi: Vec3, dist: f32, radiance: Color) -> LightSample {
+    LightSample { wi, dist, radiance, pdf: 1.0, delta: true, uv: Vec2::ZERO }
+}
+
+/// Light from a point light at `position` arriving at `p`: inverse-square fall-off.
+#[inline(always)]
+fn point_sample(position: Vec3, intensity: Color, p: Vec3) -> Option<LightSample> {
+    let v = position - p;
+    let d2 = v.length_squared();
+    if !(d2 > 0.0) {
+        return None;
+    }
+    let dist = d2.sqrt();
+    Some(delta_sample(v / dist, dist, intensity / d2))
+}
+
 impl LightSample {
     /// The sample's Monte Carlo weight: radiance / pdf.
     #[inline]
@@ -281,19 +299,22 @@ impl Light {
 
     /// Samples light arriving at `p`; `u` picks a point on area lights. `None` when `p` receives
     /// nothing from this sample (outside a spot cone, behind an area light, at the light).
-    #[inline]
+    // The point light, the commonest in classic scenes, is inlined into the caller: called out
+    // of line, `p` went through memory and its load stalled on the store just before it.
+    #[inline(always)]
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let delta = |wi, dist, radiance| LightSample { wi, dist, radiance, pdf: 1.0, delta: true, uv: Vec2::ZERO };
         match *self {
-            Light::Point { position, intensity } => {
-                let v = position - p;
-                let d2 = v.length_squared();
-                if !(d2 > 0.0) {
-                    return None;
-                }
-                let dist = d2.sqrt();
-                Some(delta(v / dist, dist, intensity / d2))
-            }
+            Light::Point { position, intensity } => point_sample(position, intensity, p),
+            _ => self.sample_other(p, u),
+        }
+    }
+
+    /// `sample` for every light but the point light.
+    #[inline(never)]
+    fn sample_other(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        let delta = delta_sample;
+        match *self {
+            Light::Point { position, intensity } => point_sample(position, intensity, p),
             Light::Spot(Spot { position, .. }) | Light::Projector(Projector { position, .. }) => {
                 let v = position - p;
                 let d2 = v.length_squared();

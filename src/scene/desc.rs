@@ -119,8 +119,14 @@ pub struct IntegratorDesc {
     pub max_depth: Option<u32>,
     /// Shadow rays per area light at each shading point (Whitted and photon mapping).
     pub light_samples: u32,
+    /// The Whitted integrator's adaptive depth control: reflected and refracted rays of less
+    /// weight in the pixel go on by Russian roulette (see `Whitted::adc_bailout`).
+    pub adc_bailout: f32,
     pub photon: PhotonOptions,
 }
+
+/// POV-Ray's default `adc_bailout`: below one step of an 8-bit pixel.
+pub const DEFAULT_ADC_BAILOUT: f32 = 1.0 / 255.0;
 
 impl Default for IntegratorDesc {
     fn default() -> Self {
@@ -128,6 +134,7 @@ impl Default for IntegratorDesc {
             kind: IntegratorKind::Whitted,
             max_depth: Some(DEFAULT_MAX_DEPTH),
             light_samples: 16,
+            adc_bailout: DEFAULT_ADC_BAILOUT,
             photon: PhotonOptions::default(),
         }
     }
@@ -220,6 +227,7 @@ pub struct Overrides {
     pub spp_axis: Option<u32>,
     pub spp: Option<u32>,
     pub max_depth: Option<u32>,
+    pub adc_bailout: Option<f32>,
     pub seed: Option<u64>,
     pub integrator: Option<IntegratorKind>,
     pub sampler: Option<SamplerKind>,
@@ -335,6 +343,9 @@ impl SceneDescription {
         }
         if let Some(d) = o.max_depth {
             self.integrator.max_depth = Some(d);
+        }
+        if let Some(b) = o.adc_bailout {
+            self.integrator.adc_bailout = b;
         }
         self.integrator.photon = self.integrator.photon.overridden_by(&o.photon);
     }

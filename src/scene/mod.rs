@@ -356,7 +356,7 @@ impl Scene {
     }
 
     /// A ray leaving hit `h` in direction `d`.
-    #[inline]
+    #[inline(always)]
     pub fn spawn(&self, h: &Hit, d: crate::math::Vec3) -> Ray {
         Ray::spawn(h.p, h.p_error, h.ng, d, self.ray_bias)
     }

@@ -80,6 +80,7 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             kind: render.integrator.unwrap_or_default(),
             max_depth: render.max_depth.or(IntegratorDesc::default().max_depth),
             light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
+            adc_bailout: render.adc_bailout.map_or(IntegratorDesc::default().adc_bailout, |b| b.0),
             photon: render.photon,
         },
         shading: ShadingDesc {

@@ -78,6 +78,7 @@ pub struct RenderDesc {
     pub ray_bias: Option<NonNegative>,
     pub transparent_shadows: Option<bool>,
     pub light_samples: Option<u32>,
+    pub adc_bailout: Option<Unit>,
     /// The film: a window to render, the pixel filter, sampling past the window's edge.
     pub crop: Option<Spanned<CropSpec>>,
     pub filter: Option<FilterSpec>,
