@@ -90,7 +90,10 @@ impl Whitted {
         stats: &mut RayStats,
     ) -> (Color, Color) {
         stats.rays += 1;
-        let Some(hit) = scene.intersect(ray, f32::INFINITY) else {
+        // Borrowed where it was returned: moving it out of the option copied it while its
+        // stores were in flight, and the copy stalled on them.
+        let found = scene.intersect(ray, f32::INFINITY);
+        let Some(hit) = &found else {
             return (scene.environment(ray.d), Color::ZERO);
         };
         let m = scene.classic(&hit);
