@@ -204,12 +204,13 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
         return atten;
     }
     let mut crossings = 0;
-    let walked = scene.for_each_crossing(&ray, tm, |material, ng| {
+    let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
         crossings += 1;
         let m = scene.materials.classic_of(material);
         atten *= match m.kind {
             ClassicKind::Transparent => m.kt,
             ClassicKind::Dielectric => {
+                let ng = crossing.ng();
                 let eta = if wi.dot(ng) < 0.0 { m.ior } else { 1.0 / m.ior };
                 1.0 - fresnel_dielectric(ng.dot(wi), eta)
             }

@@ -174,9 +174,8 @@ impl Scene {
         Some(Self::hit(h.t, &sp, material, light, i))
     }
 
-    /// Calls `visit(material, ng)` (ng the geometric normal a closest hit there reports,
-    /// `Hit::ng`) for every surface `ray` crosses in (0, t_max), in no particular order, until
-    /// it returns false; returns whether it went through all of them. `None` for scenes with
+    /// Calls `visit(material, crossing)` for every surface `ray` crosses in (0, t_max), in no
+    /// particular order, until it returns false; returns whether it went through all of them. `None` for scenes with
     /// instances or cylinders, whose crossings callers walk one closest hit at a time. One
     /// traversal instead of one per crossing: a shadow ray through a glass sphere crosses it
     /// twice. A ray exactly along an edge shared by two triangles (or tangent to a sphere)
@@ -186,21 +185,21 @@ impl Scene {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut visit: impl FnMut(u32, crate::math::Vec3) -> bool,
+        mut visit: impl FnMut(u32, &Crossing) -> bool,
     ) -> Option<bool> {
         if !self.instances.is_empty() {
             return None;
         }
-        let all = self.bvh.for_each_crossing(ray, t_max, |i, h| {
-            let (sp, material, _) = self.bvh.surface(i, ray, &h, &self.meshes);
-            visit(material, sp.ng)
+        let all = self.bvh.for_each_crossing(ray, t_max, |i, hit| {
+            let (material, _) = self.bvh.material_light(i);
+            visit(material, &Crossing { scene: self, ray, hit, on: CrossingOn::Primitive(i) })
         })?;
         if !all {
             return Some(false);
         }
-        for (plane, material) in &self.planes {
-            if let Some(h) = plane.intersect(ray, t_max)
-                && !visit(*material, plane.surface(ray, &h).ng)
+        for (k, (plane, material)) in self.planes.iter().enumerate() {
+            if let Some(hit) = plane.intersect(ray, t_max)
+                && !visit(*material, &Crossing { scene: self, ray, hit, on: CrossingOn::Plane(k) })
             {
                 return Some(false);
             }
@@ -371,5 +370,31 @@ impl Scene {
     #[inline(always)]
     pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf<'_> {
         self.materials.bsdf(h, wo)
+    }
+}
+
+/// A surface a ray crosses (see `Scene::for_each_crossing`). Its normal is worked out only when
+/// asked: a shadow ray stopped by an opaque surface, or passing a `transparent` one, needs none.
+pub struct Crossing<'a> {
+    scene: &'a Scene,
+    ray: &'a Ray,
+    hit: crate::shape::PrimHit,
+    on: CrossingOn,
+}
+
+enum CrossingOn {
+    Primitive(u32),
+    Plane(usize),
+}
+
+impl Crossing<'_> {
+    /// The geometric normal a closest hit there reports (`Hit::ng`).
+    #[inline]
+    pub fn ng(&self) -> Vec3 {
+        let s = self.scene;
+        match self.on {
+            CrossingOn::Primitive(i) => s.bvh.surface(i, self.ray, &self.hit, &s.meshes).0.ng,
+            CrossingOn::Plane(k) => s.planes[k].0.surface(self.ray, &self.hit).ng,
+        }
     }
 }
