@@ -123,14 +123,20 @@ impl Whitted {
                     if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
                         continue;
                     }
-                    let vis = shadow_transmittance(scene, &hit, ls.wi, ls.dist, stats);
-                    if vis == Color::ZERO {
-                        continue;
-                    }
                     // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
                     let r = reflect(-ls.wi, n);
                     let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
-                    c += (m.color * (m.kd * cos) + Color::splat(spec)) * ls.weight() * vis / n_samples as f32;
+                    let reflectance = m.color * (m.kd * cos) + Color::splat(spec);
+                    // Glass has no diffuse part, and its highlight is zero away from the mirror
+                    // direction: no light to find, so no shadow ray.
+                    if reflectance == Color::ZERO {
+                        continue;
+                    }
+                    let vis = shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
+                    if vis == Color::ZERO {
+                        continue;
+                    }
+                    c += reflectance * ls.weight() * vis / n_samples as f32;
                 }
             }
         }
