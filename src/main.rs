@@ -118,8 +118,8 @@ struct RenderArgs {
     /// refraction (overrides the scene).
     #[arg(long, value_name = "D")]
     max_depth: Option<u32>,
-    /// Whitted: reflected and refracted rays of less weight in the pixel than this go on by
-    /// Russian roulette (POV-Ray's adc_bailout; 0 traces all) [default: 1/255].
+    /// Whitted: reflected, refracted and shadow rays of less weight in the pixel than this go
+    /// on by Russian roulette (POV-Ray's adc_bailout; 0 traces all) [default: 1/255].
     #[arg(long, value_name = "W", value_parser = unit_interval)]
     adc_bailout: Option<f32>,
     /// Worker threads [default: all cores].

@@ -147,8 +147,8 @@ material = "glass"
     }
 }
 
-/// Adaptive depth control ends rays of little weight by Russian roulette, so it keeps the
-/// expected radiance: through a glass sphere over a lit floor, seen off axis so that internal
+/// Adaptive depth control ends rays of little weight (reflected, refracted and shadow rays) by
+/// Russian roulette, so it keeps the expected radiance: through a glass sphere over a lit floor, seen off axis so that internal
 /// reflections branch, the mean of many samples at a bailout high enough to end most rays
 /// matches the radiance with every ray traced, within four standard errors, at fewer rays.
 #[test]
@@ -185,20 +185,26 @@ material = "glass"
     let depth = 10;
     let (exact, all) = radiance_counted(&s, ray, depth, 0.0, 0);
     let n = 20_000;
-    let (mut sum, mut sum2, mut rays) = (Vec3::ZERO, Vec3::ZERO, 0u64);
+    let (mut sum, mut sum2, mut rays, mut shadow_rays) = (Vec3::ZERO, Vec3::ZERO, 0u64, 0u64);
     for i in 0..n {
         let (c, stats) = radiance_counted(&s, ray, depth, 0.2, i);
         sum += c;
         sum2 += c * c;
         rays += stats.rays;
+        shadow_rays += stats.shadow_rays;
     }
     let mean = sum / n as f32;
     let std_err = ((sum2 / n as f32 - mean * mean).max(Vec3::ZERO) / n as f32).powf(0.5);
     assert!(std_err.min_element() > 0.0, "no ray was ended: {std_err}");
     let err = (mean - exact).abs();
     assert!(err.cmple(std_err * 4.0).all(), "mean {mean} vs {exact} (standard error {std_err})");
-    let per_sample = rays as f64 / n as f64;
+    let (per_sample, shadow_per_sample) = (rays as f64 / n as f64, shadow_rays as f64 / n as f64);
     assert!(per_sample < 0.6 * all.rays as f64, "{per_sample} rays per sample, {} with every ray traced", all.rays);
+    assert!(
+        shadow_per_sample < 0.6 * all.shadow_rays as f64,
+        "{shadow_per_sample} shadow rays per sample, {} with every ray traced",
+        all.shadow_rays
+    );
 }
 
 #[test]

@@ -32,8 +32,9 @@ pub struct Whitted {
     /// or refracted ray whose weight in the pixel (the product of the reflection and
     /// transmission coefficients along its path) is below this goes on only with probability
     /// weight / `adc_bailout`, and then counts 1 / probability as much (Russian roulette, Arvo
-    /// and Kirk 1990). The image's expected value is unchanged; the rays that could add little
-    /// to it are mostly not traced. 0 traces every ray.
+    /// and Kirk 1990); so does a shadow ray, its weight the path's times the surface's
+    /// reflectance towards the viewer (k_d cos + highlight). The image's expected value is
+    /// unchanged; the rays that could add little to it are mostly not traced. 0 traces every ray.
     pub adc_bailout: f32,
 }
 
@@ -126,11 +127,19 @@ impl Whitted {
                     // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
                     let r = reflect(-ls.wi, n);
                     let spec = if m.ks > 0.0 { m.ks * r.dot(wo).max(0.0).powf(m.exponent) } else { 0.0 };
-                    let reflectance = m.color * (m.kd * cos) + Color::splat(spec);
+                    let mut reflectance = m.color * (m.kd * cos) + Color::splat(spec);
                     // Glass has no diffuse part, and its highlight is zero away from the mirror
                     // direction: no light to find, so no shadow ray.
                     if reflectance == Color::ZERO {
                         continue;
+                    }
+                    let w = weight * reflectance.max_element();
+                    if w < self.adc_bailout {
+                        let survive = w / self.adc_bailout;
+                        if sampler.rng().uniform() >= survive {
+                            continue;
+                        }
+                        reflectance /= survive;
                     }
                     let vis = shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
                     if vis == Color::ZERO {
