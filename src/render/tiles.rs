@@ -10,6 +10,9 @@ use rayon::prelude::*;
 use std::cell::RefCell;
 use std::ops::Range;
 
+/// Camera samples made together before they are traced (see `render_tile`).
+const CAMERA_BATCH: usize = 4;
+
 /// Renders `scene` with a ray integrator. Runs on the current rayon pool (the caller chooses the
 /// thread count by installing a pool).
 pub fn render_rays<I: RayIntegrator>(
@@ -85,8 +88,7 @@ fn render_tile<I: RayIntegrator>(
             let k = (j * tile.width + i) as usize;
             let next = settings.first_sample.saturating_add(tile.count[k]);
             let pixel_seed = settings.pixel_seed(x, y);
-            for index in next..range.end {
-                let (mut sampler, ray, weight) = settings.camera_sample_of(scene, x, y, pixel_seed, index);
+            let mut trace = |(mut sampler, ray, weight): (crate::sampling::Sampler, crate::geometry::Ray, f32)| {
                 let mut layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);
@@ -94,6 +96,19 @@ fn render_tile<I: RayIntegrator>(
                 if !tile.add(k, &layers) {
                     bad += 1;
                 }
+            };
+            // Camera samples are made a batch at a time before any is traced: each is a chain
+            // of dependent steps (hashes, seeding, the ray's normalisation), and made side by
+            // side they overlap, where one at a time each waited on its own chain.
+            let mut index = next;
+            while index + CAMERA_BATCH as u32 <= range.end {
+                let batch: [_; CAMERA_BATCH] =
+                    std::array::from_fn(|b| settings.camera_sample_of(scene, x, y, pixel_seed, index + b as u32));
+                batch.into_iter().for_each(&mut trace);
+                index += CAMERA_BATCH as u32;
+            }
+            for index in index..range.end {
+                trace(settings.camera_sample_of(scene, x, y, pixel_seed, index));
             }
         }
     }
