@@ -97,7 +97,7 @@ impl Whitted {
         let Some(hit) = &found else {
             return (scene.environment(ray.d), Color::ZERO);
         };
-        let m = scene.classic(&hit);
+        let m = scene.classic(hit);
         let front = hit.is_front(ray.d);
         // Normals on the side the ray arrives from: flipped when the ray is inside the object.
         let (n, ng) = if front { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
@@ -105,7 +105,7 @@ impl Whitted {
 
         let mut c = Color::ZERO;
         if hit.is_emitter() && front {
-            c += scene.emitted(&hit, -ray.d);
+            c += scene.emitted(hit, -ray.d);
         }
         if depth >= self.max_depth {
             return (c, Color::ZERO);
@@ -157,7 +157,7 @@ impl Whitted {
         c = Color::ZERO;
         let reflected = |k: f32, sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.secondary(scene, &scene.spawn(&hit, d), depth + 1, weight, k, sampler, stats)
+            self.secondary(scene, &scene.spawn(hit, d), depth + 1, weight, k, sampler, stats)
         };
         match m.kind {
             ClassicKind::Diffuse => {}
@@ -174,7 +174,7 @@ impl Whitted {
                             c += reflected(m.kr, sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += self.secondary(scene, &scene.spawn(&hit, t), depth + 1, weight, m.kt, sampler, stats);
+                            c += self.secondary(scene, &scene.spawn(hit, t), depth + 1, weight, m.kt, sampler, stats);
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
@@ -188,7 +188,7 @@ impl Whitted {
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += self.secondary(scene, &scene.spawn(&hit, t), depth + 1, weight, 1.0 - ks, sampler, stats);
+                    c += self.secondary(scene, &scene.spawn(hit, t), depth + 1, weight, 1.0 - ks, sampler, stats);
                 }
             }
         }
