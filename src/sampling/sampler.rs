@@ -122,19 +122,19 @@ impl Sampler {
                 let n2 = self.strata * self.strata;
                 // Strata counts are mostly powers of two, whose divisions are shifts (a divide
                 // is a tenth of a pinhole camera sample).
-                let (set, k, sx, sy, s);
-                if self.strata.is_power_of_two() {
-                    let (bits, bits2) = (self.strata.trailing_zeros(), n2.trailing_zeros());
-                    (set, k) = (self.index >> bits2, self.index & (n2 - 1));
-                    let perm_seed = (hash_seed(&[self.pixel_seed, pair as u64, set as u64]) >> 32) as u32;
-                    s = permutation_element(k, n2, perm_seed);
-                    (sx, sy) = (s & (self.strata - 1), s >> bits);
+                let pow2 = self.strata.is_power_of_two();
+                let (set, k) = if pow2 {
+                    (self.index >> n2.trailing_zeros(), self.index & (n2 - 1))
                 } else {
-                    (set, k) = (self.index / n2, self.index % n2);
-                    let perm_seed = (hash_seed(&[self.pixel_seed, pair as u64, set as u64]) >> 32) as u32;
-                    s = permutation_element(k, n2, perm_seed);
-                    (sx, sy) = (s % self.strata, s / self.strata);
-                }
+                    (self.index / n2, self.index % n2)
+                };
+                let perm_seed = (hash_seed(&[self.pixel_seed, pair as u64, set as u64]) >> 32) as u32;
+                let s = permutation_element(k, n2, perm_seed);
+                let (sx, sy) = if pow2 {
+                    (s & (self.strata - 1), s >> self.strata.trailing_zeros())
+                } else {
+                    (s % self.strata, s / self.strata)
+                };
                 let j = self.rng.uniform2();
                 let inv = 1.0 / self.strata as f32;
                 Vec2::new(((sx as f32 + j.x) * inv).min(ONE_MINUS_EPS), ((sy as f32 + j.y) * inv).min(ONE_MINUS_EPS))
