@@ -35,6 +35,7 @@ fn help_documents_every_option() {
         "--spp-axis",
         "--spp",
         "--max-depth",
+        "--adc-bailout",
         "--threads",
         "--seed",
         "--integrator",
@@ -63,6 +64,26 @@ fn bad_scene_exits_nonzero_with_location() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml:6:10") && err.contains("positive"), "{err}");
     assert!(!dir.join("x.png").exists(), "an image was written for a failed render");
+}
+
+/// An out-of-range option value is refused by name before anything is read or written.
+#[test]
+fn adc_bailout_outside_zero_to_one_is_refused() {
+    let dir = common::scratch("cli-adc");
+    for bad in ["2", "-0.1", "nan", "x"] {
+        let out = caustic()
+            .arg("render")
+            .arg(scene("06-fresnel-glass.toml"))
+            .arg(format!("--adc-bailout={bad}"))
+            .arg("-o")
+            .arg(dir.join("x.png"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "--adc-bailout {bad} was accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--adc-bailout") && err.contains("from 0 to 1"), "{err}");
+        assert!(!dir.join("x.png").exists());
+    }
 }
 
 #[test]

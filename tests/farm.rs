@@ -198,6 +198,10 @@ fn merge_refuses_parts_that_do_not_make_one_render() {
     o.overrides.max_depth = Some(2);
     let e = refusal(&[p0.clone(), part("depth", o)], &out);
     assert!(e.contains("`max_depth`"), "{e}");
+    let mut o = options(&scene, kind, 8, dir.join("adc.exr"), shard(1, 2));
+    o.overrides.adc_bailout = Some(0.0);
+    let e = refusal(&[p0.clone(), part("adc", o)], &out);
+    assert!(e.contains("`adc_bailout`"), "{e}");
     // Another integrator, another sample count.
     let e = refusal(
         &[p0.clone(), part("w", options(&scene, IntegratorKind::Whitted, 8, dir.join("w.exr"), shard(1, 2)))],
