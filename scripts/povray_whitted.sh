@@ -10,18 +10,21 @@
 #
 # Needs POV-Ray 3.7 (`apt-get install povray`).
 set -euo pipefail
+shopt -s inherit_errexit
+export LC_ALL=C
 root=$(cd "$(dirname "$0")/.." && pwd)
-caustic=$(realpath "${1:-$root/target/release/caustic}")
+caustic=$(realpath -e "${1:-$root/target/release/caustic}")
+command -v povray >/dev/null || { echo "povray not found (apt-get install povray)" >&2; exit 2; }
 runs=${2:-5}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cp "$root/scripts/povray/whitted.pov" "$work/"
 cd "$work"
 
-wall() { # command... -> wall seconds of the whole process
+wall() { # command... -> wall seconds of the whole process; a failed run stops the script
     local t0 t1
     t0=$(date +%s.%N)
-    "$@" >/dev/null 2>&1
+    "$@" >/dev/null 2>&1 || { echo "failed: $*" >&2; return 1; }
     t1=$(date +%s.%N)
     echo "$t1 - $t0" | bc -l
 }

@@ -119,7 +119,7 @@ struct RenderArgs {
     #[arg(long, value_name = "D")]
     max_depth: Option<u32>,
     /// Whitted: reflected, refracted and shadow rays of less weight in the pixel than this go
-    /// on by Russian roulette (POV-Ray's adc_bailout; 0 traces all) [default: 1/255].
+    /// on by Russian roulette (POV-Ray's adc_bailout; 0 ends none) [default: 1/255].
     #[arg(long, value_name = "W", value_parser = unit_interval)]
     adc_bailout: Option<f32>,
     /// Worker threads [default: all cores].
@@ -234,7 +234,8 @@ fn parse_define(s: &str) -> Result<(String, String), String> {
 
 fn unit_interval(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        // + 0.0 makes -0 into 0: a render's identity spells the value out.
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v + 0.0),
         _ => Err(format!("expected a number from 0 to 1, found `{s}`")),
     }
 }
@@ -471,6 +472,8 @@ mod tests {
             "2.5",
             "--max-depth",
             "4",
+            "--adc-bailout",
+            "0.004",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
         let mut again = vec!["caustic".to_string(), "render".into(), "s.toml".into()];

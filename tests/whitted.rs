@@ -147,10 +147,41 @@ material = "glass"
     }
 }
 
+/// The mean of `n` samples of `ray` at adaptive-depth-control `bailout` (in f64, with its
+/// standard error), and the camera-and-secondary and shadow rays per sample.
+fn roulette_mean(
+    s: &caustic::app::LoadedScene,
+    ray: Ray,
+    depth: u32,
+    bailout: f32,
+    n: u32,
+) -> ([f64; 3], [f64; 3], f64, f64) {
+    let (mut sum, mut sum2, mut rays, mut shadow_rays) = ([0.0f64; 3], [0.0f64; 3], 0u64, 0u64);
+    for i in 0..n {
+        let (c, stats) = radiance_counted(s, ray, depth, bailout, i);
+        for (k, v) in c.to_array().into_iter().enumerate() {
+            sum[k] += v as f64;
+            sum2[k] += v as f64 * v as f64;
+        }
+        rays += stats.rays;
+        shadow_rays += stats.shadow_rays;
+    }
+    let n = n as f64;
+    let mean = sum.map(|v| v / n);
+    let std_err = std::array::from_fn(|k| ((sum2[k] / n - mean[k] * mean[k]).max(0.0) / n).sqrt());
+    (mean, std_err, rays as f64 / n, shadow_rays as f64 / n)
+}
+
+/// Whether `mean` is within four standard errors of `exact` in every channel.
+fn within_four_errors(mean: [f64; 3], std_err: [f64; 3], exact: Color) -> bool {
+    (0..3).all(|k| (mean[k] - exact[k] as f64).abs() <= 4.0 * std_err[k])
+}
+
 /// Adaptive depth control ends rays of little weight (reflected, refracted and shadow rays) by
-/// Russian roulette, so it keeps the expected radiance: through a glass sphere over a lit floor, seen off axis so that internal
-/// reflections branch, the mean of many samples at a bailout high enough to end most rays
-/// matches the radiance with every ray traced, within four standard errors, at fewer rays.
+/// Russian roulette, so it keeps the expected radiance: through a glass sphere over a lit
+/// floor, seen off axis so that internal reflections branch, the mean of many samples at a
+/// bailout high enough to end most rays matches the radiance with every ray traced, within
+/// four standard errors, at fewer rays.
 #[test]
 fn adaptive_depth_control_keeps_the_mean_with_fewer_rays() {
     let s = common::scene(
@@ -184,27 +215,48 @@ material = "glass"
     let ray = Ray::new(Vec3::new(0.0, 1.0, 5.0), Vec3::new(0.0, -0.12, -1.0).normalize());
     let depth = 10;
     let (exact, all) = radiance_counted(&s, ray, depth, 0.0, 0);
-    let n = 20_000;
-    let (mut sum, mut sum2, mut rays, mut shadow_rays) = (Vec3::ZERO, Vec3::ZERO, 0u64, 0u64);
-    for i in 0..n {
-        let (c, stats) = radiance_counted(&s, ray, depth, 0.2, i);
-        sum += c;
-        sum2 += c * c;
-        rays += stats.rays;
-        shadow_rays += stats.shadow_rays;
-    }
-    let mean = sum / n as f32;
-    let std_err = ((sum2 / n as f32 - mean * mean).max(Vec3::ZERO) / n as f32).powf(0.5);
-    assert!(std_err.min_element() > 0.0, "no ray was ended: {std_err}");
-    let err = (mean - exact).abs();
-    assert!(err.cmple(std_err * 4.0).all(), "mean {mean} vs {exact} (standard error {std_err})");
-    let (per_sample, shadow_per_sample) = (rays as f64 / n as f64, shadow_rays as f64 / n as f64);
-    assert!(per_sample < 0.6 * all.rays as f64, "{per_sample} rays per sample, {} with every ray traced", all.rays);
-    assert!(
-        shadow_per_sample < 0.6 * all.shadow_rays as f64,
-        "{shadow_per_sample} shadow rays per sample, {} with every ray traced",
-        all.shadow_rays
+    let (mean, std_err, rays, shadow_rays) = roulette_mean(&s, ray, depth, 0.2, 20_000);
+    assert!(std_err.iter().all(|&e| e > 0.0), "no ray was ended: {std_err:?}");
+    assert!(within_four_errors(mean, std_err, exact), "mean {mean:?} vs {exact} (standard error {std_err:?})");
+    assert!(rays < 0.6 * all.rays as f64, "{rays} rays per sample, {} with every ray traced", all.rays);
+    assert!(shadow_rays < 0.6 * all.shadow_rays as f64, "{shadow_rays} shadow rays per sample, {}", all.shadow_rays);
+}
+
+/// Shadow rays alone: a dark floor seen directly (no reflected or refracted rays) reflects
+/// kd x colour x cos = 0.05 cos towards the viewer, so at bailout 0.2 its shadow ray is traced
+/// with probability 0.25 cos and counts four times over; the mean keeps the exact radiance.
+#[test]
+fn adaptive_depth_control_keeps_the_mean_of_shadow_rays() {
+    let s = common::scene(
+        r#"
+[camera]
+eye = [0, 2, 4]
+look_at = [0, 0, 0]
+[materials.floor]
+type = "diffuse"
+color = [0.5, 0.5, 0.5]
+kd = 0.1
+ka = 0
+[[lights]]
+type = "point"
+position = [1, 3, 0]
+intensity = 40
+[[objects]]
+type = "plane"
+material = "floor"
+"#,
     );
+    let eye = Vec3::new(0.0, 2.0, 4.0);
+    let target = Vec3::new(0.5, 0.0, 0.5);
+    let ray = Ray::new(eye, (target - eye).normalize());
+    let cos = (Vec3::new(1.0, 3.0, 0.0) - target).normalize().y as f64;
+    let (exact, all) = radiance_counted(&s, ray, 1, 0.0, 0);
+    assert_eq!(all.shadow_rays, 1);
+    let (mean, std_err, _, shadow_rays) = roulette_mean(&s, ray, 1, 0.2, 20_000);
+    assert!(within_four_errors(mean, std_err, exact), "mean {mean:?} vs {exact} (standard error {std_err:?})");
+    // Binomial: 20,000 draws of probability 0.25 cos, standard deviation below 0.004.
+    let expected = 0.25 * cos;
+    assert!((shadow_rays - expected).abs() < 0.015, "{shadow_rays} shadow rays per sample, expected {expected}");
 }
 
 #[test]

@@ -30,11 +30,12 @@ pub struct Whitted {
     pub area_samples: u32,
     /// Adaptive depth control (Hall and Greenberg 1983; POV-Ray's `adc_bailout`): a reflected
     /// or refracted ray whose weight in the pixel (the product of the reflection and
-    /// transmission coefficients along its path) is below this goes on only with probability
-    /// weight / `adc_bailout`, and then counts 1 / probability as much (Russian roulette, Arvo
-    /// and Kirk 1990); so does a shadow ray, its weight the path's times the surface's
-    /// reflectance towards the viewer (k_d cos + highlight). The image's expected value is
-    /// unchanged; the rays that could add little to it are mostly not traced. 0 traces every ray.
+    /// transmission coefficients along its path, and of 1 / probability for each roulette it
+    /// survived) is below this goes on only with probability weight / `adc_bailout`, and then
+    /// counts 1 / probability as much (Russian roulette, Arvo and Kirk 1990); so does a shadow
+    /// ray, its weight the path's times the surface's reflectance towards the viewer (k_d cos +
+    /// highlight). The image's expected value is unchanged; the rays that could add little to
+    /// it are mostly not traced. 0 ends no ray by roulette.
     pub adc_bailout: f32,
 }
 
@@ -65,18 +66,24 @@ impl Whitted {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Color {
-        let mut w = weight * k;
-        let mut scale = k;
-        if w < self.adc_bailout {
-            let survive = w / self.adc_bailout;
-            if sampler.rng().uniform() >= survive {
-                return Color::ZERO;
-            }
-            scale = k / survive;
-            w = self.adc_bailout;
+        let w = weight * k;
+        let Some(survive) = self.roulette(w, sampler) else { return Color::ZERO };
+        // A ray that survived the roulette counts 1 / survive as much: its weight is the bailout.
+        let (scale, w) = if w < self.adc_bailout { (k / survive, self.adc_bailout) } else { (k, w) };
+        let (local, further) = self.trace(scene, ray, depth, w, sampler, stats);
+        scale * (local + further)
+    }
+
+    /// Adaptive depth control for a ray of weight `w` in the pixel: `None` when the roulette
+    /// ends it, else the probability it went on with (1 at or above the bailout, w / bailout
+    /// below it).
+    #[inline]
+    fn roulette(&self, w: f32, sampler: &mut Sampler) -> Option<f32> {
+        if !(w < self.adc_bailout) {
+            return Some(1.0);
         }
-        let (local, secondary) = self.trace(scene, ray, depth, w, sampler, stats);
-        scale * (local + secondary)
+        let survive = w / self.adc_bailout;
+        (sampler.rng().uniform() < survive).then_some(survive)
     }
 
     /// Radiance along `ray` as (local shading, what reflection and refraction bring); `weight`
@@ -127,20 +134,14 @@ impl Whitted {
                     // Eq. 1: R is the light direction mirrored about N, V the direction to the viewer.
                     let r = reflect(-ls.wi, n);
                     let spec = if m.ks > 0.0 { m.ks * phong_power(r.dot(wo), m.exponent) } else { 0.0 };
-                    let mut reflectance = m.color * (m.kd * cos) + Color::splat(spec);
+                    let reflectance = m.color * (m.kd * cos) + Color::splat(spec);
                     // Glass has no diffuse part, and its highlight is zero away from the mirror
                     // direction: no light to find, so no shadow ray.
                     if reflectance == Color::ZERO {
                         continue;
                     }
-                    let w = weight * reflectance.max_element();
-                    if w < self.adc_bailout {
-                        let survive = w / self.adc_bailout;
-                        if sampler.rng().uniform() >= survive {
-                            continue;
-                        }
-                        reflectance /= survive;
-                    }
+                    let Some(survive) = self.roulette(weight * reflectance.max_element(), sampler) else { continue };
+                    let reflectance = if survive < 1.0 { reflectance / survive } else { reflectance };
                     let vis = shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
                     if vis == Color::ZERO {
                         continue;

@@ -309,10 +309,9 @@ impl Light {
         }
     }
 
-    /// `sample` for every light but the point light.
+    /// `sample`, out of line: every light (`sample` itself answers for point lights).
     #[inline(never)]
     fn sample_other(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let delta = delta_sample;
         match *self {
             Light::Point { position, intensity } => point_sample(position, intensity, p),
             Light::Spot(Spot { position, .. }) | Light::Projector(Projector { position, .. }) => {
@@ -324,9 +323,11 @@ impl Light {
                 let dist = d2.sqrt();
                 let wi = v / dist;
                 let i = self.intensity_towards(-wi);
-                (i.max_element() > 0.0).then(|| delta(wi, dist, i / d2))
+                (i.max_element() > 0.0).then(|| delta_sample(wi, dist, i / d2))
             }
-            Light::Directional { direction, irradiance, .. } => Some(delta(-direction, f32::INFINITY, irradiance)),
+            Light::Directional { direction, irradiance, .. } => {
+                Some(delta_sample(-direction, f32::INFINITY, irradiance))
+            }
             Light::Area { emitter, radiance, .. } => {
                 let (s, pdf) = emitter.sample_towards(p, u)?;
                 let v = s.p - p;

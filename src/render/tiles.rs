@@ -5,6 +5,8 @@
 use super::driver::{Driver, PassOutcome};
 use super::{RayIntegrator, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::film::{Film, Tile};
+use crate::geometry::Ray;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -88,7 +90,7 @@ fn render_tile<I: RayIntegrator>(
             let k = (j * tile.width + i) as usize;
             let next = settings.first_sample.saturating_add(tile.count[k]);
             let pixel_seed = settings.pixel_seed(x, y);
-            let mut trace = |(mut sampler, ray, weight): (crate::sampling::Sampler, crate::geometry::Ray, f32)| {
+            let mut trace = |(mut sampler, ray, weight): (Sampler, Ray, f32)| {
                 let mut layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);
@@ -101,7 +103,7 @@ fn render_tile<I: RayIntegrator>(
             // of dependent steps (hashes, seeding, the ray's normalisation), and made side by
             // side they overlap, where one at a time each waited on its own chain.
             let mut index = next;
-            while index + CAMERA_BATCH as u32 <= range.end {
+            while range.end.saturating_sub(index) >= CAMERA_BATCH as u32 {
                 let batch: [_; CAMERA_BATCH] =
                     std::array::from_fn(|b| settings.camera_sample_of(scene, x, y, pixel_seed, index + b as u32));
                 batch.into_iter().for_each(&mut trace);

@@ -119,13 +119,13 @@ pub struct IntegratorDesc {
     pub max_depth: Option<u32>,
     /// Shadow rays per area light at each shading point (Whitted and photon mapping).
     pub light_samples: u32,
-    /// The Whitted integrator's adaptive depth control: reflected and refracted rays of less
-    /// weight in the pixel go on by Russian roulette (see `Whitted::adc_bailout`).
+    /// The Whitted integrator's adaptive depth control: reflected, refracted and shadow rays of
+    /// less weight in the pixel go on by Russian roulette (see `Whitted::adc_bailout`).
     pub adc_bailout: f32,
     pub photon: PhotonOptions,
 }
 
-/// POV-Ray's default `adc_bailout`: below one step of an 8-bit pixel.
+/// POV-Ray's default `adc_bailout`: one step of an 8-bit pixel.
 pub const DEFAULT_ADC_BAILOUT: f32 = 1.0 / 255.0;
 
 impl Default for IntegratorDesc {

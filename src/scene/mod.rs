@@ -175,11 +175,11 @@ impl Scene {
     }
 
     /// Calls `visit(material, crossing)` for every surface `ray` crosses in (0, t_max), in no
-    /// particular order, until it returns false; returns whether it went through all of them. `None` for scenes with
-    /// instances or cylinders, whose crossings callers walk one closest hit at a time. One
-    /// traversal instead of one per crossing: a shadow ray through a glass sphere crosses it
-    /// twice. A ray exactly along an edge shared by two triangles (or tangent to a sphere)
-    /// crosses both (both roots), where a walk of closest hits would count one.
+    /// particular order, until it returns false; returns whether it went through all of them.
+    /// `None` for scenes with instances or cylinders, whose crossings callers walk one closest
+    /// hit at a time. One traversal instead of one per crossing: a shadow ray through a glass
+    /// sphere crosses it twice. A ray exactly along an edge shared by two triangles (or tangent
+    /// to a sphere) crosses both (both roots), where a walk of closest hits would count one.
     #[inline]
     pub fn for_each_crossing(
         &self,

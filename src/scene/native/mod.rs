@@ -14,7 +14,7 @@ mod schema;
 
 use super::SceneError;
 use super::builder::SceneBuilder;
-use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
+use super::desc::{DEFAULT_ADC_BAILOUT, IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
 use crate::material::Material;
 use crate::math::Color;
 use materials::MaterialNames;
@@ -80,7 +80,8 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             kind: render.integrator.unwrap_or_default(),
             max_depth: render.max_depth.or(IntegratorDesc::default().max_depth),
             light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
-            adc_bailout: render.adc_bailout.map_or(IntegratorDesc::default().adc_bailout, |b| b.0),
+            // + 0.0 makes -0 into 0: a render's identity spells the value out.
+            adc_bailout: render.adc_bailout.map_or(DEFAULT_ADC_BAILOUT, |b| b.0 + 0.0),
             photon: render.photon,
         },
         shading: ShadingDesc {
