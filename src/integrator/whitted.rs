@@ -11,8 +11,8 @@
 use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::light::Light;
-use crate::material::ClassicKind;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
+use crate::material::{Classic, ClassicKind};
 use crate::math::{Color, Vec3};
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
@@ -69,9 +69,8 @@ impl Whitted {
         let w = weight * k;
         let Some(survive) = self.roulette(w, sampler) else { return Color::ZERO };
         // A ray that survived the roulette counts 1 / survive as much: its weight is the bailout.
-        let (scale, w) = if w < self.adc_bailout { (k / survive, self.adc_bailout) } else { (k, w) };
-        let (local, further) = self.trace(scene, ray, depth, w, sampler, stats);
-        scale * (local + further)
+        let (local, further) = self.trace(scene, ray, depth, w.max(self.adc_bailout), sampler, stats);
+        (k / survive) * (local + further)
     }
 
     /// Adaptive depth control for a ray of weight `w` in the pixel: `None` when the roulette
@@ -141,12 +140,11 @@ impl Whitted {
                         continue;
                     }
                     let Some(survive) = self.roulette(weight * reflectance.max_element(), sampler) else { continue };
-                    let reflectance = if survive < 1.0 { reflectance / survive } else { reflectance };
                     let vis = shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
                     if vis == Color::ZERO {
                         continue;
                     }
-                    c += reflectance * ls.weight() * vis / n_samples as f32;
+                    c += reflectance / survive * ls.weight() * vis / n_samples as f32;
                 }
             }
         }
@@ -236,16 +234,7 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
     let mut crossings = 0;
     let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
         crossings += 1;
-        let m = scene.materials.classic_of(material);
-        atten *= match m.kind {
-            ClassicKind::Transparent => m.kt,
-            ClassicKind::Dielectric => {
-                let ng = crossing.ng();
-                let eta = if wi.dot(ng) < 0.0 { m.ior } else { 1.0 / m.ior };
-                1.0 - fresnel_dielectric(ng.dot(wi), eta)
-            }
-            _ => 0.0,
-        };
+        atten *= crossing_transmittance(scene.materials.classic_of(material), wi, || crossing.ng());
         atten != Color::ZERO && crossings <= MAX_SHADOW_CROSSINGS
     });
     if let Some(all) = walked {
@@ -260,23 +249,30 @@ pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats
             return atten;
         }
         let Some(h) = scene.intersect(&ray, tm) else { return atten };
-        let m = scene.classic(&h);
-        let k = match m.kind {
-            ClassicKind::Transparent => m.kt,
-            ClassicKind::Dielectric => {
-                let front = h.is_front(wi);
-                let eta = if front { m.ior } else { 1.0 / m.ior };
-                1.0 - fresnel_dielectric(h.ng.dot(wi), eta)
-            }
-            _ => return Color::ZERO,
-        };
-        atten *= k;
+        atten *= crossing_transmittance(scene.materials.classic_of(h.material), wi, || h.ng);
         if atten == Color::ZERO {
             return atten;
         }
         ray = scene.spawn(&h, wi);
     }
     Color::ZERO
+}
+
+/// What a shadow ray along `wi` keeps of its light crossing a surface of material `m`: k_t
+/// through a transparent one, 1 - Fresnel reflectance through a dielectric (`ng` gives the
+/// surface's geometric normal, asked only then), nothing through any other.
+#[inline]
+fn crossing_transmittance(m: &Classic, wi: Vec3, ng: impl FnOnce() -> Vec3) -> f32 {
+    match m.kind {
+        ClassicKind::Transparent => m.kt,
+        ClassicKind::Dielectric => {
+            let ng = ng();
+            // Entering when the ray runs against the normal.
+            let eta = if wi.dot(ng) < 0.0 { m.ior } else { 1.0 / m.ior };
+            1.0 - fresnel_dielectric(ng.dot(wi), eta)
+        }
+        _ => 0.0,
+    }
 }
 
 #[cfg(test)]

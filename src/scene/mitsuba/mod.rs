@@ -147,7 +147,7 @@ impl<'a> Cx<'a> {
             Some(el) => self.integrator(el)?,
             None => (IntegratorKind::Path, None),
         };
-        let max_depth = self.packed_depth(depth)?;
+        let max_depth = self.caustic_max_depth(depth)?;
         let sensor = self.sensor(sensor, root)?;
         Ok(SceneDescription {
             name: self.srcs[0].name.clone(),
@@ -179,7 +179,7 @@ impl<'a> Cx<'a> {
     /// the camera (1 shows only emitters seen directly, 2 adds direct lighting, -1 is
     /// unlimited); caustic counts its bounces (0 = emitters only, 1 = direct lighting), so it
     /// takes max_depth - 1, and `None` (unlimited) for -1 or when the scene gives none.
-    fn packed_depth(&mut self, depth: Option<Depth<'a>>) -> Result<Option<u32>, SceneError> {
+    fn caustic_max_depth(&mut self, depth: Option<Depth<'a>>) -> Result<Option<u32>, SceneError> {
         let Some((d, el)) = depth else { return Ok(None) };
         if d < -1 {
             return Err(self.err(el, format!("max_depth must be -1 (unlimited) or at least 0, found {d}")));
