@@ -3,7 +3,7 @@
 //! queries sorted by a 64^3 cell key, the order of a tile-by-tile final gather, on two threads in
 //! chunks with one `Gathered` buffer each. The `items/s` column is gathers per second.
 
-use caustic::math::Vec3;
+use caustic::math::{Color, Vec3};
 use caustic::photon::{Gathered, Photon, PhotonMap};
 use rayon::prelude::*;
 use std::sync::LazyLock;
@@ -32,8 +32,9 @@ fn point(i: u64, seed: u64) -> Vec3 {
     Vec3::new(uniform(base), uniform(base + 1), uniform(base + 2))
 }
 
-static PHOTONS: LazyLock<Vec<Photon>> =
-    LazyLock::new(|| (0..N_PHOTONS as u64).map(|i| Photon::new(point(i, 1), -Vec3::Y, Vec3::splat(1e-6), 0)).collect());
+static PHOTONS: LazyLock<Vec<Photon>> = LazyLock::new(|| {
+    (0..N_PHOTONS as u64).map(|i| Photon::new(point(i, 1), -Vec3::Y, Color::splat(1e-6), 0)).collect()
+});
 
 static MAP: LazyLock<PhotonMap> = LazyLock::new(|| PhotonMap::build(PHOTONS.clone()));
 

@@ -224,7 +224,7 @@ fn layers_are_written_and_sum_to_the_image() {
         .unwrap();
     assert!(status.success());
     let total = caustic::film::output::read_exr(&out).unwrap();
-    let mut sum = vec![caustic::math::Vec3::ZERO; total.pixels.len()];
+    let mut sum = vec![caustic::math::Color::ZERO; total.pixels.len()];
     for layer in caustic::film::LAYER_NAMES {
         let img = caustic::film::output::read_exr(&dir.join(format!("l.{layer}.exr"))).unwrap();
         assert!(img.mean().max_element() > 0.0, "layer {layer} is black");

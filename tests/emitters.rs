@@ -51,7 +51,7 @@ fn an_emitting_sphere_gives_the_irradiance_of_the_formula() {
     let e = irradiance(&s, Vec3::ZERO, Vec3::Z, 200_000);
     let exact = PI * 2.0 * 0.25 / 9.0;
     assert!((e - exact).abs() < 0.005 * exact, "{e} vs {exact}");
-    let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
+    let power: f64 = s.scene.lights.iter().map(|l| l.power().r() as f64).sum();
     let exact_power = PI * 2.0 * 4.0 * PI * 0.25;
     assert!((power - exact_power).abs() < 1e-4 * exact_power, "{power} vs {exact_power}");
 }
@@ -76,7 +76,7 @@ fn an_emitting_mesh_has_the_power_and_irradiance_of_the_formula() {
         })
         .sum();
     assert_eq!(s.scene.lights.len(), mesh.indices.len());
-    let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
+    let power: f64 = s.scene.lights.iter().map(|l| l.power().r() as f64).sum();
     assert!((power - PI * 3.0 * area).abs() < 1e-4 * power, "{power} vs {}", PI * 3.0 * area);
     // Photons leave it with the same total power.
     let (mut flux, n) = (0.0f64, 200_000);
@@ -84,7 +84,7 @@ fn an_emitting_mesh_has_the_power_and_irradiance_of_the_formula() {
     for _ in 0..n {
         let (i, prob) = s.scene.light_picker.pick(rng.uniform()).unwrap();
         let e = s.scene.emit_photon(&s.scene.lights[i], rng.uniform2(), rng.uniform2()).unwrap();
-        flux += e.flux.x as f64 / prob as f64;
+        flux += e.flux.r() as f64 / prob as f64;
     }
     flux /= n as f64;
     assert!((flux - power).abs() < 0.005 * power, "photons carry {flux}, power {power}");
@@ -132,7 +132,7 @@ emission = 1
     let lights = &s.scene.lights;
     assert_eq!(lights.len(), 7, "the sphere and six faces");
     assert!(matches!(lights[0], Light::Area { .. }));
-    let box_power: f64 = lights[1..].iter().map(|l| l.power().x as f64).sum();
+    let box_power: f64 = lights[1..].iter().map(|l| l.power().r() as f64).sum();
     assert!((box_power - PI * 6.0).abs() < 1e-4, "{box_power}");
     // The box is behind the probe's surface: only the sphere lights it.
     let e = irradiance(&s, Vec3::ZERO, -Vec3::Z, 200_000);
@@ -172,7 +172,7 @@ emission = 0.5
 emission_texture = "checks"
 "#,
     );
-    let power: Vec<f64> = s.scene.lights.iter().map(|l| l.power().x as f64).collect();
+    let power: Vec<f64> = s.scene.lights.iter().map(|l| l.power().r() as f64).collect();
     assert_eq!(power.len(), 2);
     assert!((power[0] - PI * 2.0 * 2.0).abs() < 1e-4 && (power[1] - PI * 2.0 * 1.0).abs() < 1e-4, "{power:?}");
 }
@@ -230,7 +230,7 @@ fn emitting_disks_and_cylinders_give_the_irradiance_of_the_formula() {
         r#"<shape type="cylinder"><float name="radius" value="0.5"/><point name="p0" x="0" y="0" z="0"/><point name="p1" x="0" y="0" z="2"/>
         <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#,
     );
-    let power: f64 = s.scene.lights.iter().map(|l| l.power().x as f64).sum();
+    let power: f64 = s.scene.lights.iter().map(|l| l.power().r() as f64).sum();
     let exact_power = PI * 2.0 * (2.0 * PI * 0.5 * 2.0);
     assert!((power - exact_power).abs() < 1e-4 * exact_power, "{power} vs {exact_power}");
     // Beside it, at distance D from the axis, facing it: a long cylinder's irradiance is bounded by
@@ -324,13 +324,13 @@ fn textured_emitters_read_the_same_texture_where_sampled_and_where_hit() {
             } else if total < 50 {
                 eprintln!("{name}: p {} uv {:?} seen {seen} sampled {} want {want:?}", h.p, h.uv(), ls.radiance);
             }
-            colours.insert((ls.radiance.x * 10.0) as i32);
+            colours.insert((ls.radiance.r() * 10.0) as i32);
         }
         // Points within rounding of a check's edge may read the neighbouring check.
         assert!(total > 1000 && agree as f64 >= 0.995 * total as f64, "{name}: {agree} of {total} agree");
         assert_eq!(colours.len(), 2, "{name}: both checks are seen: {colours:?}");
         // Power: the checkerboard's mean (half of each colour) times pi times the area.
-        let power: f64 = scene.lights.iter().map(|l| l.power().x as f64).sum();
+        let power: f64 = scene.lights.iter().map(|l| l.power().r() as f64).sum();
         let area: f64 = scene
             .lights
             .iter()

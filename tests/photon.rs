@@ -50,7 +50,7 @@ fn photon_irradiance_under_a_point_light_matches_i_cos_over_d2() {
         let e: Color = found.iter().map(|&(_, i)| map.photon(i).power()).sum::<Color>() / (PI * r2);
         let v = light - p;
         let expected = 10.0 * (v.y / v.length()) / v.length_squared();
-        assert!((e.x - expected).abs() < 0.05 * expected, "at {p}: photon irradiance {} vs {expected}", e.x);
+        assert!((e.r() - expected).abs() < 0.05 * expected, "at {p}: photon irradiance {} vs {expected}", e.r());
     }
 }
 
@@ -61,7 +61,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
         .replace("type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "type = \"plane\"");
     let s = common::scene(&text);
     let pass = trace::trace_global(&s.scene, 400_000, 3, trace::Watch::none());
-    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
+    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
     let expected = 4.0 * PI * 10.0 * 0.5;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
     // A 2 x 2 square 2 below the light subtends 4 asin(1 / 5) of the sphere of directions.
@@ -71,7 +71,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
     );
     let s = common::scene(&square);
     let pass = trace::trace_global(&s.scene, 400_000, 4, trace::Watch::none());
-    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.x).sum();
+    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
     let fraction = 4.0 * (1.0f32 / 5.0).asin() / (4.0 * PI);
     let expected = 4.0 * PI * 10.0 * fraction;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");

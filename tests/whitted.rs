@@ -63,7 +63,7 @@ fn diffuse_plane_receives_kd_i_cos_over_d2() {
         let to_light = light - target;
         let d2 = to_light.length_squared();
         let cos = to_light.normalize().y;
-        let expected = Vec3::new(1.0, 0.5, 0.25) * 0.7 * 10.0 * cos / d2;
+        let expected = Color::new(1.0, 0.5, 0.25) * 0.7 * 10.0 * cos / d2;
         assert!((c - expected).abs().max_element() <= 1e-4 * expected.max_element(), "at {target}: {c} vs {expected}");
     }
 }
@@ -81,14 +81,14 @@ fn shadow_ray_blocked_and_unblocked() {
     // A point off to the side sees the light.
     let lit_target = Vec3::new(-2.0, 0.0, 1.5);
     let lit = radiance(&s, Ray::new(eye, (lit_target - eye).normalize()), 1);
-    assert!(lit.x > 0.1, "{lit}");
+    assert!(lit.r() > 0.1, "{lit}");
     // A blocker beyond the light does not cast a shadow.
     let beyond = format!(
         "{PLANE_UNDER_LIGHT}\n[[objects]]\ntype = \"sphere\"\ncenter = [1.5, 4.5, -0.75]\nradius = 0.3\nmaterial = \"white\"\n"
     );
     let s2 = common::scene(&beyond);
     let c = radiance(&s2, Ray::new(eye, (Vec3::ZERO - eye).normalize()), 1);
-    assert!(c.x > 0.1, "a sphere behind the light shadowed the floor: {c}");
+    assert!(c.r() > 0.1, "a sphere behind the light shadowed the floor: {c}");
 }
 
 #[test]
@@ -114,7 +114,7 @@ material = "mirror"
 "#,
     );
     let c = radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 4);
-    assert!((c - Vec3::new(0.2, 0.4, 0.6) * 0.75).abs().max_element() < 1e-6, "{c}");
+    assert!((c - Color::new(0.2, 0.4, 0.6) * 0.75).abs().max_element() < 1e-6, "{c}");
     // With one bounce (direct light only) the recursion is cut: no reflection.
     assert_eq!(radiance(&s, Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), 1), Color::ZERO);
 }
@@ -143,7 +143,7 @@ material = "glass"
     );
     for y in [0.0f32, 0.3, 0.7, 0.95, 0.999] {
         let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 41);
-        assert!((c - Vec3::ONE).abs().max_element() < 1e-3, "offset {y}: {c}");
+        assert!((c - Color::ONE).abs().max_element() < 1e-3, "offset {y}: {c}");
     }
 }
 
@@ -285,7 +285,7 @@ material = "glass"
     for i in 0..200 {
         let y = i as f32 / 200.0;
         let c = radiance(&s, Ray::new(Vec3::new(0.0, y, 5.0), -Vec3::Z), 61);
-        darkest = darkest.min(c.x);
+        darkest = darkest.min(c.r());
     }
     assert!(darkest > 0.99, "darkest pixel {darkest}: a ring from total internal reflection");
 }

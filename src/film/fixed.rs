@@ -29,7 +29,7 @@ pub fn to_fixed(v: f32) -> i128 {
 
 #[inline]
 pub fn to_fixed_rgb(c: Color) -> FixedRgb {
-    [to_fixed(c.x), to_fixed(c.y), to_fixed(c.z)]
+    [to_fixed(c.r()), to_fixed(c.g()), to_fixed(c.b())]
 }
 
 #[inline]
@@ -87,7 +87,7 @@ mod tests {
             prop_assert_eq!(sum(&rev), whole);
             // The mean is within the fixed-point resolution of the exact one.
             let exact = values.iter().map(|&v| v as f64).sum::<f64>() / values.len() as f64;
-            let m = mean(&[whole, 0, 0], values.len() as u32).x as f64;
+            let m = mean(&[whole, 0, 0], values.len() as u32).r() as f64;
             prop_assert!((m - exact).abs() <= exact * 1e-6 + 1e-12);
         }
     }

@@ -242,7 +242,7 @@ impl Image {
     /// Mean of all pixels.
     pub fn mean(&self) -> Color {
         let s: glam::DVec3 = self.pixels.iter().map(|c| c.as_dvec3()).sum();
-        (s / self.pixels.len().max(1) as f64).as_vec3()
+        Color::from_dvec3(s / self.pixels.len().max(1) as f64)
     }
 
     /// Root-mean-square difference per channel value against `other` (same size).

@@ -4,6 +4,7 @@
 //! so a crash or error never leaves a truncated image (and never destroys a previous one).
 
 use super::Image;
+use crate::math::Color;
 use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -108,7 +109,7 @@ fn write_exr(img: &Image, path: &Path) -> Result<(), OutputError> {
     let w = img.width as usize;
     let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
         let c = img.pixels[pos.y() * w + pos.x()];
-        (c.x, c.y, c.z)
+        (c.r(), c.g(), c.b())
     });
     let image = exr::image::Image::from_channels((img.width as usize, img.height as usize), channels);
     image.write().to_file(path).map_err(|e| write_err(path, e))
@@ -124,7 +125,7 @@ pub fn read_exr(path: &Path) -> Result<Image, OutputError> {
             super::Image::new(w as u32, h as u32)
         },
         |img: &mut super::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            img.set(pos.x() as u32, pos.y() as u32, glam::Vec3::new(r, g, b));
+            img.set(pos.x() as u32, pos.y() as u32, Color::new(r, g, b));
         },
     )
     .map_err(|e| write_err(path, e))?;
@@ -149,7 +150,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("caustic-out-{}", std::process::id()));
         fs::create_dir_all(&dir).unwrap();
         let mut img = Image::new(5, 3);
-        img.set(4, 2, glam::Vec3::new(2.5, 0.25, 1e-3));
+        img.set(4, 2, Color::new(2.5, 0.25, 1e-3));
         let exr = dir.join("a.exr");
         write_image(&img, &exr).unwrap();
         assert_eq!(read_exr(&exr).unwrap(), img);

@@ -521,7 +521,7 @@ mod tests {
                 * 2.0
                 * std::f64::consts::PI
                 * 3.0;
-            let p = Light::Spot(s).power().x as f64;
+            let p = Light::Spot(s).power().r() as f64;
             assert!((p - integral).abs() < 1e-4 * integral, "{cutoff}/{beam}: {p} vs {integral}");
         }
     }
@@ -552,7 +552,7 @@ mod tests {
         let seen = Light::Projector(Projector { position: -target, ..p }).sample(Vec3::ZERO, Vec2::ZERO).unwrap();
         let cos_a = target.normalize().z;
         let want = PI / (target.z * target.z * cos_a);
-        assert!((seen.radiance.x - want).abs() < 1e-5 * want, "{} vs {want}", seen.radiance.x);
+        assert!((seen.radiance.r() - want).abs() < 1e-5 * want, "{} vs {want}", seen.radiance.r());
     }
 
     #[test]

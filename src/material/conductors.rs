@@ -58,7 +58,9 @@ pub fn lookup(name: &str) -> Option<(Color, Color)> {
     if name == "none" {
         return Some((Color::ZERO, Color::ONE));
     }
-    let find = |n: &str| TABLE.iter().find(|(m, _, _)| *m == n).map(|(_, e, k)| (Color::from(*e), Color::from(*k)));
+    let find = |n: &str| {
+        TABLE.iter().find(|(m, _, _)| *m == n).map(|(_, e, k)| (Color::from_array(*e), Color::from_array(*k)))
+    };
     find(name).or_else(|| name.strip_suffix("_palik").filter(|n| !NO_PALIK.contains(n)).and_then(find))
 }
 

@@ -81,9 +81,9 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 #[inline]
 pub fn fresnel_conductor_rgb(cos_i: f32, eta: crate::math::Color, k: crate::math::Color) -> crate::math::Color {
     crate::math::Color::new(
-        fresnel_conductor(cos_i, eta.x, k.x),
-        fresnel_conductor(cos_i, eta.y, k.y),
-        fresnel_conductor(cos_i, eta.z, k.z),
+        fresnel_conductor(cos_i, eta.r(), k.r()),
+        fresnel_conductor(cos_i, eta.g(), k.g()),
+        fresnel_conductor(cos_i, eta.b(), k.b()),
     )
 }
 

@@ -180,7 +180,7 @@ impl Material {
         textures: &[Texture],
     ) -> Model {
         let d = diffuse.mean(textures);
-        Model::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean: (d.x + d.y + d.z) / 3.0 }
+        Model::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean: d.mean() }
     }
 
     /// A rough plastic (its coating's transmittance table is made here, once per roughness and
@@ -195,15 +195,7 @@ impl Material {
     ) -> Model {
         let d = diffuse.mean(textures);
         let table = CoatingTable::shared(microfacet, eta);
-        Model::RoughPlastic {
-            microfacet,
-            diffuse,
-            specular,
-            eta,
-            nonlinear,
-            diffuse_mean: (d.x + d.y + d.z) / 3.0,
-            table,
-        }
+        Model::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean: d.mean(), table }
     }
 }
 
@@ -247,7 +239,6 @@ impl Model {
     pub fn lobes(&self, front: bool, uv: Vec2, textures: &[Texture]) -> Lobes {
         let mut lobes = Lobes::default();
         let side = |eta: f32| if front { eta } else { 1.0 / eta };
-        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match *self {
             Model::Classic(c) => {
                 let c = match c.color_texture {
@@ -288,7 +279,7 @@ impl Model {
                 lobes.add(Bxdf::PlasticDiffuse(PlasticDiffuse {
                     d,
                     eta,
-                    d_mean: diffuse_mean.max(1e-4 * mean(scale)),
+                    d_mean: diffuse_mean.max(1e-4 * scale.mean()),
                 }));
             }
             Model::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean, table } => {
@@ -299,7 +290,7 @@ impl Model {
                 lobes.add(Bxdf::RoughPlasticDiffuse(RoughPlasticDiffuse {
                     d,
                     table,
-                    d_mean: diffuse_mean.max(1e-4 * mean(scale)),
+                    d_mean: diffuse_mean.max(1e-4 * scale.mean()),
                 }));
             }
             Model::TwoSided { .. }

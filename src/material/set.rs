@@ -190,7 +190,7 @@ impl Materials {
                 Model::NormalMap { normals, inner } => {
                     let base = perturbed.unwrap_or_else(|| h.shading_frame());
                     let rgb = self.textures[normals as usize].eval(uv);
-                    perturbed = Some(perturbed_frame(&base, rgb * 2.0 - Color::ONE, wo));
+                    perturbed = Some(perturbed_frame(&base, rgb.to_vec3() * 2.0 - Vec3::ONE, wo));
                     m = inner;
                 }
                 Model::Blend { .. } => {
@@ -332,7 +332,6 @@ impl Materials {
     /// matching width for rough surfaces, glass as glass. Roughness of glass, textures other than
     /// a diffuse colour, masks and bump maps are ignored.
     fn classic_view(&self, m: u32) -> Classic {
-        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         let const_or_mean = |p: &Param<Color>| match *p {
             Param::Const(c) => (c, None),
             Param::Texture(t) => (self.textures[t as usize].mean(), Some(t)),
@@ -342,7 +341,7 @@ impl Materials {
             Param::Const(a) => a,
             Param::Texture(t) => {
                 let c = self.textures[t as usize].mean();
-                mean(c)
+                c.mean()
             }
         };
         let base = Classic { ka: 0.0, ks: 0.0, kr: 0.0, kt: 0.0, ..Classic::default() };
@@ -354,12 +353,12 @@ impl Materials {
             }
             Model::Conductor { eta, k, specular } => {
                 let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
-                Classic { kind: ClassicKind::Reflective, color: f0, kd: 0.0, kr: mean(f0), ..base }
+                Classic { kind: ClassicKind::Reflective, color: f0, kd: 0.0, kr: f0.mean(), ..base }
             }
             Model::RoughConductor { roughness, eta, k, specular } => {
                 let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
                 let n = exponent(alpha_of(&roughness.alpha_u).max(alpha_of(&roughness.alpha_v)));
-                Classic { kind: ClassicKind::Diffuse, color: f0, kd: 0.0, ks: mean(f0), exponent: n, ..base }
+                Classic { kind: ClassicKind::Diffuse, color: f0, kd: 0.0, ks: f0.mean(), exponent: n, ..base }
             }
             Model::Dielectric { eta, .. } | Model::RoughDielectric { eta, .. } => {
                 Classic { kind: ClassicKind::Dielectric, ior: eta, kd: 0.0, ..base }

@@ -1,16 +1,15 @@
 //! Vector types (re-exported from glam), colours, orthonormal frames and small helpers.
 
+mod color;
 pub mod float;
 
+pub use color::Color;
 pub use glam::{Vec2, Vec3, Vec3A};
-
-/// Linear RGB radiance or reflectance. A plain `Vec3` keeps colour arithmetic SIMD-friendly and `Copy`.
-pub type Color = Vec3;
 
 /// Relative luminance of a linear sRGB colour (Rec. 709 weights).
 #[inline]
 pub fn luminance(c: Color) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+    0.2126 * c.r() + 0.7152 * c.g() + 0.0722 * c.b()
 }
 
 /// An orthonormal basis whose `z` axis is a given unit normal; used to map local sample

@@ -73,7 +73,9 @@ const PHI_BINS: usize = 512;
 /// The three channels of `power` in the low `3 * CHANNEL_BITS` bits.
 #[inline]
 fn encode_power(power: Color) -> u64 {
-    encode_channel(power.x) | encode_channel(power.y) << CHANNEL_BITS | encode_channel(power.z) << (2 * CHANNEL_BITS)
+    encode_channel(power.r())
+        | encode_channel(power.g()) << CHANNEL_BITS
+        | encode_channel(power.b()) << (2 * CHANNEL_BITS)
 }
 
 /// Encodes one non-negative power channel into 13 bits, rounding to nearest.

@@ -293,8 +293,7 @@ pub fn scatter_photon(
 ) -> Option<(Vec3, Color, crate::material::bxdf::LobeFlags)> {
     let s = bsdf.sample_lobe(wo, rng.uniform(), rng.uniform2(), Transport::Importance)?;
     let scattered = flux * s.weight;
-    let sum = |c: Color| c.x + c.y + c.z;
-    let q = (sum(scattered) / sum(flux)).min(1.0);
+    let q = (scattered.sum() / flux.sum()).min(1.0);
     if !(q > 0.0) || rng.uniform() >= q {
         return None;
     }
@@ -474,7 +473,7 @@ mod tests {
         for _ in 0..n {
             if let Some((_, f, _)) = scatter_photon(&b, wo, flux, &mut rng) {
                 // Photons keep their power averaged over the channels.
-                assert!((f.x + f.y + f.z - (flux.x + flux.y + flux.z)).abs() < 1e-4, "{f}");
+                assert!((f.sum() - flux.sum()).abs() < 1e-4, "{f}");
                 sum += f;
             }
         }

@@ -2,7 +2,7 @@
 //! negative sizes, zero-length directions) while deserializing, so the TOML reader attaches the
 //! exact line and column of the bad value to the error.
 
-use crate::math::Vec3;
+use crate::math::{Color, Vec3};
 use serde::de::{Deserialize, Deserializer, Error};
 
 fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
@@ -94,7 +94,7 @@ impl<'de> Deserialize<'de> for Direction {
 
 /// An RGB colour: three finite numbers >= 0, or one number for grey.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Rgb(pub Vec3);
+pub struct Rgb(pub Color);
 impl<'de> Deserialize<'de> for Rgb {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         #[derive(serde::Deserialize)]
@@ -112,14 +112,14 @@ impl<'de> Deserialize<'de> for Rgb {
         if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
             return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
         }
-        Ok(Rgb(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+        Ok(Rgb(Color::new(a[0] as f32, a[1] as f32, a[2] as f32)))
     }
 }
 
 /// A colour or the name of a texture giving it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ColorOrTexture {
-    Color(Vec3),
+    Color(Color),
     Texture(String),
 }
 impl<'de> Deserialize<'de> for ColorOrTexture {
@@ -141,7 +141,7 @@ impl<'de> Deserialize<'de> for ColorOrTexture {
         if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
             return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
         }
-        Ok(ColorOrTexture::Color(Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+        Ok(ColorOrTexture::Color(Color::new(a[0] as f32, a[1] as f32, a[2] as f32)))
     }
 }
 

@@ -144,7 +144,7 @@ impl Bitmap {
 /// A texel's scalar reading: one channel as it is, colour as luminance.
 #[inline]
 fn scalar_of(c: Color, channels: u32) -> f32 {
-    if channels >= 3 { luminance(c) } else { c.x }
+    if channels >= 3 { luminance(c) } else { c.r() }
 }
 
 /// Which colour of a checkerboard covers `uv`: squares of 0.5, the lower half of each unit
@@ -176,13 +176,16 @@ impl Texture {
     /// The scalar at `uv`, as Mitsuba's `eval_1` reads a texture given for a scalar parameter.
     #[inline]
     pub fn eval_1(&self, uv: Vec2) -> f32 {
-        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match self {
-            Texture::Constant(c) => mean(*c),
+            Texture::Constant(c) => c.mean(),
             Texture::Bitmap(b) => scalar_of(b.eval(uv), b.image.channels),
             // Mitsuba 3's eval_1 of a checkerboard has the colours the other way round.
             Texture::Checkerboard { color0, color1, to_uv } => {
-                mean(if checker_is_color0(to_uv, uv) { *color1 } else { *color0 })
+                if checker_is_color0(to_uv, uv) {
+                    color1.mean()
+                } else {
+                    color0.mean()
+                }
             }
         }
     }
@@ -201,7 +204,7 @@ impl Texture {
                         sum += b.texel(x, y).as_dvec3();
                     }
                 }
-                (sum / n as f64).as_vec3()
+                Color::from_dvec3(sum / n as f64)
             }
             Texture::Checkerboard { color0, color1, .. } => (*color0 + *color1) * 0.5,
         }
@@ -240,31 +243,31 @@ mod tests {
     fn texel_centres_top_row_first_and_wrap_modes() {
         let b = bitmap(Filter::Bilinear, Wrap::Repeat);
         // The centre of texel (0, 0) is (0.125, 0.25): the top-left texel exactly.
-        assert_eq!(b.eval(Vec2::new(0.125, 0.25)).x, 1.0);
-        assert_eq!(b.eval(Vec2::new(0.125, 0.75)).x, 0.0);
+        assert_eq!(b.eval(Vec2::new(0.125, 0.25)).r(), 1.0);
+        assert_eq!(b.eval(Vec2::new(0.125, 0.75)).r(), 0.0);
         // Half-way between texels 0 and 1 of the top row.
-        assert!((b.eval(Vec2::new(0.25, 0.25)).x - 0.75).abs() < 1e-6);
+        assert!((b.eval(Vec2::new(0.25, 0.25)).r() - 0.75).abs() < 1e-6);
         // u = 0 blends the first and the last column under repeat, and reads the first under
         // clamp and mirror.
-        assert!((b.eval(Vec2::new(0.0, 0.25)).x - 0.5625).abs() < 1e-6);
+        assert!((b.eval(Vec2::new(0.0, 0.25)).r() - 0.5625).abs() < 1e-6);
         for wrap in [Wrap::Clamp, Wrap::Mirror] {
-            assert_eq!(bitmap(Filter::Bilinear, wrap).eval(Vec2::new(0.0, 0.25)).x, 1.0);
+            assert_eq!(bitmap(Filter::Bilinear, wrap).eval(Vec2::new(0.0, 0.25)).r(), 1.0);
         }
         // v = 1 under repeat blends the bottom and top rows; under clamp it is the bottom row.
-        assert!((b.eval(Vec2::new(0.125, 1.0)).x - 0.5).abs() < 1e-6);
-        assert_eq!(bitmap(Filter::Bilinear, Wrap::Clamp).eval(Vec2::new(0.125, 1.0)).x, 0.0);
+        assert!((b.eval(Vec2::new(0.125, 1.0)).r() - 0.5).abs() < 1e-6);
+        assert_eq!(bitmap(Filter::Bilinear, Wrap::Clamp).eval(Vec2::new(0.125, 1.0)).r(), 0.0);
         // Nearest reads the texel the point falls in; repeat wraps 2 to 0.
         let n = bitmap(Filter::Nearest, Wrap::Repeat);
-        assert_eq!(n.eval(Vec2::new(0.3, 0.2)).x, 0.5);
-        assert_eq!(n.eval(Vec2::new(0.125, 1.0)).x, 1.0);
-        assert_eq!(n.eval(Vec2::new(-0.1, 0.2)).x, 0.125);
+        assert_eq!(n.eval(Vec2::new(0.3, 0.2)).r(), 0.5);
+        assert_eq!(n.eval(Vec2::new(0.125, 1.0)).r(), 1.0);
+        assert_eq!(n.eval(Vec2::new(-0.1, 0.2)).r(), 0.125);
         // Mirror indices: ... 1 0 | 0 1 2 3 | 3 2 ...
         let m = bitmap(Filter::Nearest, Wrap::Mirror);
-        assert_eq!(m.eval(Vec2::new(-0.1, 0.2)).x, 1.0);
-        assert_eq!(m.eval(Vec2::new(1.1, 0.2)).x, 0.125);
-        assert_eq!(m.eval(Vec2::new(1.3, 0.2)).x, 0.25);
+        assert_eq!(m.eval(Vec2::new(-0.1, 0.2)).r(), 1.0);
+        assert_eq!(m.eval(Vec2::new(1.1, 0.2)).r(), 0.125);
+        assert_eq!(m.eval(Vec2::new(1.3, 0.2)).r(), 0.25);
         // Non-finite coordinates do not panic.
-        assert_eq!(b.eval(Vec2::new(f32::NAN, 0.0)).x, 1.0);
+        assert_eq!(b.eval(Vec2::new(f32::NAN, 0.0)).r(), 1.0);
     }
 
     #[test]
@@ -273,9 +276,9 @@ mod tests {
         for uv in [Vec2::new(0.3, 0.3), Vec2::new(0.61, 0.12), Vec2::new(0.9, 0.8)] {
             let (v, g) = b.eval_1_grad(uv);
             let h = 1e-3;
-            let du = (b.eval(uv + Vec2::new(h, 0.0)).x - b.eval(uv - Vec2::new(h, 0.0)).x) / (2.0 * h);
-            let dv = (b.eval(uv + Vec2::new(0.0, h)).x - b.eval(uv - Vec2::new(0.0, h)).x) / (2.0 * h);
-            assert_eq!(v, b.eval(uv).x);
+            let du = (b.eval(uv + Vec2::new(h, 0.0)).r() - b.eval(uv - Vec2::new(h, 0.0)).r()) / (2.0 * h);
+            let dv = (b.eval(uv + Vec2::new(0.0, h)).r() - b.eval(uv - Vec2::new(0.0, h)).r()) / (2.0 * h);
+            assert_eq!(v, b.eval(uv).r());
             assert!(
                 (g.x - du).abs() < 1e-2 * (1.0 + du.abs()) && (g.y - dv).abs() < 1e-2 * (1.0 + dv.abs()),
                 "{g} vs ({du}, {dv})"

@@ -110,6 +110,6 @@ pub fn mean_luminance(img: &Image) -> f64 {
 
 pub fn rmse(a: &Image, b: &Image) -> f64 {
     assert_eq!((a.width, a.height), (b.width, b.height));
-    let s: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x - *y).length_squared() as f64 / 3.0).sum();
+    let s: f64 = a.pixels.iter().zip(&b.pixels).map(|(&x, &y)| ((x - y) * (x - y)).sum() as f64 / 3.0).sum();
     (s / a.pixels.len() as f64).sqrt()
 }

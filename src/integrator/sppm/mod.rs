@@ -523,14 +523,14 @@ mod tests {
         let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
         let (m, phi, _) = gather(&v, 0.5, &grid, &hits);
         assert_eq!(m, 3);
-        assert!((phi.x - 0.5 / PI).abs() < 1e-6, "{phi}");
+        assert!((phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let deep = [PhotonHit { depth: 3, ..hits[0] }];
         let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
         let (m, phi, _) = gather(&VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
         assert_eq!((m, phi), (1, Color::ZERO));
         let (m, phi, _) = gather(&VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
-        assert!(m == 1 && (phi.x - 0.5 / PI).abs() < 1e-6, "{phi}");
+        assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
     }
 
     #[test]
@@ -541,7 +541,7 @@ mod tests {
         p.update(6, Color::splat(3.0), 2.0 / 3.0);
         assert!((p.n - 14.0).abs() < 1e-6);
         assert!((p.r * p.r - 14.0 / 16.0).abs() < 1e-6);
-        assert!((p.tau.x - 7.0).abs() < 1e-6);
+        assert!((p.tau.r() - 7.0).abs() < 1e-6);
         // No photons: nothing changes.
         let before = p;
         p.update(0, Color::ZERO, 2.0 / 3.0);
@@ -549,6 +549,6 @@ mod tests {
         // The estimate: tau / (iterations pi r^2) plus the mean direct light.
         p.ld = Color::splat(4.0);
         let l = p.radiance(2);
-        assert!((l.x - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
+        assert!((l.r() - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
     }
 }

@@ -127,7 +127,7 @@ fn delta_lobes_pick_their_directions_with_the_right_probabilities() {
         chi2_discrete("transparent", &counts, &[1.0 / 3.0, 2.0 / 3.0], n);
         let t = single(Bxdf::Transmission(Transmission { t: 0.6, eta: 1.5 }), wo);
         let s = t.sample(wo, 0.5, rng.uniform2(), Transport::Radiance).unwrap();
-        assert!((s.weight.x - 0.6 / 2.25).abs() < 1e-6, "radiance through glass is scaled by 1/eta^2");
+        assert!((s.weight.r() - 0.6 / 2.25).abs() < 1e-6, "radiance through glass is scaled by 1/eta^2");
     }
 }
 
@@ -215,9 +215,9 @@ fn dielectric_reflects_and_transmits_by_fresnel() {
     for _ in 0..n {
         let s = b.sample(Vec3::Z, rng.uniform(), rng.uniform2(), Transport::Importance).unwrap();
         if s.flags.is_transmission() {
-            trans += s.weight.x;
+            trans += s.weight.r();
         } else {
-            refl += s.weight.x;
+            refl += s.weight.r();
         }
     }
     assert!((refl / n as f32 - 0.04).abs() < 1e-3 && (trans / n as f32 - 0.96).abs() < 1e-3);
@@ -226,7 +226,7 @@ fn dielectric_reflects_and_transmits_by_fresnel() {
         let s = b.sample(Vec3::Z, rng.uniform(), rng.uniform2(), Transport::Radiance)?;
         s.flags.is_transmission().then_some(s)
     });
-    assert!((s.unwrap().weight.x - 1.0 / 2.25).abs() < 1e-4);
+    assert!((s.unwrap().weight.r() - 1.0 / 2.25).abs() < 1e-4);
 }
 
 fn classic_material(m: &Classic, wo: Vec3) -> Bsdf<'static> {
@@ -284,7 +284,7 @@ fn photons_scatter_with_the_adjoint_bsdf_under_shading_normals() {
     let mut mean = 0.0f64;
     for _ in 0..n {
         if let Some(s) = bsdf.sample_lobe(wo, rng.uniform(), rng.uniform2(), Transport::Importance) {
-            mean += s.weight.x as f64;
+            mean += s.weight.r() as f64;
         }
     }
     mean /= n as f64;

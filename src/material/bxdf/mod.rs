@@ -235,7 +235,6 @@ impl Bxdf {
     /// albedo (1 for a dielectric, which always reflects or transmits everything).
     #[inline]
     pub fn sampling_weight(&self) -> f32 {
-        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match self {
             Bxdf::Lambert(b) => colour_weight(b.r),
             Bxdf::Phong(b) => b.ks,
@@ -247,8 +246,8 @@ impl Bxdf {
             Bxdf::RoughDielectric(b) => colour_weight(b.r.max(b.t)),
             // A plastic's two lobes in Mitsuba's proportion: the coating's mean specular
             // reflectance against the base's mean reflectance (then times `selection`).
-            Bxdf::FresnelMirror(b) => mean(b.scale),
-            Bxdf::RoughCoating(b) => mean(b.scale),
+            Bxdf::FresnelMirror(b) => b.scale.mean(),
+            Bxdf::RoughCoating(b) => b.scale.mean(),
             Bxdf::PlasticDiffuse(b) => b.d_mean,
             Bxdf::RoughPlasticDiffuse(b) => b.d_mean,
         }
@@ -301,21 +300,20 @@ impl Bxdf {
     /// lobes in proportion to it, as Jensen's Russian roulette does.
     #[inline]
     pub fn mean_albedo(&self) -> f32 {
-        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         match self {
-            Bxdf::Lambert(b) => mean(b.r),
+            Bxdf::Lambert(b) => b.r.mean(),
             Bxdf::Phong(b) => b.ks,
-            Bxdf::Mirror(b) => mean(b.r),
+            Bxdf::Mirror(b) => b.r.mean(),
             Bxdf::Transmission(b) => b.t,
-            Bxdf::Dielectric(b) => mean(b.r.max(b.t)),
-            Bxdf::Conductor(b) => mean(b.albedo()),
-            Bxdf::RoughConductor(b) => mean(b.albedo()),
-            Bxdf::RoughDielectric(b) => mean(b.r.max(b.t)),
+            Bxdf::Dielectric(b) => b.r.max(b.t).mean(),
+            Bxdf::Conductor(b) => b.albedo().mean(),
+            Bxdf::RoughConductor(b) => b.albedo().mean(),
+            Bxdf::RoughDielectric(b) => b.r.max(b.t).mean(),
             // Fresnel reflectance of a coating averaged over directions is about its F_dr.
-            Bxdf::FresnelMirror(b) => mean(b.scale) * super::fresnel::fresnel_diffuse_reflectance(b.eta),
-            Bxdf::RoughCoating(b) => mean(b.scale) * super::fresnel::fresnel_diffuse_reflectance(b.eta),
-            Bxdf::PlasticDiffuse(b) => mean(b.d),
-            Bxdf::RoughPlasticDiffuse(b) => mean(b.d),
+            Bxdf::FresnelMirror(b) => b.scale.mean() * super::fresnel::fresnel_diffuse_reflectance(b.eta),
+            Bxdf::RoughCoating(b) => b.scale.mean() * super::fresnel::fresnel_diffuse_reflectance(b.eta),
+            Bxdf::PlasticDiffuse(b) => b.d.mean(),
+            Bxdf::RoughPlasticDiffuse(b) => b.d.mean(),
         }
     }
 

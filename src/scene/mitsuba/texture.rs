@@ -39,7 +39,7 @@ impl<'a> Cx<'a> {
     ) -> Result<Option<FloatParam>, SceneError> {
         if let Some(el) = self.prop(p, name) {
             let c = self.color_of(el, name)?;
-            return Ok(Some(Param::Const((c.x + c.y + c.z) / 3.0)));
+            return Ok(Some(Param::Const(c.mean())));
         }
         if let Some(&(tex, _)) = self.object(p, Some(name), "texture").first() {
             return self.texture(tex, b).map(|t| Some(Param::Texture(t)));

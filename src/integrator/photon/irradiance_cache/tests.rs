@@ -24,7 +24,7 @@ fn record(m: usize, n: usize, field: impl Fn(Vec3) -> (f32, f32)) -> Record {
 #[test]
 fn a_constant_sky_gives_pi_l_and_no_gradients() {
     let r = record(12, 37, |_| (0.7, f32::INFINITY));
-    assert!((r.e.x - PI * 0.7).abs() < 1e-4, "E = {}", r.e.x);
+    assert!((r.e.r() - PI * 0.7).abs() < 1e-4, "E = {}", r.e.r());
     for c in 0..3 {
         assert!(r.grad_r[c].length() < 1e-4 && r.grad_t[c].length() < 1e-4, "{:?} {:?}", r.grad_r, r.grad_t);
     }
@@ -55,9 +55,13 @@ fn the_rotational_gradient_matches_a_tilted_sky() {
     let frame = Frame::from_z(n);
     let (samples, dirs) = gather(48, 150, |d| sky(frame.to_world(d)));
     let turned = make_record(Vec3::ZERO, &frame, 48, 150, &samples, &dirs, (1e-3, 1e3));
-    let got = r.extrapolate(Vec3::ZERO, n).x;
-    let without = r.e.x;
-    assert!((got - turned.e.x).abs() < 0.1 * (without - turned.e.x).abs(), "{got} vs {} (E {without})", turned.e.x);
+    let got = r.extrapolate(Vec3::ZERO, n).r();
+    let without = r.e.r();
+    assert!(
+        (got - turned.e.r()).abs() < 0.1 * (without - turned.e.r()).abs(),
+        "{got} vs {} (E {without})",
+        turned.e.r()
+    );
 }
 
 /// A ceiling at height H, bright (L = 1) where x > 0 and black elsewhere, seen from the origin
@@ -71,7 +75,7 @@ fn the_translational_gradient_matches_a_half_lit_ceiling() {
             let x = d.x * t;
             (if x > 0.0 { 1.0 } else { 0.0 }, t)
         });
-        assert!((r.e.x - PI / 2.0).abs() < 0.01, "E = {}", r.e.x);
+        assert!((r.e.r() - PI / 2.0).abs() < 0.01, "E = {}", r.e.r());
         let want = PI / (2.0 * h);
         let g = r.grad_t[0];
         assert!((g.x - want).abs() < 0.05 * want, "H = {h}: {g:?} vs {want}");
@@ -99,8 +103,8 @@ fn a_radius_raised_to_the_minimum_scales_the_gradient_down() {
     let want = PI / (2.0 * h) * h;
     assert!((r.grad_t[0].x - want).abs() < 0.05 * want, "{:?} vs {want}", r.grad_t[0]);
     for a in [0.25f32, 1.0] {
-        let e = r.extrapolate(Vec3::new(a * r.r, 0.0, 0.0), Vec3::Z).x;
-        assert!((e - r.e.x).abs() <= 1.05 * a * r.e.x, "a = {a}: {e} vs E = {}", r.e.x);
+        let e = r.extrapolate(Vec3::new(a * r.r, 0.0, 0.0), Vec3::Z).r();
+        assert!((e - r.e.r()).abs() <= 1.05 * a * r.e.r(), "a = {a}: {e} vs E = {}", r.e.r());
     }
 }
 
@@ -141,7 +145,7 @@ fn lookups_weight_records_by_their_error_and_stop_at_the_threshold() {
     // Two records of equal error weigh equally.
     let cache = IrradianceCache::new(vec![flat_record(Vec3::ZERO, 2.0, 1.0), flat_record(Vec3::X * 0.2, 4.0, 1.0)], a);
     let mid = cache.lookup(Vec3::X * 0.1, Vec3::Z, 1).unwrap();
-    assert!((mid.x - 3.0).abs() < 1e-5, "{mid:?}");
+    assert!((mid.r() - 3.0).abs() < 1e-5, "{mid:?}");
     assert!(cache.covers(Vec3::X * 0.1, Vec3::Z, 0.7 * a, 1));
     assert!(!cache.covers(Vec3::X * 0.1, Vec3::Z, 0.05, 1));
 }
@@ -168,9 +172,9 @@ fn the_grid_finds_records_of_every_size() {
         for s in [-0.99f32, -0.5, 0.0, 0.5, 0.99] {
             for axis in [Vec3::X, Vec3::Y] {
                 let p = r.p + axis * (s * reach);
-                let got = cache.lookup(p, Vec3::Z, 1).map(|c| c.x);
+                let got = cache.lookup(p, Vec3::Z, 1).map(|c| c.r());
                 // (e w) / w: exact up to rounding.
-                let ok = got.is_some_and(|g| (g - r.e.x).abs() <= 1e-5 * r.e.x);
+                let ok = got.is_some_and(|g| (g - r.e.r()).abs() <= 1e-5 * r.e.r());
                 assert!(ok, "record at {:?}, offset {s} along {axis:?}: {got:?}", r.p);
             }
         }
