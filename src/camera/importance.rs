@@ -63,8 +63,8 @@ pub struct CameraWi {
     /// Density of the sample as a solid angle at the reference point,
     /// dist² / (|cos θ_lens| lens_area); 1 for an orthographic camera, whose direction is a delta.
     pub pdf: f32,
-    /// The camera's position (pinhole) or direction (orthographic) is a delta: no other strategy
-    /// can find this connection, and the pdf is a weight, not a density.
+    /// The camera's position (pinhole) or direction (orthographic) is a delta: a light path can
+    /// never reach the lens by chance (the strategy with no camera vertex has density 0).
     pub delta: bool,
 }
 

@@ -1,6 +1,7 @@
 //! Camera importance tests: We integrates to 1 over the full film, `sample_wi` inverts
 //! `generate_ray`, the sampled directions follow `pdf_we` and `sample_wi`'s pdf by chi-square,
-//! and nothing off the film or behind the camera has importance.
+//! nothing off the film or behind the camera has importance, and light tracing an emitter that
+//! fills the view gives its radiance in every part of the film.
 
 use std::f32::consts::PI;
 
@@ -406,4 +407,65 @@ fn lens_connections_follow_their_pdf() {
     let p = c.eye + (ps.x * c.u + ps.y * c.v - c.d * c.w) * (0.7 / c.d);
     let visible = chi2_lens_connections("thin lens, point at the film's edge", &c, p);
     assert!(visible > 0.2 && visible < 0.8, "the density integrates to {visible}");
+}
+
+/// The light tracer's contract end to end: a one-sided Lambertian emitter of radiance 1 filling
+/// the view, light-traced with the t = 1 strategy (one emitter point and one lens sample per
+/// pixel sample of the full film, each adding L |cos| importance / pdf / p_area to the pixel it
+/// lands in, the sums divided by the samples per pixel) gives 1 everywhere. Checked on blocks of
+/// pixels, each against its own standard error.
+#[test]
+fn light_tracing_an_emitter_filling_the_view_gives_its_radiance() {
+    const BLOCKS: (usize, usize) = (16, 12);
+    for (seed, (name, c)) in cameras().into_iter().enumerate() {
+        let mut rng = Rng32::new(70 + seed as u64);
+        // A tilted plane three units ahead, facing the camera.
+        let centre = c.eye - 3.0 * c.w;
+        let n = (c.w + 0.4 * c.u.normalize() + 0.2 * c.v.normalize()).normalize();
+        let plane = Frame::from_z(n);
+        let hit = |ray: &Ray| {
+            let q = ray.at((centre - ray.o).dot(n) / ray.d.dot(n)) - centre;
+            Vec2::new(q.dot(plane.x), q.dot(plane.y))
+        };
+        // The part of the plane the camera sees, from rays along the film's edges.
+        let mut half = Vec2::ZERO;
+        for i in 0..4000 {
+            let t = rng.uniform();
+            let edge = [Vec2::new(t, 0.0), Vec2::new(t, 1.0), Vec2::new(0.0, t), Vec2::new(1.0, t)][i % 4];
+            let lens = if i % 8 < 4 { rng.uniform2() } else { Vec2::new(rng.uniform(), (i % 2) as f32) };
+            half = half.max(hit(&c.generate_ray(edge * film(&c), lens)).abs());
+        }
+        half *= 1.1;
+        let area = 4.0 * half.x * half.y;
+        let (mut sum, mut sum2) = (vec![0.0f64; BLOCKS.0 * BLOCKS.1], vec![0.0f64; BLOCKS.0 * BLOCKS.1]);
+        // Samples per pixel: enough for about four million paths.
+        let spp = (4_000_000 / (c.width * c.height) as usize).max(1);
+        let paths = c.width as usize * c.height as usize * spp;
+        for _ in 0..paths {
+            let a = (2.0 * rng.uniform2() - Vec2::ONE) * half;
+            let x = centre + a.x * plane.x + a.y * plane.y;
+            let Some(s) = c.sample_wi(x, rng.uniform2()) else { continue };
+            let value = f64::from(n.dot(s.wi).max(0.0) * s.importance / s.pdf * area);
+            let block = (s.raster / film(&c) * Vec2::new(BLOCKS.0 as f32, BLOCKS.1 as f32)).as_uvec2();
+            let index = (block.y as usize).min(BLOCKS.1 - 1) * BLOCKS.0 + (block.x as usize).min(BLOCKS.0 - 1);
+            sum[index] += value;
+            sum2[index] += value * value;
+        }
+        // A block's value is the mean of its pixels' values (sums / spp): its sum over spp times
+        // its pixels, W H / blocks, which is paths / blocks.
+        let norm = paths as f64 / (BLOCKS.0 * BLOCKS.1) as f64;
+        let mut worst_z = 0.0f64;
+        for (s, s2) in sum.iter().zip(&sum2) {
+            let z = (s / norm - 1.0) / (s2.sqrt() / norm);
+            worst_z = worst_z.max(z.abs());
+        }
+        let total: f64 = sum.iter().sum::<f64>() / (norm * sum.len() as f64);
+        let total_error = sum2.iter().sum::<f64>().sqrt() / (norm * sum.len() as f64);
+        eprintln!("{name}: film mean {total:.5} +- {total_error:.5}, worst block {worst_z:.2} standard errors off");
+        assert!(
+            (total - 1.0).abs() < 0.01 && total_error < 0.0025,
+            "{name}: the film averages {total} +- {total_error}"
+        );
+        assert!(worst_z < 5.0, "{name}: a block is {worst_z} standard errors away from 1");
+    }
 }
