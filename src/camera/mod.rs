@@ -9,13 +9,16 @@
 //! sample meets at p. An orthographic camera's rays all run along -w from the view-plane point
 //! itself; its u and v may be longer than 1 (a Mitsuba `to_world` with a scale sets the extent).
 //!
-//! `desc` holds the camera as a scene file describes it and its build for an image size.
+//! `desc` holds the camera as a scene file describes it and its build for an image size;
+//! `importance` the camera's importance for light tracing and bidirectional methods.
 
 mod desc;
+mod importance;
 #[cfg(test)]
 mod tests;
 
 pub use desc::{CameraDesc, FieldOfView, FovAxis, Placement};
+pub use importance::CameraWi;
 
 use crate::geometry::Ray;
 use crate::math::{Vec2, Vec3};
