@@ -279,15 +279,9 @@ impl<'a> Bsdf<'a> {
         !self.lobes.flags.intersects(LobeFlags::DIFFUSE | LobeFlags::GLOSSY) || self.opacity == 0.0
     }
 
-    /// Albedo of the diffuse lobes.
+    /// Albedo of the Lambertian lobes.
     pub fn diffuse_albedo(&self) -> Color {
-        self.lobes()
-            .iter()
-            .map(|l| match l {
-                Bxdf::Lambert(b) => b.r,
-                _ => Color::ZERO,
-            })
-            .sum()
+        self.lobes().iter().filter_map(Bxdf::lambert_albedo).sum()
     }
 
     /// The BSDF's value for the pair (no cosine): the non-delta lobes of the kind the geometry
@@ -507,10 +501,7 @@ impl<'a> Bsdf<'a> {
         }
         let mut sum = Color::ZERO;
         for lobe in self.lobes() {
-            match lobe {
-                Bxdf::Lambert(b) => sum += b.r,
-                _ => return None,
-            }
+            sum += lobe.lambert_albedo()?;
         }
         Some(sum * self.opacity)
     }

@@ -6,8 +6,7 @@
 //! over the viewer's. Refracted radiance is scaled by 1 / eta^2 in radiance transport, not for
 //! photons (importance).
 
-use super::conductor::reflect_about;
-use super::{BxdfSample, LobeFlags, Transport};
+use super::{BxdfSample, Lobe, LobeFlags, Transport, colour_weight, reflect_about};
 use crate::material::fresnel::{fresnel_dielectric, refract};
 use crate::material::microfacet::Microfacet;
 use crate::math::{Color, Vec2, Vec3};
@@ -30,9 +29,42 @@ impl RoughDielectric {
         let h = h.normalize_or_zero();
         if h.z < 0.0 { -h } else { h }
     }
+}
+
+impl Lobe for RoughDielectric {
+    #[inline]
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
+    }
 
     #[inline]
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
+    fn is_isotropic(&self) -> bool {
+        self.mf.is_isotropic()
+    }
+
+    #[inline]
+    fn sampling_weight(&self) -> f32 {
+        colour_weight(self.r.max(self.t))
+    }
+
+    #[inline]
+    fn mean_albedo(&self) -> f32 {
+        self.r.max(self.t).mean()
+    }
+
+    #[inline]
+    fn lambert_albedo(&self) -> Option<Color> {
+        None
+    }
+
+    #[inline]
+    fn scaled(self, w: f32) -> Self {
+        let c = Color::splat(w);
+        RoughDielectric { r: self.r * c, t: self.t * c, ..self }
+    }
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
         if wo.z <= 0.0 || wi.z == 0.0 {
             return Color::ZERO;
         }
@@ -61,7 +93,7 @@ impl RoughDielectric {
     }
 
     #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> f32 {
         if wo.z <= 0.0 || wi.z == 0.0 {
             return 0.0;
         }
@@ -83,7 +115,7 @@ impl RoughDielectric {
 
     /// `uc` chooses reflection (with probability F) or refraction, `u` the facet.
     #[inline]
-    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BxdfSample> {
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BxdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
