@@ -337,9 +337,9 @@ fn materials_map_to_our_model() {
         let i = ms.names.iter().position(|n| n == name).unwrap_or_else(|| panic!("{name}"));
         ms.list[i]
     };
-    use caustic::material::{Model, Param};
+    use caustic::material::{Model, Param, Plain};
     let eta = |name: &str| match m(name).model {
-        Model::Dielectric { eta, reflectance, transmittance } => {
+        Model::Plain(Plain::Dielectric { eta, reflectance, transmittance }) => {
             assert_eq!((reflectance, transmittance), (Param::Const(Color::ONE), Param::Const(Color::ONE)));
             eta
         }
@@ -351,18 +351,18 @@ fn materials_map_to_our_model() {
     let mirror = m("mirror");
     assert_eq!(
         (mirror.model, mirror.two_sided),
-        (Model::Conductor { eta: Color::ZERO, k: Color::ONE, specular: Param::Const(Color::ONE) }, false)
+        (Plain::Conductor { eta: Color::ZERO, k: Color::ONE, specular: Param::Const(Color::ONE) }.into(), false)
     );
     // `twosided` of one diffuse: the diffuse on both sides; a bare diffuse is one-sided.
     let two = m("two");
     assert_eq!(
         (two.model, two.two_sided),
-        (Model::Diffuse { reflectance: Param::Const(Color::new(0.2, 0.3, 0.4)) }, true)
+        (Plain::Diffuse { reflectance: Param::Const(Color::new(0.2, 0.3, 0.4)) }.into(), true)
     );
     let default = m("(default diffuse)");
     assert_eq!(
         (default.model, default.two_sided),
-        (Model::Diffuse { reflectance: Param::Const(Color::splat(0.5)) }, false)
+        (Plain::Diffuse { reflectance: Param::Const(Color::splat(0.5)) }.into(), false)
     );
 }
 

@@ -24,13 +24,7 @@ fn radiance_counted(
 ) -> (Color, RayStats) {
     let mut sampler = Sampler::new(SamplerKind::Jittered, 0, 0, 0, index, 1);
     let mut stats = RayStats::default();
-    let l = Whitted { max_depth: depth, area_samples: 16, adc_bailout: bailout }.radiance(
-        &s.scene,
-        &ray,
-        &mut sampler,
-        &mut (),
-        &mut stats,
-    );
+    let l = Whitted::new(&s.scene, depth, 16, bailout).radiance(&s.scene, &ray, &mut sampler, &mut (), &mut stats);
     (l.iter().sum(), stats)
 }
 
@@ -315,7 +309,7 @@ fn glass_shadows_pass_the_fresnel_product() {
             let hit = s.scene.intersect(&Ray::new(Vec3::new(0.0, 1.0, 0.0), -Vec3::Y), f32::INFINITY).expect("floor");
             let to_light = light - hit.p;
             let mut stats = RayStats::default();
-            let t = caustic::integrator::whitted::shadow_transmittance(
+            let t = Whitted::new(&s.scene, 6, 16, 0.0).shadow_transmittance(
                 &s.scene,
                 &hit,
                 to_light.normalize(),

@@ -43,11 +43,9 @@ impl Integrator {
     ) -> Result<Self, Cancelled> {
         let depth = desc.depth_limit(desc.kind);
         Ok(match desc.kind {
-            IntegratorKind::Whitted => Integrator::Whitted(Whitted {
-                max_depth: depth,
-                area_samples: desc.light_samples,
-                adc_bailout: desc.adc_bailout,
-            }),
+            IntegratorKind::Whitted => {
+                Integrator::Whitted(Whitted::new(scene, depth, desc.light_samples, desc.adc_bailout))
+            }
             IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth }),
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);

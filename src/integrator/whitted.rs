@@ -11,6 +11,7 @@
 use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::light::Light;
+use crate::material::classic::classic_view;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::material::{Classic, ClassicKind};
 use crate::math::{Color, Vec3};
@@ -22,6 +23,11 @@ use crate::scene::Scene;
 const MAX_SHADOW_CROSSINGS: usize = 16;
 
 pub struct Whitted {
+    /// What each material of the scene is shaded with: the classic model, or the nearest
+    /// classic reading of a physical one (`material::classic::classic_view`).
+    classic: Vec<Classic>,
+    /// Some material transmits light, so shadow rays look for transparent surfaces.
+    any_transmissive: bool,
     /// The most bounces a path may have (see `IntegratorDesc::max_depth`): the surface a ray
     /// meets at recursion depth r is bounce r + 1, lit by the lights when r + 1 <= max_depth,
     /// and reflection and refraction recurse while r + 1 < max_depth.
@@ -37,6 +43,26 @@ pub struct Whitted {
     /// highlight). The image's expected value is unchanged; the rays that could add little to
     /// it are mostly not traced. 0 ends no ray by roulette.
     pub adc_bailout: f32,
+}
+
+impl Whitted {
+    /// The integrator for `scene`, with the settings described on the fields.
+    pub fn new(scene: &Scene, max_depth: u32, area_samples: u32, adc_bailout: f32) -> Self {
+        let classic: Vec<Classic> =
+            (0..scene.materials.len() as u32).map(|m| classic_view(&scene.materials, m)).collect();
+        let any_transmissive = classic.iter().any(Classic::transmits);
+        Whitted { classic, any_transmissive, max_depth, area_samples, adc_bailout }
+    }
+
+    /// The classic material hit `h` is shaded with, its texture applied.
+    #[inline(always)]
+    fn classic(&self, scene: &Scene, h: &Hit) -> Classic {
+        let c = self.classic[h.material as usize];
+        match c.color_texture {
+            Some(t) => Classic { color: scene.materials.textures[t as usize].eval(h.uv()), ..c },
+            None => c,
+        }
+    }
 }
 
 impl RayIntegrator for Whitted {
@@ -103,7 +129,7 @@ impl Whitted {
         let Some(hit) = &found else {
             return (scene.environment(ray.d), Color::ZERO);
         };
-        let m = scene.classic(hit);
+        let m = self.classic(scene, hit);
         let front = hit.is_front(ray.d);
         // Normals on the side the ray arrives from: flipped when the ray is inside the object.
         let (n, ng) = if front { (hit.ns, hit.ng) } else { (-hit.ns, -hit.ng) };
@@ -140,7 +166,7 @@ impl Whitted {
                         continue;
                     }
                     let Some(survive) = self.roulette(weight * reflectance.max_element(), sampler) else { continue };
-                    let vis = shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
+                    let vis = self.shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
                     if vis == Color::ZERO {
                         continue;
                     }
@@ -213,49 +239,51 @@ fn phong_power(cos: f32, n: f32) -> f32 {
 /// Opaque surfaces block it; with `transparent_shadows`, transparent surfaces pass k_t and
 /// dielectrics pass 1 - Fresnel reflectance at each crossing (refraction does not bend shadow
 /// rays, so glass casts a lighter shadow rather than a caustic, which photon mapping renders).
-pub fn shadow_transmittance(scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> Color {
-    let mut ray = scene.spawn(hit, wi);
-    // Stop just short of the light so a light's own surface does not shadow it.
-    let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
-    let target = hit.p + wi * dist;
-    let t_max = |ray: &Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
-    if !scene.transparent_shadows || !scene.any_transmissive {
-        stats.shadow_rays += 1;
-        return if scene.occluded(&ray, t_max(&ray)) { Color::ZERO } else { Color::ONE };
-    }
-    // Transmittance is a product, so the crossings can be taken in any order, all from one
-    // traversal along the first ray.
-    let mut atten = Color::ONE;
-    let tm = t_max(&ray);
-    if !(tm > 0.0) {
-        stats.shadow_rays += 1;
-        return atten;
-    }
-    let mut crossings = 0;
-    let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
-        crossings += 1;
-        atten *= crossing_transmittance(scene.materials.classic_of(material), wi, || crossing.ng());
-        atten != Color::ZERO && crossings <= MAX_SHADOW_CROSSINGS
-    });
-    if let Some(all) = walked {
-        stats.shadow_rays += 1;
-        return if all { atten } else { Color::ZERO };
-    }
-    // As many crossings pass as in the walk above; a further one blocks.
-    for _ in 0..=MAX_SHADOW_CROSSINGS {
-        stats.shadow_rays += 1;
+impl Whitted {
+    pub fn shadow_transmittance(&self, scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> Color {
+        let mut ray = scene.spawn(hit, wi);
+        // Stop just short of the light so a light's own surface does not shadow it.
+        let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
+        let target = hit.p + wi * dist;
+        let t_max = |ray: &Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
+        if !scene.transparent_shadows || !self.any_transmissive {
+            stats.shadow_rays += 1;
+            return if scene.occluded(&ray, t_max(&ray)) { Color::ZERO } else { Color::ONE };
+        }
+        // Transmittance is a product, so the crossings can be taken in any order, all from one
+        // traversal along the first ray.
+        let mut atten = Color::ONE;
         let tm = t_max(&ray);
         if !(tm > 0.0) {
+            stats.shadow_rays += 1;
             return atten;
         }
-        let Some(h) = scene.intersect(&ray, tm) else { return atten };
-        atten *= crossing_transmittance(scene.materials.classic_of(h.material), wi, || h.ng);
-        if atten == Color::ZERO {
-            return atten;
+        let mut crossings = 0;
+        let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
+            crossings += 1;
+            atten *= crossing_transmittance(&self.classic[material as usize], wi, || crossing.ng());
+            atten != Color::ZERO && crossings <= MAX_SHADOW_CROSSINGS
+        });
+        if let Some(all) = walked {
+            stats.shadow_rays += 1;
+            return if all { atten } else { Color::ZERO };
         }
-        ray = scene.spawn(&h, wi);
+        // As many crossings pass as in the walk above; a further one blocks.
+        for _ in 0..=MAX_SHADOW_CROSSINGS {
+            stats.shadow_rays += 1;
+            let tm = t_max(&ray);
+            if !(tm > 0.0) {
+                return atten;
+            }
+            let Some(h) = scene.intersect(&ray, tm) else { return atten };
+            atten *= crossing_transmittance(&self.classic[h.material as usize], wi, || h.ng);
+            if atten == Color::ZERO {
+                return atten;
+            }
+            ray = scene.spawn(&h, wi);
+        }
+        Color::ZERO
     }
-    Color::ZERO
 }
 
 /// What a shadow ray along `wi` keeps of its light crossing a surface of material `m`: k_t

@@ -5,6 +5,8 @@
 
 use super::bsdf::Lobes;
 use super::bxdf::{Bxdf, Dielectric, Lambert, Mirror, Phong, Transmission};
+use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
+use super::{Materials, Model, Param, Plain, Wrapper};
 use crate::math::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,8 +60,22 @@ impl Default for Classic {
 
 impl Classic {
     /// A surface that reflects nothing (the surface of a plain area light).
+    pub const BLACK: Classic = Classic {
+        kind: ClassicKind::Diffuse,
+        color: Color::ZERO,
+        color_texture: None,
+        ka: 0.0,
+        kd: 0.0,
+        ks: 0.0,
+        exponent: 32.0,
+        kr: 0.0,
+        kt: 0.0,
+        ior: 1.5,
+    };
+
+    /// A surface that reflects nothing (the surface of a plain area light).
     pub fn black() -> Self {
-        Classic { color: Color::ZERO, ka: 0.0, kd: 0.0, ..Classic::default() }
+        Self::BLACK
     }
 
     /// True when the material has a perfectly specular (mirror or refracting) part, so light
@@ -116,5 +132,70 @@ impl Classic {
     #[inline]
     pub fn transmits(&self) -> bool {
         matches!(self.kind, ClassicKind::Transparent | ClassicKind::Dielectric)
+    }
+}
+
+/// The Whitted view of material `m` of `materials`: the classic model as it is, and for the
+/// others the nearest classic reading (documented in docs/scene-format.md): diffuse colours,
+/// mirrors with the normal-incidence reflectance of metals and coatings, Phong highlights of the
+/// matching width for rough surfaces, glass as glass. Roughness of glass, textures other than a
+/// diffuse colour, masks and bump maps are ignored; a two-sided material reads as its front, a
+/// blend as its heavier part.
+pub fn classic_view(materials: &Materials, m: u32) -> Classic {
+    let textures = &materials.textures;
+    let const_or_mean = |p: &Param<Color>| match *p {
+        Param::Const(c) => (c, None),
+        Param::Texture(t) => (textures[t as usize].mean(), Some(t)),
+    };
+    let exponent = |alpha: f32| (2.0 / (alpha * alpha).max(1e-4) - 2.0).clamp(1.0, 10_000.0);
+    let alpha_of = |p: &Param<f32>| match *p {
+        Param::Const(a) => a,
+        Param::Texture(t) => textures[t as usize].mean().mean(),
+    };
+    let base = Classic { ka: 0.0, ks: 0.0, kr: 0.0, kt: 0.0, ..Classic::default() };
+    let plain = match materials.list[m as usize].model {
+        Model::Plain(p) => p,
+        Model::Wrapper(w) => {
+            return match w {
+                Wrapper::TwoSided { front: inner, .. }
+                | Wrapper::BumpMap { inner, .. }
+                | Wrapper::NormalMap { inner, .. }
+                | Wrapper::Mask { inner, .. } => classic_view(materials, inner),
+                Wrapper::Blend { weight, first, second } => {
+                    let w = alpha_of(&weight).clamp(0.0, 1.0);
+                    classic_view(materials, if w < 0.5 { first } else { second })
+                }
+            };
+        }
+    };
+    match plain {
+        Plain::Classic(c) => c,
+        Plain::Diffuse { reflectance } => {
+            let (color, color_texture) = const_or_mean(&reflectance);
+            Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0, ..base }
+        }
+        Plain::Conductor { eta, k, specular } => {
+            let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
+            Classic { kind: ClassicKind::Reflective, color: f0, kd: 0.0, kr: f0.mean(), ..base }
+        }
+        Plain::RoughConductor { roughness, eta, k, specular } => {
+            let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
+            let n = exponent(alpha_of(&roughness.alpha_u).max(alpha_of(&roughness.alpha_v)));
+            Classic { kind: ClassicKind::Diffuse, color: f0, kd: 0.0, ks: f0.mean(), exponent: n, ..base }
+        }
+        Plain::Dielectric { eta, .. } | Plain::RoughDielectric { eta, .. } => {
+            Classic { kind: ClassicKind::Dielectric, ior: eta, kd: 0.0, ..base }
+        }
+        Plain::Plastic { diffuse, eta, .. } => {
+            let (color, color_texture) = const_or_mean(&diffuse);
+            let f0 = fresnel_dielectric(1.0, eta);
+            Classic { kind: ClassicKind::Reflective, color, color_texture, kd: 1.0 - f0, kr: f0, ..base }
+        }
+        Plain::RoughPlastic { microfacet, diffuse, eta, .. } => {
+            let (color, color_texture) = const_or_mean(&diffuse);
+            let f0 = fresnel_dielectric(1.0, eta);
+            let n = exponent(microfacet.alpha_u);
+            Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0 - f0, ks: f0, exponent: n, ..base }
+        }
     }
 }

@@ -85,16 +85,33 @@ impl Roughness {
     fn at(&self, uv: Vec2, textures: &[Texture]) -> Microfacet {
         Microfacet::new(self.distribution, self.alpha_u.at(uv, textures), self.alpha_v.at(uv, textures))
     }
+}
 
-    fn is_textured(&self) -> bool {
-        self.alpha_u.is_texture() || self.alpha_v.is_texture()
+/// What a material is: a plain model, whose lobes it gives at a hit, or a wrapper, which
+/// changes another material (always an earlier one of the same scene, so wrappers cannot form
+/// cycles). `Materials` walks the wrappers at a hit to the plain model they end in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Model {
+    Plain(Plain),
+    Wrapper(Wrapper),
+}
+
+impl From<Plain> for Model {
+    fn from(p: Plain) -> Self {
+        Model::Plain(p)
     }
 }
 
-/// What a material is. Indices name other materials of the same scene (always earlier ones, so
-/// wrappers cannot form cycles) or textures.
+impl From<Wrapper> for Model {
+    fn from(w: Wrapper) -> Self {
+        Model::Wrapper(w)
+    }
+}
+
+/// A model that scatters light itself: its parameters are constants or textures (indices into
+/// the scene's textures).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Model {
+pub enum Plain {
     /// The seed report's model; its lobes are `Classic::lobes`.
     Classic(Classic),
     /// Lambertian reflection (Mitsuba `diffuse`).
@@ -119,6 +136,12 @@ pub enum Model {
         diffuse_mean: f32,
         table: &'static CoatingTable,
     },
+}
+
+/// A model that changes another material (`inner`, `front`, `back`, `first`, `second`: indices of
+/// earlier materials).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Wrapper {
     /// Material `front` on the outward side and `back` on the other (Mitsuba `twosided`).
     TwoSided { front: u32, back: u32 },
     /// `inner` with its shading normal tilted by the gradient of a height texture (Mitsuba
@@ -133,6 +156,23 @@ pub enum Model {
     Blend { weight: FloatParam, first: u32, second: u32 },
 }
 
+/// A parameter of either kind, as `Plain::params` and `Wrapper::params` list them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AnyParam {
+    Color(ColorParam),
+    Float(FloatParam),
+}
+
+impl AnyParam {
+    /// The texture the parameter reads, if any.
+    pub fn texture(&self) -> Option<u32> {
+        match *self {
+            AnyParam::Color(Param::Texture(t)) | AnyParam::Float(Param::Texture(t)) => Some(t),
+            AnyParam::Color(Param::Const(_)) | AnyParam::Float(Param::Const(_)) => None,
+        }
+    }
+}
+
 /// A scene material: what it is and whether its back scatters like its front.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
@@ -144,7 +184,7 @@ pub struct Material {
 
 impl From<Classic> for Material {
     fn from(c: Classic) -> Self {
-        Material { model: Model::Classic(c), two_sided: true }
+        Material { model: Model::Plain(Plain::Classic(c)), two_sided: true }
     }
 }
 
@@ -156,13 +196,13 @@ impl Default for Material {
 
 impl Material {
     /// A one-sided material of model `model` (Mitsuba's default for reflecting BSDFs).
-    pub fn one_sided(model: Model) -> Self {
-        Material { model, two_sided: false }
+    pub fn one_sided(model: impl Into<Model>) -> Self {
+        Material { model: model.into(), two_sided: false }
     }
 
     /// A material of model `model` that scatters the same on both sides.
-    pub fn two_sided(model: Model) -> Self {
-        Material { model, two_sided: true }
+    pub fn two_sided(model: impl Into<Model>) -> Self {
+        Material { model: model.into(), two_sided: true }
     }
 
     /// A surface that reflects nothing (the surface of a plain area light).
@@ -178,9 +218,9 @@ impl Material {
         eta: f32,
         nonlinear: bool,
         textures: &[Texture],
-    ) -> Model {
+    ) -> Plain {
         let d = diffuse.mean(textures);
-        Model::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean: d.mean() }
+        Plain::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean: d.mean() }
     }
 
     /// A rough plastic (its coating's transmittance table is made here, once per roughness and
@@ -192,77 +232,103 @@ impl Material {
         eta: f32,
         nonlinear: bool,
         textures: &[Texture],
-    ) -> Model {
+    ) -> Plain {
         let d = diffuse.mean(textures);
         let table = CoatingTable::shared(microfacet, eta);
-        Model::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean: d.mean(), table }
+        Plain::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean: d.mean(), table }
     }
 }
 
 impl Model {
+    /// Every parameter the model reads (the one list of its texture references).
+    pub fn params(&self) -> Vec<AnyParam> {
+        match self {
+            Model::Plain(p) => p.params(),
+            Model::Wrapper(w) => w.params(),
+        }
+    }
+
+    /// True when `test` holds for this model's plain model or, for a wrapper, for any material
+    /// it wraps (`material` looks an earlier material's model up by index).
+    pub fn any_part(&self, material: &dyn Fn(u32) -> Model, test: &dyn Fn(&Plain) -> bool) -> bool {
+        match self {
+            Model::Plain(p) => test(p),
+            Model::Wrapper(w) => w.children().into_iter().flatten().any(|c| material(c).any_part(material, test)),
+        }
+    }
+
+    /// True for a wrapper of one material (two-sided, bump map, normal map, mask): what a blend
+    /// does not apply to its parts.
+    pub fn is_single_wrapper(&self) -> bool {
+        matches!(self, Model::Wrapper(w) if w.next(true).is_some())
+    }
+
+    /// The materials a wrapper refers to (none for a plain model).
+    pub fn children(&self) -> impl Iterator<Item = u32> {
+        let refs = match self {
+            Model::Plain(_) => [None, None],
+            Model::Wrapper(w) => w.children(),
+        };
+        refs.into_iter().flatten()
+    }
+}
+
+impl Plain {
+    /// Every parameter the model reads.
+    pub fn params(&self) -> Vec<AnyParam> {
+        use AnyParam::{Color as C, Float as F};
+        let rough = |r: &Roughness| [F(r.alpha_u), F(r.alpha_v)];
+        match self {
+            Plain::Classic(c) => c.color_texture.map(|t| C(Param::Texture(t))).into_iter().collect(),
+            Plain::Diffuse { reflectance } => vec![C(*reflectance)],
+            Plain::Conductor { specular, .. } => vec![C(*specular)],
+            Plain::RoughConductor { roughness, specular, .. } => {
+                [rough(roughness).as_slice(), &[C(*specular)]].concat()
+            }
+            Plain::Dielectric { reflectance, transmittance, .. } => vec![C(*reflectance), C(*transmittance)],
+            Plain::RoughDielectric { roughness, reflectance, transmittance, .. } => {
+                [rough(roughness).as_slice(), &[C(*reflectance), C(*transmittance)]].concat()
+            }
+            Plain::Plastic { diffuse, specular, .. } | Plain::RoughPlastic { diffuse, specular, .. } => {
+                vec![C(*diffuse), C(*specular)]
+            }
+        }
+    }
+
     /// True when the model's lobes depend on the surface point (a textured parameter).
     pub fn is_textured(&self) -> bool {
-        match self {
-            Model::Classic(c) => c.color_texture.is_some(),
-            Model::Diffuse { reflectance } => reflectance.is_texture(),
-            Model::Conductor { specular, .. } => specular.is_texture(),
-            Model::RoughConductor { roughness, specular, .. } => roughness.is_textured() || specular.is_texture(),
-            Model::Dielectric { reflectance, transmittance, .. } => {
-                reflectance.is_texture() || transmittance.is_texture()
-            }
-            Model::RoughDielectric { roughness, reflectance, transmittance, .. } => {
-                roughness.is_textured() || reflectance.is_texture() || transmittance.is_texture()
-            }
-            Model::Plastic { diffuse, specular, .. } | Model::RoughPlastic { diffuse, specular, .. } => {
-                diffuse.is_texture() || specular.is_texture()
-            }
-            Model::TwoSided { .. }
-            | Model::BumpMap { .. }
-            | Model::NormalMap { .. }
-            | Model::Mask { .. }
-            | Model::Blend { .. } => true,
-        }
+        self.params().iter().any(|p| p.texture().is_some())
     }
 
-    /// The materials a wrapper refers to.
-    pub fn children(&self) -> Vec<u32> {
-        match *self {
-            Model::TwoSided { front, back } => vec![front, back],
-            Model::BumpMap { inner, .. } | Model::NormalMap { inner, .. } | Model::Mask { inner, .. } => vec![inner],
-            Model::Blend { first, second, .. } => vec![first, second],
-            _ => Vec::new(),
-        }
-    }
-
-    /// The lobes of a non-wrapper model at texture coordinates `uv`, seen from the outward side
-    /// (`front`) or the inside (which matters only for glass: the index is inverted).
+    /// The lobes at texture coordinates `uv`, seen from the outward side (`front`) or the
+    /// inside (which matters only for glass: the index is inverted).
     pub fn lobes(&self, front: bool, uv: Vec2, textures: &[Texture]) -> Lobes {
         let mut lobes = Lobes::default();
         let side = |eta: f32| if front { eta } else { 1.0 / eta };
         match *self {
-            Model::Classic(c) => {
+            Plain::Classic(c) => {
                 let c = match c.color_texture {
                     Some(t) => Classic { color: textures[t as usize].eval(uv), ..c },
                     None => c,
                 };
                 return c.lobes(front);
             }
-            Model::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(uv, textures) })),
-            Model::Conductor { eta, k, specular } => {
+            Plain::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(uv, textures) })),
+            Plain::Conductor { eta, k, specular } => {
                 lobes.add(Bxdf::Conductor(Conductor { eta, k, scale: specular.at(uv, textures) }))
             }
-            Model::RoughConductor { roughness, eta, k, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
+            Plain::RoughConductor { roughness, eta, k, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
                 mf: roughness.at(uv, textures),
                 eta,
                 k,
                 scale: specular.at(uv, textures),
             })),
-            Model::Dielectric { eta, reflectance, transmittance } => lobes.add(Bxdf::Dielectric(Dielectric {
+            Plain::Dielectric { eta, reflectance, transmittance } => lobes.add(Bxdf::Dielectric(Dielectric {
                 eta: side(eta),
                 r: reflectance.at(uv, textures),
                 t: transmittance.at(uv, textures),
             })),
-            Model::RoughDielectric { roughness, eta, reflectance, transmittance } => {
+            Plain::RoughDielectric { roughness, eta, reflectance, transmittance } => {
                 lobes.add(Bxdf::RoughDielectric(RoughDielectric {
                     mf: roughness.at(uv, textures),
                     eta: side(eta),
@@ -270,7 +336,7 @@ impl Model {
                     t: transmittance.at(uv, textures),
                 }))
             }
-            Model::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean } => {
+            Plain::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean } => {
                 let d = diffuse.at(uv, textures);
                 let fdr = fresnel_diffuse_reflectance(1.0 / eta);
                 let d = base_through_coating(d, fdr, nonlinear) / (eta * eta);
@@ -282,7 +348,7 @@ impl Model {
                     d_mean: diffuse_mean.max(1e-4 * scale.mean()),
                 }));
             }
-            Model::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean, table } => {
+            Plain::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean, table } => {
                 let d = diffuse.at(uv, textures);
                 let d = base_through_coating(d, table.internal_reflectance, nonlinear) / (eta * eta);
                 let scale = specular.at(uv, textures);
@@ -293,21 +359,21 @@ impl Model {
                     d_mean: diffuse_mean.max(1e-4 * scale.mean()),
                 }));
             }
-            Model::TwoSided { .. }
-            | Model::BumpMap { .. }
-            | Model::NormalMap { .. }
-            | Model::Mask { .. }
-            | Model::Blend { .. } => {}
         }
         lobes
     }
 
     /// True when the model is glass (transmits light, both sides meaningful).
+    #[inline]
     pub fn is_glass(&self) -> bool {
         match self {
-            Model::Classic(c) => c.transmits(),
-            Model::Dielectric { .. } | Model::RoughDielectric { .. } => true,
-            _ => false,
+            Plain::Classic(c) => c.transmits(),
+            Plain::Dielectric { .. } | Plain::RoughDielectric { .. } => true,
+            Plain::Diffuse { .. }
+            | Plain::Conductor { .. }
+            | Plain::RoughConductor { .. }
+            | Plain::Plastic { .. }
+            | Plain::RoughPlastic { .. } => false,
         }
     }
 
@@ -319,9 +385,50 @@ impl Model {
     /// photons asked) in a scene whose only shiny object is rough.
     pub fn casts_caustics(&self) -> bool {
         match self {
-            Model::Classic(c) => c.is_specular(),
-            Model::Conductor { .. } | Model::Dielectric { .. } | Model::Plastic { .. } => true,
-            _ => false,
+            Plain::Classic(c) => c.is_specular(),
+            Plain::Conductor { .. } | Plain::Dielectric { .. } | Plain::Plastic { .. } => true,
+            Plain::Diffuse { .. }
+            | Plain::RoughConductor { .. }
+            | Plain::RoughDielectric { .. }
+            | Plain::RoughPlastic { .. } => false,
+        }
+    }
+}
+
+impl Wrapper {
+    /// Every parameter the wrapper reads (a bump map's heights and a normal map's normals are
+    /// textures read as colours).
+    pub fn params(&self) -> Vec<AnyParam> {
+        match *self {
+            Wrapper::TwoSided { .. } => Vec::new(),
+            Wrapper::BumpMap { height, .. } => vec![AnyParam::Color(Param::Texture(height))],
+            Wrapper::NormalMap { normals, .. } => vec![AnyParam::Color(Param::Texture(normals))],
+            Wrapper::Mask { opacity, .. } => vec![AnyParam::Float(opacity)],
+            Wrapper::Blend { weight, .. } => vec![AnyParam::Float(weight)],
+        }
+    }
+
+    /// The materials the wrapper refers to.
+    pub fn children(&self) -> [Option<u32>; 2] {
+        match *self {
+            Wrapper::TwoSided { front, back } => [Some(front), Some(back)],
+            Wrapper::BumpMap { inner, .. } | Wrapper::NormalMap { inner, .. } | Wrapper::Mask { inner, .. } => {
+                [Some(inner), None]
+            }
+            Wrapper::Blend { first, second, .. } => [Some(first), Some(second)],
+        }
+    }
+
+    /// The one material a walk through the wrapper goes on to when the surface is seen from the
+    /// outward side (`front`) or not; `None` for a blend, which has two.
+    #[inline]
+    pub fn next(&self, front: bool) -> Option<u32> {
+        match *self {
+            Wrapper::TwoSided { front: a, back: b } => Some(if front { a } else { b }),
+            Wrapper::BumpMap { inner, .. } | Wrapper::NormalMap { inner, .. } | Wrapper::Mask { inner, .. } => {
+                Some(inner)
+            }
+            Wrapper::Blend { .. } => None,
         }
     }
 }

@@ -3,10 +3,9 @@
 //! materials' lobes come from a table made once, textured ones are evaluated at the hit's (u, v).
 
 use super::bsdf::{Bsdf, LobeSet, Lobes, MAX_LOBES, front_side};
-use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
-use super::{Classic, ClassicKind, Material, Model, Param};
+use super::{Classic, Material, Model, Plain, Wrapper};
 use crate::geometry::Hit;
-use crate::math::{Color, Frame, Vec2, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 use crate::texture::Texture;
 
 /// Wrappers nest at most this deep (a mask of a bump map of a two-sided material is 3).
@@ -20,8 +19,6 @@ pub struct Materials {
     pub textures: Vec<Texture>,
     /// Lobes of untextured plain materials seen from the front and from the back, made once.
     cached: Vec<Option<[Lobes; 2]>>,
-    /// What the Whitted integrator shades each material with.
-    classic: Vec<Classic>,
     /// Some material is a mask: shadow rays must look through transparent parts.
     pub has_masks: bool,
 }
@@ -38,19 +35,18 @@ impl Materials {
                 }
             }
             let texture_ok = |t: u32| (t as usize) < textures.len();
-            let textures_used = texture_refs(&m.model);
-            if let Some(t) = textures_used.into_iter().find(|&t| !texture_ok(t)) {
+            if let Some(t) = m.model.params().iter().filter_map(|p| p.texture()).find(|&t| !texture_ok(t)) {
                 return Err(format!("material `{name}` refers to texture {t}, which does not exist"));
             }
-            if let Model::BumpMap { height, .. } = m.model
+            if let Model::Wrapper(Wrapper::BumpMap { height, .. }) = m.model
                 && !matches!(textures[height as usize], Texture::Bitmap(_))
             {
                 return Err(format!("bump map `{name}` needs a bitmap texture for its heights"));
             }
         }
-        let mut set = Materials { list, names, textures, cached: Vec::new(), classic: Vec::new(), has_masks: false };
+        let mut set = Materials { list, names, textures, cached: Vec::new(), has_masks: false };
         for i in 0..set.list.len() {
-            if let Model::Blend { first, second, .. } = set.list[i].model {
+            if let Model::Wrapper(Wrapper::Blend { first, second, .. }) = set.list[i].model {
                 let n = set.plain_lobe_count(first) + set.plain_lobe_count(second);
                 if n > MAX_LOBES {
                     let name = set.names.get(i).map_or("?", String::as_str);
@@ -64,43 +60,72 @@ impl Materials {
                 return Err(format!("material `{name}` nests wrappers more than {MAX_NESTING} deep"));
             }
         }
-        set.has_masks = set.list.iter().any(|m| matches!(m.model, Model::Mask { .. }));
+        set.has_masks = set.list.iter().any(|m| matches!(m.model, Model::Wrapper(Wrapper::Mask { .. })));
         set.cached = set
             .list
             .iter()
-            .map(|m| {
-                let plain = !m.model.is_textured();
-                plain.then(|| {
-                    [m.model.lobes(true, Vec2::ZERO, &set.textures), m.model.lobes(false, Vec2::ZERO, &set.textures)]
-                })
+            .map(|m| match m.model {
+                Model::Plain(p) if !p.is_textured() => {
+                    Some([p.lobes(true, Vec2::ZERO, &set.textures), p.lobes(false, Vec2::ZERO, &set.textures)])
+                }
+                Model::Plain(_) | Model::Wrapper(_) => None,
             })
             .collect();
-        set.classic = (0..set.list.len()).map(|i| set.classic_view(i as u32)).collect();
         Ok(set)
     }
 
     fn depth(&self, m: u32) -> usize {
-        1 + self.list[m as usize].model.children().into_iter().map(|c| self.depth(c)).max().unwrap_or(0)
+        1 + self.list[m as usize].model.children().map(|c| self.depth(c)).max().unwrap_or(0)
+    }
+
+    /// The one walk through wrappers: from material `m`, seen from the outward side (`front`)
+    /// or not, through each wrapper (`visit` sees it: a mask's opacity, a bump map's frame) to
+    /// where the wrappers end, and whether a two-sided wrapper chose the side on the way.
+    #[inline]
+    fn walk(&self, m: u32, front: bool, mut visit: impl FnMut(&Wrapper)) -> (WalkEnd, bool) {
+        let mut m = m;
+        let mut as_front = false;
+        for _ in 0..=MAX_NESTING {
+            match &self.list[m as usize].model {
+                Model::Plain(_) => return (WalkEnd::Plain(m), as_front),
+                Model::Wrapper(w) => {
+                    visit(w);
+                    as_front |= matches!(w, Wrapper::TwoSided { .. });
+                    match w.next(front) {
+                        Some(next) => m = next,
+                        None => return (WalkEnd::Blend(m), as_front),
+                    }
+                }
+            }
+        }
+        // Deeper nesting is refused when the set is made.
+        (WalkEnd::Black, as_front)
     }
 
     /// Lobes a plain material (or the plain material a chain of wrappers ends in) has.
     fn plain_lobes_of(&self, m: u32) -> Lobes {
-        let mut m = m;
-        for _ in 0..MAX_NESTING {
-            match self.list[m as usize].model {
-                Model::TwoSided { front, .. } => m = front,
-                Model::BumpMap { inner, .. } | Model::NormalMap { inner, .. } | Model::Mask { inner, .. } => m = inner,
-                Model::Blend { .. } => return Lobes::default(),
-                model => return model.lobes(true, Vec2::ZERO, &self.textures),
-            }
+        match self.walk(m, true, |_| {}).0 {
+            WalkEnd::Plain(p) => self.plain(p).lobes(true, Vec2::ZERO, &self.textures),
+            WalkEnd::Blend(_) | WalkEnd::Black => Lobes::default(),
         }
-        Lobes::default()
     }
 
     fn plain_lobe_count(&self, m: u32) -> usize {
         match self.list[m as usize].model {
-            Model::Blend { first, second, .. } => self.plain_lobe_count(first) + self.plain_lobe_count(second),
-            _ => self.plain_lobes_of(m).len().max(1),
+            Model::Wrapper(Wrapper::Blend { first, second, .. }) => {
+                self.plain_lobe_count(first) + self.plain_lobe_count(second)
+            }
+            Model::Plain(_) | Model::Wrapper(_) => self.plain_lobes_of(m).len().max(1),
+        }
+    }
+
+    /// The plain model of material `m`, which a walk ended at (a wrapper there is a bug: black).
+    #[inline]
+    fn plain(&self, m: u32) -> &Plain {
+        static BLACK: Plain = Plain::Classic(Classic::BLACK);
+        match &self.list[m as usize].model {
+            Model::Plain(p) => p,
+            Model::Wrapper(_) => &BLACK,
         }
     }
 
@@ -120,7 +145,7 @@ impl Materials {
         if let Some(c) = &self.cached[m as usize] {
             return LobeSet::Shared(&c[usize::from(!outward)]);
         }
-        LobeSet::Owned(self.list[m as usize].model.lobes(outward, uv, &self.textures))
+        LobeSet::Owned(self.plain(m).lobes(outward, uv, &self.textures))
     }
 
     /// Which lobes plain material `m` shows on side `front` (`as_front` as in `lobes`): its
@@ -129,7 +154,7 @@ impl Materials {
     #[inline]
     fn outward(&self, m: u32, front: bool, as_front: bool) -> Option<bool> {
         let material = &self.list[m as usize];
-        let glass = material.model.is_glass();
+        let glass = self.plain(m).is_glass();
         (front || as_front || material.two_sided || glass).then_some(front || !glass)
     }
 
@@ -149,14 +174,7 @@ impl Materials {
             return Bsdf::shared(frame_for(h, lobes), h.ng, front, lobes);
         }
         // Then a plain textured one.
-        if !matches!(
-            self.list[m as usize].model,
-            Model::TwoSided { .. }
-                | Model::BumpMap { .. }
-                | Model::NormalMap { .. }
-                | Model::Mask { .. }
-                | Model::Blend { .. }
-        ) {
+        if let Model::Plain(_) = self.list[m as usize].model {
             let lobes = self.lobes(m, h.uv(), front, false);
             return Bsdf::with_lobes(frame_for(h, &lobes), h.ng, front, lobes);
         }
@@ -166,42 +184,27 @@ impl Materials {
     /// `bsdf` through wrappers.
     fn wrapped_bsdf(&self, h: &Hit, wo: Vec3, front: bool) -> Bsdf<'_> {
         let uv = h.uv();
-        let mut m = h.material;
         let mut opacity = 1.0f32;
-        let mut as_front = false;
         // The perturbed shading frame, outward, when a bump or normal map applies.
         let mut perturbed: Option<Frame> = None;
-        let mut lobes = Lobes::default();
-        for _ in 0..=MAX_NESTING {
-            match self.list[m as usize].model {
-                Model::TwoSided { front: a, back: b } => {
-                    m = if front { a } else { b };
-                    as_front = true;
-                }
-                Model::Mask { opacity: o, inner } => {
-                    opacity *= o.at(uv, &self.textures).clamp(0.0, 1.0);
-                    m = inner;
-                }
-                Model::BumpMap { height, scale, inner } => {
-                    let base = perturbed.unwrap_or_else(|| h.shading_frame());
-                    perturbed = Some(self.bump_frame(h, &base, height, scale, wo));
-                    m = inner;
-                }
-                Model::NormalMap { normals, inner } => {
-                    let base = perturbed.unwrap_or_else(|| h.shading_frame());
-                    let rgb = self.textures[normals as usize].eval(uv);
-                    perturbed = Some(perturbed_frame(&base, rgb.to_vec3() * 2.0 - Vec3::ONE, wo));
-                    m = inner;
-                }
-                Model::Blend { .. } => {
-                    self.add_blend_lobes(m, uv, front, as_front, 1.0, &mut lobes, 0);
-                    break;
-                }
-                _ => {
-                    lobes = *self.lobes(m, uv, front, as_front);
-                    break;
-                }
+        let (end, as_front) = self.walk(h.material, front, |w| match *w {
+            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(uv, &self.textures).clamp(0.0, 1.0),
+            Wrapper::BumpMap { height, scale, .. } => {
+                let base = perturbed.unwrap_or_else(|| h.shading_frame());
+                perturbed = Some(self.bump_frame(h, &base, height, scale, wo));
             }
+            Wrapper::NormalMap { normals, .. } => {
+                let base = perturbed.unwrap_or_else(|| h.shading_frame());
+                let rgb = self.textures[normals as usize].eval(uv);
+                perturbed = Some(perturbed_frame(&base, rgb.to_vec3() * 2.0 - Vec3::ONE, wo));
+            }
+            Wrapper::TwoSided { .. } | Wrapper::Blend { .. } => {}
+        });
+        let mut lobes = Lobes::default();
+        match end {
+            WalkEnd::Plain(m) => lobes = *self.lobes(m, uv, front, as_front),
+            WalkEnd::Blend(m) => self.add_blend_lobes(m, uv, front, as_front, 1.0, &mut lobes, 0),
+            WalkEnd::Black => {}
         }
         let frame = match perturbed {
             Some(_) => h.shading_frame(),
@@ -230,33 +233,20 @@ impl Materials {
         if depth > MAX_NESTING || !(scale > 0.0) {
             return;
         }
-        if let Model::Blend { weight, first, second } = self.list[m as usize].model {
+        if let Model::Wrapper(Wrapper::Blend { weight, first, second }) = self.list[m as usize].model {
             let w = weight.at(uv, &self.textures).clamp(0.0, 1.0);
             self.add_blend_lobes(first, uv, front, as_front, scale * (1.0 - w), out, depth + 1);
             self.add_blend_lobes(second, uv, front, as_front, scale * w, out, depth + 1);
             return;
         }
-        let end = self.plain_end(m);
-        if matches!(self.list[end as usize].model, Model::Blend { .. }) {
+        // A blend's part resolves to its plain material: its wrappers are not applied inside a
+        // blend (the loaders warn or refuse), a two-sided one giving its front.
+        match self.walk(m, true, |_| {}).0 {
             // A blend behind wrappers: its wrappers are dropped, its parts still count.
-            self.add_blend_lobes(end, uv, front, as_front, scale, out, depth + 1);
-        } else {
-            out.add_scaled(&self.lobes(end, uv, front, as_front), scale);
+            WalkEnd::Blend(end) => self.add_blend_lobes(end, uv, front, as_front, scale, out, depth + 1),
+            WalkEnd::Plain(end) => out.add_scaled(&self.lobes(end, uv, front, as_front), scale),
+            WalkEnd::Black => {}
         }
-    }
-
-    /// The plain material a blend's part resolves to (its wrappers are not applied inside a
-    /// blend: the loader warns).
-    fn plain_end(&self, m: u32) -> u32 {
-        let mut m = m;
-        for _ in 0..MAX_NESTING {
-            match self.list[m as usize].model {
-                Model::TwoSided { front, .. } => m = front,
-                Model::BumpMap { inner, .. } | Model::NormalMap { inner, .. } | Model::Mask { inner, .. } => m = inner,
-                _ => return m,
-            }
-        }
-        m
     }
 
     /// The shading frame tilted by a height texture: dp/du and dp/dv move along the normal by
@@ -282,107 +272,23 @@ impl Materials {
     /// transparent part, 0 for everything else.
     #[inline]
     pub fn transparency(&self, h: &Hit, toward_front: bool) -> f32 {
-        let mut m = h.material;
         let mut opacity = 1.0f32;
-        for _ in 0..=MAX_NESTING {
-            match self.list[m as usize].model {
-                Model::TwoSided { front, back } => m = if toward_front { front } else { back },
-                Model::Mask { opacity: o, inner } => {
-                    opacity *= o.at(h.uv(), &self.textures).clamp(0.0, 1.0);
-                    m = inner;
-                }
-                Model::BumpMap { inner, .. } | Model::NormalMap { inner, .. } => m = inner,
-                _ => break,
-            }
-        }
+        self.walk(h.material, toward_front, |w| match *w {
+            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(h.uv(), &self.textures).clamp(0.0, 1.0),
+            Wrapper::TwoSided { .. } | Wrapper::BumpMap { .. } | Wrapper::NormalMap { .. } | Wrapper::Blend { .. } => {}
+        });
         1.0 - opacity
     }
 
-    /// What the Whitted integrator shades hit `h` with (the classic model, textures applied).
-    #[inline(always)]
-    pub fn classic(&self, h: &Hit) -> Classic {
-        let c = self.classic[h.material as usize];
-        match c.color_texture {
-            Some(t) => Classic { color: self.textures[t as usize].eval(h.uv()), ..c },
-            None => c,
-        }
-    }
-
-    /// The classic material of index `m` (without its texture).
-    pub fn classic_of(&self, m: u32) -> &Classic {
-        &self.classic[m as usize]
-    }
-
     /// True when light through material `m` can focus into caustics (see
-    /// `Model::casts_caustics`).
+    /// `Plain::casts_caustics`).
     pub fn casts_caustics(&self, m: u32) -> bool {
         let model = &self.list[m as usize].model;
-        model.casts_caustics() || model.children().into_iter().any(|c| self.casts_caustics(c))
-    }
-
-    /// True when some part of material `m` transmits light.
-    pub fn is_glass(&self, m: u32) -> bool {
-        let model = &self.list[m as usize].model;
-        model.is_glass() || model.children().into_iter().any(|c| self.is_glass(c))
-    }
-
-    /// The Whitted view of material `m`: the classic model as it is, and for the others the
-    /// nearest classic reading (documented in docs/scene-format.md): diffuse colours, mirrors
-    /// with the normal-incidence reflectance of metals and coatings, Phong highlights of the
-    /// matching width for rough surfaces, glass as glass. Roughness of glass, textures other than
-    /// a diffuse colour, masks and bump maps are ignored.
-    fn classic_view(&self, m: u32) -> Classic {
-        let const_or_mean = |p: &Param<Color>| match *p {
-            Param::Const(c) => (c, None),
-            Param::Texture(t) => (self.textures[t as usize].mean(), Some(t)),
+        let own = match model {
+            Model::Plain(p) => p.casts_caustics(),
+            Model::Wrapper(_) => false,
         };
-        let exponent = |alpha: f32| (2.0 / (alpha * alpha).max(1e-4) - 2.0).clamp(1.0, 10_000.0);
-        let alpha_of = |p: &Param<f32>| match *p {
-            Param::Const(a) => a,
-            Param::Texture(t) => {
-                let c = self.textures[t as usize].mean();
-                c.mean()
-            }
-        };
-        let base = Classic { ka: 0.0, ks: 0.0, kr: 0.0, kt: 0.0, ..Classic::default() };
-        match self.list[m as usize].model {
-            Model::Classic(c) => c,
-            Model::Diffuse { reflectance } => {
-                let (color, color_texture) = const_or_mean(&reflectance);
-                Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0, ..base }
-            }
-            Model::Conductor { eta, k, specular } => {
-                let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
-                Classic { kind: ClassicKind::Reflective, color: f0, kd: 0.0, kr: f0.mean(), ..base }
-            }
-            Model::RoughConductor { roughness, eta, k, specular } => {
-                let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
-                let n = exponent(alpha_of(&roughness.alpha_u).max(alpha_of(&roughness.alpha_v)));
-                Classic { kind: ClassicKind::Diffuse, color: f0, kd: 0.0, ks: f0.mean(), exponent: n, ..base }
-            }
-            Model::Dielectric { eta, .. } | Model::RoughDielectric { eta, .. } => {
-                Classic { kind: ClassicKind::Dielectric, ior: eta, kd: 0.0, ..base }
-            }
-            Model::Plastic { diffuse, eta, .. } => {
-                let (color, color_texture) = const_or_mean(&diffuse);
-                let f0 = fresnel_dielectric(1.0, eta);
-                Classic { kind: ClassicKind::Reflective, color, color_texture, kd: 1.0 - f0, kr: f0, ..base }
-            }
-            Model::RoughPlastic { microfacet, diffuse, eta, .. } => {
-                let (color, color_texture) = const_or_mean(&diffuse);
-                let f0 = fresnel_dielectric(1.0, eta);
-                let n = exponent(microfacet.alpha_u);
-                Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0 - f0, ks: f0, exponent: n, ..base }
-            }
-            Model::TwoSided { front: inner, .. }
-            | Model::BumpMap { inner, .. }
-            | Model::NormalMap { inner, .. }
-            | Model::Mask { inner, .. } => self.classic_view(inner),
-            Model::Blend { weight, first, second } => {
-                let w = alpha_of(&weight).clamp(0.0, 1.0);
-                if w < 0.5 { self.classic_view(first) } else { self.classic_view(second) }
-            }
-        }
+        own || model.children().any(|c| self.casts_caustics(c))
     }
 }
 
@@ -411,49 +317,13 @@ fn perturbed_frame(base: &Frame, n_local: Vec3, wo: Vec3) -> Frame {
     Frame { x: base.to_world(s), y: base.to_world(t), z: base.to_world(n) }
 }
 
-/// Every texture index a model reads.
-fn texture_refs(model: &Model) -> Vec<u32> {
-    let mut out = Vec::new();
-    let mut c = |p: &Param<Color>| {
-        if let Param::Texture(t) = p {
-            out.push(*t)
-        }
-    };
-    match model {
-        Model::Classic(cl) => {
-            if let Some(t) = cl.color_texture {
-                c(&Param::Texture(t));
-            }
-        }
-        Model::Diffuse { reflectance } => c(reflectance),
-        Model::Conductor { specular, .. } => c(specular),
-        Model::RoughConductor { specular, .. } => c(specular),
-        Model::Dielectric { reflectance, transmittance, .. }
-        | Model::RoughDielectric { reflectance, transmittance, .. } => {
-            c(reflectance);
-            c(transmittance);
-        }
-        Model::Plastic { diffuse, specular, .. } | Model::RoughPlastic { diffuse, specular, .. } => {
-            c(diffuse);
-            c(specular);
-        }
-        Model::BumpMap { height, .. } => out.push(*height),
-        Model::NormalMap { normals, .. } => out.push(*normals),
-        _ => {}
-    }
-    let mut f = |p: &Param<f32>| {
-        if let Param::Texture(t) = p {
-            out.push(*t)
-        }
-    };
-    match model {
-        Model::RoughConductor { roughness, .. } | Model::RoughDielectric { roughness, .. } => {
-            f(&roughness.alpha_u);
-            f(&roughness.alpha_v);
-        }
-        Model::Mask { opacity, .. } => f(opacity),
-        Model::Blend { weight, .. } => f(weight),
-        _ => {}
-    }
-    out
+/// Where a walk through wrappers ends (`Materials::walk`).
+#[derive(Clone, Copy, Debug)]
+enum WalkEnd {
+    /// At this plain material.
+    Plain(u32),
+    /// At this blend, whose two parts are walked each on its own.
+    Blend(u32),
+    /// Nowhere: wrappers nested deeper than a set allows (refused when it is made).
+    Black,
 }

@@ -11,7 +11,7 @@ use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{EmissionTexture, Emitter, Environment, Light, LightPicker, PhotonDisk};
-use crate::material::{Material, Materials};
+use crate::material::{Material, Materials, Plain};
 use crate::math::{Color, Vec3};
 use crate::shape::{Plane, Primitive, Primitives, Shape, Triangle, TriangleMesh};
 use crate::texture::Texture;
@@ -243,8 +243,8 @@ impl SceneBuilder {
 
     /// True when light through material `m` (or any material it wraps) can form caustics.
     fn casts_caustics(&self, m: u32) -> bool {
-        let model = &self.materials[m as usize].model;
-        model.casts_caustics() || model.children().into_iter().any(|c| c < m && self.casts_caustics(c))
+        let model = |i: u32| self.materials[i as usize].model;
+        model(m).any_part(&model, &Plain::casts_caustics)
     }
 
     /// Records the bounding sphere of the object whose primitives start at `first`, when its
@@ -319,7 +319,6 @@ impl SceneBuilder {
                 _ => {}
             }
         }
-        let any_transmissive = (0..materials.len() as u32).any(|m| materials.classic_of(m).transmits());
         let any_light_texture = self
             .lights
             .iter()
@@ -339,7 +338,6 @@ impl SceneBuilder {
             // the direction is kept as a tiny margin relative to the scene size.
             ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
             transparent_shadows: shading.transparent_shadows,
-            any_transmissive,
             any_light_texture,
             specular_targets: self.specular_targets,
         };

@@ -19,8 +19,8 @@ use crate::accel::{Bvh, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
 use crate::light::{EmittedPhoton, Light, LightPicker, LightSample};
+use crate::material::Materials;
 use crate::material::bsdf::Bsdf;
-use crate::material::{Classic, Materials};
 use crate::math::{Color, Vec3};
 use crate::shape::{Plane, SurfacePoint, TriangleMesh};
 use std::path::Path;
@@ -68,8 +68,6 @@ pub struct Scene {
     pub ray_bias: f32,
     /// Whether transparent objects let (attenuated) light through to shadow rays.
     pub transparent_shadows: bool,
-    /// Some material transmits light (so shadow rays must look for transparent surfaces).
-    pub any_transmissive: bool,
     /// Some spot light or projector casts a texture, or some area light emits one (so light
     /// samples look it up).
     pub any_light_texture: bool,
@@ -358,12 +356,6 @@ impl Scene {
     #[inline(always)]
     pub fn spawn(&self, h: &Hit, d: crate::math::Vec3) -> Ray {
         Ray::spawn(h.p, h.p_error, h.ng, d, self.ray_bias)
-    }
-
-    /// The classic (seed report) material the Whitted integrator shades hit `h` with.
-    #[inline(always)]
-    pub fn classic(&self, h: &Hit) -> Classic {
-        self.materials.classic(h)
     }
 
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).

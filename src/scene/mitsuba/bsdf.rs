@@ -7,13 +7,13 @@ use super::Build;
 use super::props::{Cx, Props};
 use super::xml::El;
 use crate::material::microfacet::{Distribution, Microfacet};
-use crate::material::{Classic, ClassicKind, Material, Model, Param, Roughness, conductors};
+use crate::material::{Classic, ClassicKind, Material, Param, Plain, Roughness, Wrapper, conductors};
 use crate::math::Color;
 use crate::scene::SceneError;
 
 /// Mitsuba's default BSDF: diffuse with reflectance 0.5 (one-sided).
 pub(super) fn default_diffuse() -> Material {
-    Material::one_sided(Model::Diffuse { reflectance: Param::Const(Color::splat(0.5)) })
+    Material::one_sided(Plain::Diffuse { reflectance: Param::Const(Color::splat(0.5)) })
 }
 
 /// Fresnel reflectance at normal incidence for relative index `eta`.
@@ -82,16 +82,16 @@ impl<'a> Cx<'a> {
         let m = match p.kind.as_str() {
             "diffuse" => {
                 let reflectance = self.color_param(&p, "reflectance", b)?.unwrap_or(Param::Const(Color::splat(0.5)));
-                one(Model::Diffuse { reflectance })
+                one(Plain::Diffuse { reflectance })
             }
             "conductor" | "roughconductor" => {
                 let (eta, k) = self.complex_ior(&p)?;
                 let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
                 if p.kind == "conductor" {
-                    one(Model::Conductor { eta, k, specular })
+                    one(Plain::Conductor { eta, k, specular })
                 } else {
                     let roughness = self.roughness(&p, b, true)?;
-                    one(Model::RoughConductor { roughness, eta, k, specular })
+                    one(Plain::RoughConductor { roughness, eta, k, specular })
                 }
             }
             "dielectric" | "roughdielectric" => {
@@ -99,13 +99,13 @@ impl<'a> Cx<'a> {
                 let reflectance = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
                 let transmittance = self.color_param(&p, "specular_transmittance", b)?.unwrap_or(unit);
                 if p.kind == "dielectric" {
-                    Material::two_sided(Model::Dielectric { eta, reflectance, transmittance })
+                    Material::two_sided(Plain::Dielectric { eta, reflectance, transmittance })
                 } else {
                     if (eta - 1.0).abs() < 1e-7 {
                         return Err(self.err(el, "roughdielectric needs int_ior and ext_ior to differ"));
                     }
                     let roughness = self.roughness(&p, b, true)?;
-                    Material::two_sided(Model::RoughDielectric { roughness, eta, reflectance, transmittance })
+                    Material::two_sided(Plain::RoughDielectric { roughness, eta, reflectance, transmittance })
                 }
             }
             "thindielectric" => {
@@ -176,7 +176,7 @@ impl<'a> Cx<'a> {
                     [front, back] => {
                         check(self, *front)?;
                         check(self, *back)?;
-                        Material::two_sided(Model::TwoSided { front: *front, back: *back })
+                        Material::two_sided(Wrapper::TwoSided { front: *front, back: *back })
                     }
                     [] => return Err(self.err(el, "twosided needs a nested <bsdf>")),
                     _ => return Err(self.err(el, "twosided takes one or two nested <bsdf>s")),
@@ -193,7 +193,7 @@ impl<'a> Cx<'a> {
                 let scale = self.float(&p, "scale")?.unwrap_or(1.0);
                 self.perturbation_switches(&p)?;
                 let inner = self.one_nested(&p, b, depth)?;
-                Material::two_sided(Model::BumpMap { height, scale, inner })
+                Material::two_sided(Wrapper::BumpMap { height, scale, inner })
             }
             "normalmap" => {
                 let normals = match self.object(&p, Some("normalmap"), "texture").first() {
@@ -202,12 +202,12 @@ impl<'a> Cx<'a> {
                 };
                 self.perturbation_switches(&p)?;
                 let inner = self.one_nested(&p, b, depth)?;
-                Material::two_sided(Model::NormalMap { normals, inner })
+                Material::two_sided(Wrapper::NormalMap { normals, inner })
             }
             "mask" => {
                 let opacity = self.float_param(&p, "opacity", b)?.unwrap_or(Param::Const(0.5));
                 let inner = self.one_nested(&p, b, depth)?;
-                Material::two_sided(Model::Mask { opacity, inner })
+                Material::two_sided(Wrapper::Mask { opacity, inner })
             }
             "blendbsdf" => {
                 let weight = self
@@ -216,13 +216,7 @@ impl<'a> Cx<'a> {
                 match self.nested(&p, b, depth)?.as_slice() {
                     [first, second] => {
                         for m in [*first, *second] {
-                            if !matches!(
-                                b.geometry.material(m).model,
-                                Model::TwoSided { .. }
-                                    | Model::BumpMap { .. }
-                                    | Model::NormalMap { .. }
-                                    | Model::Mask { .. }
-                            ) {
+                            if !b.geometry.material(m).model.is_single_wrapper() {
                                 continue;
                             }
                             self.warn(
@@ -230,7 +224,7 @@ impl<'a> Cx<'a> {
                                 "a wrapper (twosided, bump/normal map, mask) inside blendbsdf is not applied",
                             )?;
                         }
-                        Material::two_sided(Model::Blend { weight, first: *first, second: *second })
+                        Material::two_sided(Wrapper::Blend { weight, first: *first, second: *second })
                     }
                     _ => return Err(self.err(el, "blendbsdf needs exactly two nested <bsdf>s")),
                 }
@@ -326,6 +320,6 @@ impl<'a> Cx<'a> {
 
 /// True when material `m` of the scene being built transmits light.
 fn b_is_glass(b: &Build, m: u32) -> bool {
-    let model = &b.geometry.material(m).model;
-    model.is_glass() || model.children().into_iter().any(|c| b_is_glass(b, c))
+    let model = |i: u32| b.geometry.material(i).model;
+    model(m).any_part(&model, &Plain::is_glass)
 }

@@ -238,8 +238,12 @@ impl<'a> Cx<'a> {
         if let Some((radiance, texture)) = radiance {
             // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
             // exactly our plain emitter material.
-            let reflects = !m.model.children().is_empty()
-                || !m.model.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty();
+            let reflects = match m.model {
+                crate::material::Model::Wrapper(_) => true,
+                crate::material::Model::Plain(p) => {
+                    !p.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty()
+                }
+            };
             b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
             return self.finish(&p);
         }

@@ -5,7 +5,9 @@
 use super::Cx;
 use super::schema::{self, MaterialDesc, TextureDesc};
 use crate::material::microfacet::{Distribution, Microfacet};
-use crate::material::{Classic, ClassicKind, ColorParam, FloatParam, Material, Model, Param, Roughness, conductors};
+use crate::material::{
+    Classic, ClassicKind, ColorParam, FloatParam, Material, Param, Plain, Roughness, Wrapper, conductors,
+};
 use crate::math::{Color, Vec2};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
@@ -259,11 +261,17 @@ impl<'a> Cx<'a> {
     ) -> Result<Material, SceneError> {
         let d = &p.desc;
         let two_sided = d.two_sided.unwrap_or(true);
-        let with_sides = |model: Model| Material { model, two_sided };
+        let with_sides = |model: Plain| Material { model: model.into(), two_sided };
         let unit = Param::Const(Color::ONE);
         Ok(match p.kind {
-            "diffuse" | "reflective" | "transparent" | "dielectric" => {
-                let mut c = classic(d, p.kind);
+            kind @ ("diffuse" | "reflective" | "transparent" | "dielectric") => {
+                let kind = match kind {
+                    "diffuse" => ClassicKind::Diffuse,
+                    "reflective" => ClassicKind::Reflective,
+                    "transparent" => ClassicKind::Transparent,
+                    _ => ClassicKind::Dielectric,
+                };
+                let mut c = classic(d, kind);
                 if let Some(s) = &d.color
                     && let ColorOrTexture::Texture(n) = s.get_ref()
                 {
@@ -285,9 +293,9 @@ impl<'a> Cx<'a> {
                 };
                 let specular = self.color_param(&d.specular, Color::ONE, textures)?;
                 if p.kind == "conductor" {
-                    with_sides(Model::Conductor { eta, k, specular })
+                    with_sides(Plain::Conductor { eta, k, specular })
                 } else {
-                    with_sides(Model::RoughConductor { roughness: self.roughness(p, textures)?, eta, k, specular })
+                    with_sides(Plain::RoughConductor { roughness: self.roughness(p, textures)?, eta, k, specular })
                 }
             }
             "roughdielectric" => {
@@ -295,7 +303,7 @@ impl<'a> Cx<'a> {
                 if (eta - 1.0).abs() < 1e-7 {
                     return Err(self.at(p.span.clone(), "a rough dielectric needs an `ior` other than 1"));
                 }
-                Material::two_sided(Model::RoughDielectric {
+                Material::two_sided(Plain::RoughDielectric {
                     roughness: self.roughness(p, textures)?,
                     eta,
                     reflectance: unit,
@@ -334,41 +342,39 @@ impl<'a> Cx<'a> {
                     return Err(self.at(t.span(), "a bump map needs a bitmap texture (only bitmaps have gradients)"));
                 }
                 let inner = self.named(names, &d.material, "material", &p.span)?;
-                Material::two_sided(Model::BumpMap { height, scale: d.scale.map_or(1.0, |v| v.0), inner })
+                Material::two_sided(Wrapper::BumpMap { height, scale: d.scale.map_or(1.0, |v| v.0), inner })
             }
             "normalmap" => {
                 let t = d.texture.as_ref().ok_or_else(|| self.at(p.span.clone(), "a normal map needs `texture`"))?;
                 let normals = self.texture_index(textures, t.get_ref(), t.span())?;
                 let inner = self.named(names, &d.material, "material", &p.span)?;
-                Material::two_sided(Model::NormalMap { normals, inner })
+                Material::two_sided(Wrapper::NormalMap { normals, inner })
             }
             "mask" => {
                 let opacity = self.float_param(&d.opacity, 0.5, textures)?;
                 let inner = self.named(names, &d.material, "material", &p.span)?;
-                Material::two_sided(Model::Mask { opacity, inner })
+                Material::two_sided(Wrapper::Mask { opacity, inner })
             }
             "blend" => {
                 let weight = self.float_param(&d.weight, 0.5, textures)?;
                 let first = self.named(names, &d.first, "first", &p.span)?;
                 let second = self.named(names, &d.second, "second", &p.span)?;
                 for (key, m) in [("first", first), ("second", second)] {
-                    if matches!(
-                        geometry.material(m).model,
-                        Model::TwoSided { .. } | Model::BumpMap { .. } | Model::NormalMap { .. } | Model::Mask { .. }
-                    ) {
+                    if geometry.material(m).model.is_single_wrapper() {
                         return Err(self.at(
                             p.span.clone(),
                             format!("a blend's `{key}` cannot be a twosided, bumpmap, normalmap or mask material (it would not be applied inside the blend): wrap the blend instead"),
                         ));
                     }
                 }
-                Material::two_sided(Model::Blend { weight, first, second })
+                Material::two_sided(Wrapper::Blend { weight, first, second })
             }
-            _ => {
+            "twosided" => {
                 let front = self.named(names, &d.front, "front", &p.span)?;
                 let back = self.named(names, &d.back, "back", &p.span)?;
-                Material::two_sided(Model::TwoSided { front, back })
+                Material::two_sided(Wrapper::TwoSided { front, back })
             }
+            other => return Err(self.at(p.span.clone(), format!("unknown material type `{other}`"))),
         })
     }
 }
@@ -382,14 +388,8 @@ fn to_uv(d: &TextureDesc) -> Affine2 {
 }
 
 /// A material of the seed report's model from its table.
-fn classic(desc: &MaterialDesc, kind: &str) -> Classic {
+fn classic(desc: &MaterialDesc, kind: ClassicKind) -> Classic {
     let d = Classic::default();
-    let kind = match kind {
-        "diffuse" => ClassicKind::Diffuse,
-        "reflective" => ClassicKind::Reflective,
-        "transparent" => ClassicKind::Transparent,
-        _ => ClassicKind::Dielectric,
-    };
     // Glass defaults to no diffuse term: all its light comes from reflection and refraction.
     let clear = kind == ClassicKind::Dielectric || kind == ClassicKind::Transparent;
     let color = match desc.color.as_ref().map(|c| c.get_ref()) {
