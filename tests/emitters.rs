@@ -335,7 +335,7 @@ fn textured_emitters_read_the_same_texture_where_sampled_and_where_hit() {
             .lights
             .iter()
             .map(|l| match l {
-                Light::Area { emitter, .. } => emitter.area() as f64,
+                Light::Area { shape, .. } => shape.area() as f64,
                 _ => 0.0,
             })
             .sum();

@@ -144,7 +144,7 @@ fn emitting_primitives_know_their_light_after_the_bvh_reorders_them() {
         let x = i as f32 * 4.0 - 8.0;
         let h = s.intersect(&Ray::new(Vec3::new(x, 5.0, 30.0), -Vec3::Z), f32::INFINITY).unwrap();
         assert_eq!(h.light, i, "sphere light {i}");
-        let caustic::light::Light::Area { emitter: caustic::light::Emitter::Sphere(sp), radiance, .. } =
+        let caustic::light::Light::Area { shape: caustic::shape::Shape::Sphere(sp), radiance, .. } =
             s.lights[i as usize]
         else {
             panic!("light {i} is not a spherical area light");

@@ -306,7 +306,7 @@ fn rectangles_emit_along_local_z_and_flip_normals_turns_them() {
                <transform name="to_world"><rotate x="1" angle="90"/><translate y="2"/></transform>
                <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#
         )));
-        let caustic::light::Light::Area { emitter: caustic::light::Emitter::Quad(q), radiance, .. } = s.scene.lights[0]
+        let caustic::light::Light::Area { shape: caustic::shape::Shape::Quad(q), radiance, .. } = s.scene.lights[0]
         else {
             panic!()
         };
@@ -468,9 +468,7 @@ fn disks_keep_their_area_and_emitting_obj_parallelograms_become_lights() {
     )
     .unwrap();
     assert!(w.is_empty(), "{w:?}");
-    let caustic::light::Light::Area { emitter: caustic::light::Emitter::Quad(q), .. } = s.scene.lights[0] else {
-        panic!()
-    };
+    let caustic::light::Light::Area { shape: caustic::shape::Shape::Quad(q), .. } = s.scene.lights[0] else { panic!() };
     assert!((q.area() - 1.0).abs() < 1e-6 && q.n.abs_diff_eq(Vec3::Y, 1e-6), "{q:?}");
     std::fs::remove_dir_all(&dir).ok();
 }

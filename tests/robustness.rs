@@ -86,8 +86,8 @@ fn check_loaded(loaded: &LoadedScene) -> Result<(), String> {
         if !p.is_finite() {
             known(format!("accepted light {i} has non-finite power {p}: {l:?}"))?;
         }
-        if let Light::Area { emitter, .. } = l {
-            let a = emitter.area();
+        if let Light::Area { shape, .. } = l {
+            let a = shape.area();
             if !(a > 0.0 && a.is_finite()) {
                 known(format!("accepted area light {i} has area {a}: {l:?}"))?;
             }
@@ -1120,8 +1120,8 @@ fn assert_rejected_or_usable(text: &str) {
     assert!(b.is_empty() || (b.min.is_finite() && b.max.is_finite()), "accepted with bounds {b:?}:\n{text}");
     for l in &scene.lights {
         assert!(l.power().is_finite(), "accepted light with power {}: {l:?}\n{text}", l.power());
-        if let Light::Area { emitter, .. } = l {
-            let a = emitter.area();
+        if let Light::Area { shape, .. } = l {
+            let a = shape.area();
             assert!(a > 0.0 && a.is_finite(), "accepted area light with area {a}: {l:?}\n{text}");
         }
     }

@@ -1,7 +1,9 @@
-//! Bounding volume hierarchy over all bounded primitives: a 4-wide tree (built by `build`,
-//! nodes and traversal in `wide`). The primitives are reordered into leaf order and their
+//! Bounding volume hierarchy over a scene's primitives: a 4-wide tree over the bounded ones
+//! (built by `build`, nodes and traversal in `wide`), and the unbounded ones (planes) after it,
+//! tested with every ray. The primitives are reordered into leaf order (planes last) and their
 //! intersection data copied beside them, so each leaf is a contiguous run of at most
-//! `build::MAX_LEAF` compact shapes and a hit's index names its primitive directly.
+//! `build::MAX_LEAF` compact shapes and a hit's index names its primitive directly, planes
+//! included.
 
 use super::build::{BuildPrim, build_wide};
 use super::wide::{WideNode, traverse};
@@ -18,8 +20,10 @@ pub struct Bvh {
     /// Node levels (sizes the traversal stack).
     depth: u32,
     bounds: Aabb,
-    /// Intersection data in leaf order (hot).
+    /// Intersection data in leaf order (hot); the unbounded primitives after the tree's.
     shapes: Vec<CompactShape>,
+    /// Primitives the tree holds (the first `bounded` of `shapes`); the rest are unbounded.
+    bounded: usize,
     /// The primitives in leaf order, read once per closest hit.
     prims: Primitives,
     /// `for_each_crossing` finds every crossing (no leaf is a cylinder).
@@ -33,10 +37,18 @@ impl Bvh {
         let mut prims = prims.into();
         prims.shrink_to_fit();
         let n = prims.len();
-        let mut build: Vec<BuildPrim> =
-            (0..n).into_par_iter().map(|i| BuildPrim::new(prims.bounds(i, meshes), i)).collect();
+        let unbounded: Vec<u32> =
+            (0..n as u32).filter(|&i| !prims.get(i as usize, meshes).shape.is_bounded()).collect();
+        let mut build: Vec<BuildPrim> = if unbounded.is_empty() {
+            (0..n).into_par_iter().map(|i| BuildPrim::new(prims.bounds(i, meshes), i)).collect()
+        } else {
+            let bounded = |i: &usize| unbounded.binary_search(&(*i as u32)).is_err();
+            (0..n).filter(bounded).map(|i| BuildPrim::new(prims.bounds(i, meshes), i)).collect()
+        };
         let tree = build_wide(&mut build);
-        let order: Vec<u32> = build.par_iter().map(BuildPrim::index).collect();
+        let bounded = build.len();
+        let mut order: Vec<u32> = build.par_iter().map(BuildPrim::index).collect();
+        order.extend(&unbounded);
         // The build records go before the nodes are joined, the primitives reordered and the
         // leaves made: at the peak a mesh triangle holds only its primitive, leaf and node share.
         drop(build);
@@ -45,7 +57,17 @@ impl Bvh {
         drop(order);
         let shapes: Vec<CompactShape> = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
         let crossings_enumerable = shapes.par_iter().all(CompactShape::crossings_enumerable);
-        Bvh { nodes, depth, bounds, shapes, prims, crossings_enumerable }
+        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable }
+    }
+
+    /// The unbounded primitives (planes), after the tree's.
+    pub fn unbounded(&self) -> impl Iterator<Item = &CompactShape> {
+        self.shapes[self.bounded..].iter()
+    }
+
+    /// Number of unbounded primitives.
+    pub fn unbounded_len(&self) -> usize {
+        self.shapes.len() - self.bounded
     }
 
     /// The primitives, in the order hits name them.
@@ -109,7 +131,8 @@ impl Bvh {
         if self.shapes.len() <= LINEAR_MAX {
             leaf(0, self.shapes.len(), &mut closest);
         } else {
-            traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
+            traverse::<true>(&self.nodes, self.depth, ray, &mut closest, &mut leaf);
+            leaf(self.bounded, self.shapes.len() - self.bounded, &mut closest);
         }
         best.map(|(i, h)| (i as u32, h))
     }
@@ -135,7 +158,8 @@ impl Bvh {
         let stopped = if self.shapes.len() <= LINEAR_MAX {
             leaf(0, self.shapes.len(), &mut t)
         } else {
-            traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
+            traverse::<false>(&self.nodes, self.depth, ray, &mut t, &mut leaf)
+                || leaf(self.bounded, self.shapes.len() - self.bounded, &mut t)
         };
         Some(!stopped)
     }
@@ -151,6 +175,8 @@ impl Bvh {
         if self.shapes.len() <= LINEAR_MAX {
             return leaf(0, self.shapes.len(), &mut t);
         }
-        traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
+        let planes = self.shapes.len() - self.bounded;
+        (planes > 0 && leaf(self.bounded, planes, &mut t))
+            || traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }
 }

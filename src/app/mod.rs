@@ -267,7 +267,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                 } else {
                     String::new()
                 },
-                loaded.scene.planes.len(),
+                loaded.scene.bvh.unbounded_len(),
                 loaded.scene.lights.len(),
                 info.bvh_nodes,
                 info.bvh_build.as_secs_f64() * 1e3,

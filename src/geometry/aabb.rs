@@ -17,6 +17,8 @@ impl Default for Aabb {
 impl Aabb {
     /// The empty box: the identity of `union`.
     pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    /// All of space (the bounds of an unbounded shape such as a plane).
+    pub const INFINITE: Aabb = Aabb { min: Vec3::splat(f32::NEG_INFINITY), max: Vec3::splat(f32::INFINITY) };
 
     pub fn from_points(points: &[Vec3]) -> Self {
         points.iter().fold(Aabb::EMPTY, |b, &p| b.grow(p))

@@ -1,7 +1,7 @@
 //! Light sources, in physical units. A closed set of `Copy` variants; each can be sampled from a
 //! shading point (for shadow rays and next-event estimation) and can emit photons. Area lights
 //! belong to an emitting primitive, which knows its light by index (`Primitive::light`), and
-//! sample through a copy of that primitive's shape (`area`). Environment lights (`environment`:
+//! sample through a copy of that primitive's shape (`Shape::sample_towards`). Environment lights (`environment`:
 //! a map or a constant) surround the scene; they and directional lights send their photons in
 //! through a `PhotonDisk` covering the scene (`disk`).
 //!
@@ -9,17 +9,16 @@
 //! in W/(m^2 sr); scene lengths count as metres. The classic Whitted integrator reads the same
 //! values as the seed report's "light intensity" (colour x intensity, falling off as 1/d^2).
 
-mod area;
 mod disk;
 mod environment;
 
-pub use area::{Emitter, SurfaceSample, TRIANGLE_UV};
 pub use disk::{PLANE_REACH, PhotonDisk};
 pub use environment::{EnvMap, Environment};
 
 use crate::geometry::Ray;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
 use crate::sampling::warp::{cosine_hemisphere, uniform_cone, uniform_sphere};
+use crate::shape::Shape;
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,9 +36,10 @@ pub enum Light {
     /// `irradiance` what a surface facing it receives. Its photons enter through `disk` (set when
     /// the scene is built), which also gives its power.
     Directional { direction: Vec3, irradiance: Color, disk: PhotonDisk },
-    /// A shape emitting from its front side: `radiance`, times the texture at the point's uv
-    /// when it has one (Mitsuba's `area` emitter with a radiance texture).
-    Area { emitter: Emitter, radiance: Color, texture: Option<EmissionTexture> },
+    /// A shape emitting from its front side (the side its normals point to): `radiance`, times
+    /// the texture at the point's uv when it has one (Mitsuba's `area` emitter with a radiance
+    /// texture). The shape is a copy of the emitting primitive's.
+    Area { shape: Shape, radiance: Color, texture: Option<EmissionTexture> },
     /// Light from every direction at infinity: an environment map or a constant radiance, seen
     /// by rays that leave the scene.
     Environment(Environment),
@@ -51,6 +51,24 @@ pub enum Light {
 pub struct EmissionTexture {
     pub texture: u32,
     pub mean: Color,
+    /// A triangle's vertex texture coordinates (a mesh's; `TRIANGLE_UV` when it has none).
+    pub vertex_uv: [Vec2; 3],
+}
+
+impl EmissionTexture {
+    /// Texture coordinates of the point of `shape` whose own surface coordinates are `uv`
+    /// (`Hit::uv`, `SurfaceSample::uv`): a triangle's vertex coordinates interpolated by its
+    /// barycentrics, `uv` itself on every other shape.
+    #[inline]
+    pub fn uv(&self, shape: &Shape, uv: Vec2) -> Vec2 {
+        match shape {
+            Shape::Triangle(_) => {
+                let t = &self.vertex_uv;
+                t[0] * (1.0 - uv.x - uv.y) + t[1] * uv.x + t[2] * uv.y
+            }
+            Shape::Sphere(_) | Shape::Quad(_) | Shape::Disk(_) | Shape::Cylinder(_) | Shape::Plane(_) => uv,
+        }
+    }
 }
 
 /// No texture: a spot light of uniform intensity.
@@ -290,8 +308,8 @@ impl Light {
             // Untextured power times the texture's mean: the image plane's irradiance integral.
             Light::Projector(p) => p.intensity * p.plane_area() * p.mean,
             Light::Directional { irradiance, disk, .. } => irradiance * disk.area(),
-            Light::Area { emitter, radiance, texture } => {
-                radiance * PI * emitter.area() * texture.map_or(Color::ONE, |t| t.mean)
+            Light::Area { shape, radiance, texture } => {
+                radiance * PI * shape.area() * texture.map_or(Color::ONE, |t| t.mean)
             }
             Light::Environment(e) => e.power(),
         }
@@ -328,8 +346,8 @@ impl Light {
             Light::Directional { direction, irradiance, .. } => {
                 Some(delta_sample(-direction, f32::INFINITY, irradiance))
             }
-            Light::Area { emitter, radiance, .. } => {
-                let (s, pdf) = emitter.sample_towards(p, u)?;
+            Light::Area { shape, radiance, texture } => {
+                let (s, pdf) = shape.sample_towards(p, u)?;
                 let v = s.p - p;
                 let d2 = v.length_squared();
                 if !(d2 > 0.0) || !(pdf > 0.0) {
@@ -340,7 +358,8 @@ impl Light {
                 if s.n.dot(-wi) <= 0.0 {
                     return None;
                 }
-                Some(LightSample { wi, dist, radiance, pdf, delta: false, uv: emitter.texture_uv(s.uv) })
+                let uv = texture.map_or(s.uv, |t| t.uv(&shape, s.uv));
+                Some(LightSample { wi, dist, radiance, pdf, delta: false, uv })
             }
             Light::Environment(e) => {
                 let (wi, radiance, pdf) = e.sample(u)?;
@@ -354,7 +373,7 @@ impl Light {
     #[inline]
     pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match *self {
-            Light::Area { emitter, .. } => emitter.pdf_towards(p, q, n, wi),
+            Light::Area { shape, .. } => shape.pdf_towards(p, q, n, wi),
             Light::Environment(e) => e.pdf(wi),
             _ => 0.0,
         }
@@ -404,13 +423,13 @@ impl Light {
                 let (ray, inv_density) = disk.ray(direction, u_pos)?;
                 Some(EmittedPhoton { ray, flux: irradiance * inv_density, n: direction, uv: Vec2::ZERO })
             }
-            Light::Area { emitter, radiance, .. } => {
-                let s = emitter.sample_area(u_pos);
+            Light::Area { shape, radiance, texture } => {
+                let s = shape.sample_area(u_pos)?;
                 let d = Frame::from_z(s.n).to_world(cosine_hemisphere(u_dir));
                 // L cos / (pdf_area * cos / pi) = L * area * pi.
                 let ray = Ray::spawn(s.p, s.p_error, s.n, d, 0.0);
-                let uv = emitter.texture_uv(s.uv);
-                Some(EmittedPhoton { ray, flux: radiance * (emitter.area() * PI), n: s.n, uv })
+                let uv = texture.map_or(s.uv, |t| t.uv(&shape, s.uv));
+                Some(EmittedPhoton { ray, flux: radiance * (shape.area() * PI), n: s.n, uv })
             }
             Light::Environment(e) => e.emit(u_pos, u_dir),
         }
@@ -433,7 +452,7 @@ impl Light {
 mod tests {
     use super::*;
     use crate::sampling::Rng32;
-    use crate::shape::{Quad, Sphere};
+    use crate::shape::{Quad, Sphere, Triangle};
 
     #[test]
     fn photon_flux_averages_to_power() {
@@ -461,17 +480,14 @@ mod tests {
                 irradiance: Color::splat(2.0),
                 disk: PhotonDisk::new(Vec3::ONE, 0.5, true),
             },
-            Light::Area { emitter: Emitter::Quad(quad), radiance: Color::splat(4.0), texture: None },
+            Light::Area { shape: Shape::Quad(quad), radiance: Color::splat(4.0), texture: None },
             Light::Area {
-                emitter: Emitter::Triangle {
-                    p: [Vec3::ZERO, Vec3::X * 2.0, Vec3::new(0.3, 1.5, -0.2)],
-                    uv: TRIANGLE_UV,
-                },
+                shape: Shape::Triangle(Triangle::new(Vec3::ZERO, Vec3::X * 2.0, Vec3::new(0.3, 1.5, -0.2))),
                 radiance: Color::splat(2.5),
                 texture: None,
             },
             Light::Area {
-                emitter: Emitter::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
+                shape: Shape::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
                 radiance: Color::splat(1.5),
                 texture: None,
             },
@@ -560,7 +576,7 @@ mod tests {
         // Sum of 1/pdf over samples estimates the solid angle the light subtends: for a sphere
         // of radius r at distance d it is 2 pi (1 - sqrt(1 - r^2/d^2)); for the quad compare the
         // pdf of sampled points with `pdf`.
-        let s = Emitter::Sphere(Sphere::new(Vec3::new(0.0, 0.0, -4.0), 1.0));
+        let s = Shape::Sphere(Sphere::new(Vec3::new(0.0, 0.0, -4.0), 1.0));
         let mut rng = Rng32::new(9);
         let p = Vec3::ZERO;
         for _ in 0..1000 {
@@ -571,7 +587,7 @@ mod tests {
             assert!((s.pdf_towards(p, q, n, wi) - pdf).abs() < 1e-4 * pdf);
             assert!(n.dot(-wi) >= -1e-3);
         }
-        let quad = Emitter::Quad(Quad::new(Vec3::new(-1.0, 2.0, -1.0), Vec3::Z * 2.0, Vec3::X * 2.0).unwrap());
+        let quad = Shape::Quad(Quad::new(Vec3::new(-1.0, 2.0, -1.0), Vec3::Z * 2.0, Vec3::X * 2.0).unwrap());
         // Facing down (e1 x e2 = z x x = +y... flip check): the quad's normal is +y, so a point
         // below sees its back and gets nothing; a point above is lit.
         assert!(quad.sample_towards(Vec3::ZERO, Vec2::splat(0.5)).is_none());
@@ -590,7 +606,7 @@ mod tests {
         // A triangle (facing +y, seen from above) against Van Oosterom and Strackee's formula
         // tan(omega / 2) = |a . (b x c)| / (abc + (a . b) c + (a . c) b + (b . c) a).
         let tri = [Vec3::new(-1.0, 2.0, -1.0), Vec3::new(0.5, 2.0, 1.0), Vec3::new(1.5, 2.0, -0.5)];
-        let t = Emitter::Triangle { p: tri, uv: TRIANGLE_UV };
+        let t = Shape::Triangle(Triangle::new(tri[0], tri[1], tri[2]));
         let mut omega = 0.0f64;
         for _ in 0..n {
             let (s, pdf) = t.sample_towards(above, rng.uniform2()).unwrap();

@@ -349,9 +349,9 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         | Light::Projector(crate::light::Projector { position, .. }) => {
             (position, Vec3::ZERO, Vec3::ZERO, 1.0, Color::ONE, Vec2::ZERO)
         }
-        Light::Area { emitter, radiance, .. } => {
-            let s = emitter.sample_area(u_pos);
-            (s.p, s.p_error, s.n, emitter.area(), radiance, emitter.texture_uv(s.uv))
+        Light::Area { shape, radiance, texture } => {
+            let s = shape.sample_area(u_pos)?;
+            (s.p, s.p_error, s.n, shape.area(), radiance, texture.map_or(s.uv, |t| t.uv(&shape, s.uv)))
         }
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };

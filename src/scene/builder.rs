@@ -10,10 +10,10 @@ use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
 use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
-use crate::light::{EmissionTexture, Emitter, Environment, Light, LightPicker, PhotonDisk};
+use crate::light::{EmissionTexture, Environment, Light, LightPicker, PhotonDisk};
 use crate::material::{Material, Materials, Plain};
-use crate::math::{Color, Vec3};
-use crate::shape::{Plane, Primitive, Primitives, Shape, Triangle, TriangleMesh};
+use crate::math::{Color, Vec2, Vec3};
+use crate::shape::{Plane, Primitive, Primitives, Shape, TRIANGLE_UV, Triangle, TriangleMesh};
 use crate::texture::Texture;
 use std::time::Instant;
 
@@ -24,7 +24,8 @@ pub struct SceneBuilder {
     material_names: Vec<String>,
     textures: Vec<Texture>,
     prims: Primitives,
-    planes: Vec<(Plane, u32)>,
+    /// The infinite planes added (also primitives), for the photon disk.
+    planes: Vec<Plane>,
     meshes: Vec<TriangleMesh>,
     lights: Vec<Light>,
     /// The environment (map or constant), added after all other lights by `finish`.
@@ -172,8 +173,11 @@ impl SceneBuilder {
         self.note_specular(first, material);
     }
 
+    /// Adds an infinite plane (a primitive the BVH keeps beside its tree).
     pub fn add_plane(&mut self, plane: Plane, material: u32) {
-        self.planes.push((plane, material));
+        debug_assert!(self.open_group.is_none(), "loaders refuse planes in instanced groups");
+        self.planes.push(plane);
+        self.prims.push(Primitive { shape: Shape::Plane(plane), material, light: NO_LIGHT });
     }
 
     /// Adds a light that has no surface (point, spot, directional).
@@ -198,47 +202,72 @@ impl SceneBuilder {
 
     /// Adds an emitting shape: a light and its primitive. `surface` is the BSDF the emitter
     /// reflects with (a reflecting emitter); `None` makes it black.
-    pub fn add_area_light(&mut self, emitter: Emitter, radiance: Color, surface: Option<Material>) {
-        self.add_area_lights([emitter], radiance, None, surface);
+    pub fn add_area_light(&mut self, shape: Shape, radiance: Color, surface: Option<Material>) {
+        self.add_area_lights([shape], radiance, None, surface);
     }
 
-    /// Adds one emitting object made of several surfaces (the faces of a cube, the triangles of
-    /// a mesh): a light per surface, so light sampling picks among them by power (by area, as
-    /// they share the radiance), and one material for all. With a `texture` (an index from
-    /// `add_texture`) the radiance is multiplied by it at each point's uv.
+    /// Adds one emitting object made of several surfaces (the faces of a cube): a light per
+    /// surface, so light sampling picks among them by power (by area, as they share the
+    /// radiance), and one material for all. With a `texture` (an index from `add_texture`) the
+    /// radiance is multiplied by it at each point's uv.
     pub fn add_area_lights(
         &mut self,
-        emitters: impl IntoIterator<Item = Emitter>,
+        shapes: impl IntoIterator<Item = Shape>,
+        radiance: Color,
+        texture: Option<u32>,
+        surface: Option<Material>,
+    ) {
+        let shapes = shapes.into_iter().map(|s| (s, TRIANGLE_UV));
+        self.add_emitters(shapes, radiance, texture, surface);
+    }
+
+    /// Adds an emitting triangle mesh: a light per triangle (each emitting from the side its
+    /// winding faces, as the mesh's geometric normals do), reading a texture at the mesh's
+    /// texture coordinates.
+    pub fn add_mesh_area_lights(
+        &mut self,
+        mesh: &TriangleMesh,
+        radiance: Color,
+        texture: Option<u32>,
+        surface: Option<Material>,
+    ) {
+        let triangles = mesh.indices.iter().enumerate().map(|(k, t)| {
+            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
+            (Shape::Triangle(Triangle::new(p0, p1, p2)), mesh.vertex_uvs(k).unwrap_or(TRIANGLE_UV))
+        });
+        self.add_emitters(triangles, radiance, texture, surface);
+    }
+
+    /// True when some triangle of `mesh` has an area (can emit).
+    pub fn mesh_can_emit(mesh: &TriangleMesh) -> bool {
+        mesh.indices.iter().any(|t| {
+            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
+            Triangle::new(p0, p1, p2).area() > 0.0
+        })
+    }
+
+    /// The lights and primitives of emitting shapes, each with the texture coordinates of its
+    /// vertices when it is a triangle (read by an emission texture).
+    fn add_emitters(
+        &mut self,
+        shapes: impl IntoIterator<Item = (Shape, [Vec2; 3])>,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
     ) {
         debug_assert!(self.open_group.is_none(), "loaders refuse emitters in instanced groups");
-        let texture = texture.map(|t| EmissionTexture { texture: t, mean: self.textures[t as usize].mean() });
         let first = self.lights.len();
         let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
-        for emitter in emitters {
-            if !(emitter.area() > 0.0) {
+        for (shape, vertex_uv) in shapes {
+            if !(shape.area() > 0.0 && shape.is_bounded()) {
                 continue;
             }
+            let texture =
+                texture.map(|t| EmissionTexture { texture: t, mean: self.textures[t as usize].mean(), vertex_uv });
             let light = self.lights.len() as u32;
-            self.area_prims.push(Primitive { shape: emitter.shape(), material: m, light });
-            self.lights.push(Light::Area { emitter, radiance, texture });
+            self.area_prims.push(Primitive { shape, material: m, light });
+            self.lights.push(Light::Area { shape, radiance, texture });
         }
-    }
-
-    /// The surfaces of a triangle mesh as emitters, each emitting from the side its winding
-    /// faces (as the mesh's geometric normals do), with the mesh's texture coordinates.
-    pub fn mesh_emitters(mesh: &TriangleMesh) -> Vec<Emitter> {
-        mesh.indices
-            .iter()
-            .enumerate()
-            .map(|(k, t)| Emitter::Triangle {
-                p: t.map(|i| mesh.positions[i as usize]),
-                uv: mesh.vertex_uvs(k).unwrap_or(crate::light::TRIANGLE_UV),
-            })
-            .filter(|e| e.area() > 0.0)
-            .collect()
     }
 
     /// True when light through material `m` (or any material it wraps) can form caustics.
@@ -294,7 +323,7 @@ impl SceneBuilder {
         self.specular_targets.extend(Self::instance_targets(&self.group_specular, &instances));
         let info = LoadInfo {
             meshes: self.mesh_info,
-            primitives: bvh.len(),
+            primitives: bvh.len() - bvh.unbounded_len(),
             triangles: self.triangles,
             degenerate_triangles: self.degenerate_triangles,
             bvh_nodes: bvh.node_count() + instances.node_count(),
@@ -326,7 +355,6 @@ impl SceneBuilder {
         let scene = Scene {
             bvh,
             instances,
-            planes: self.planes,
             meshes: self.meshes,
             materials,
             light_picker: LightPicker::new(&self.lights),
@@ -348,10 +376,10 @@ impl SceneBuilder {
 /// Where photons from lights at infinity enter: the bounding sphere of the finite geometry,
 /// extended over the planes when there are any (`PhotonDisk`). A scene of planes alone centres
 /// it under the camera, as wide as the camera is high.
-fn photon_disk(bounds: Aabb, planes: &[(Plane, u32)], eye: Vec3) -> PhotonDisk {
+fn photon_disk(bounds: Aabb, planes: &[Plane], eye: Vec3) -> PhotonDisk {
     let (center, radius) = if !bounds.is_empty() && bounds.diagonal().is_finite() {
         bounds.bounding_sphere()
-    } else if let Some((p, _)) = planes.first() {
+    } else if let Some(p) = planes.first() {
         let h = (eye - p.point).dot(p.normal);
         (eye - p.normal * h, h.abs())
     } else {

@@ -17,12 +17,12 @@ pub use error::SceneError;
 
 use crate::accel::{Bvh, Instances};
 use crate::camera::Camera;
-use crate::geometry::{Aabb, Hit, NO_LIGHT, Ray};
+use crate::geometry::{Aabb, Hit, Ray};
 use crate::light::{EmittedPhoton, Light, LightPicker, LightSample};
 use crate::material::Materials;
 use crate::material::bsdf::Bsdf;
 use crate::math::{Color, Vec3};
-use crate::shape::{Plane, SurfacePoint, TriangleMesh};
+use crate::shape::{CompactShape, SurfacePoint, TriangleMesh};
 use std::path::Path;
 
 /// Reads a scene file: Mitsuba 3 XML for `.xml`, caustic's TOML format otherwise.
@@ -51,8 +51,6 @@ pub struct Scene {
     pub bvh: Bvh,
     /// Instanced groups of shapes and the top-level BVH over their instances.
     pub instances: Instances,
-    /// Unbounded planes, tested after the BVH, with their material index.
-    pub planes: Vec<(Plane, u32)>,
     pub meshes: Vec<TriangleMesh>,
     /// Materials, their names and the textures they read.
     pub materials: Materials,
@@ -144,26 +142,9 @@ impl Scene {
             closest = h.t;
             best = Some((i, h));
         }
-        let mut instanced = None;
         if !self.instances.is_empty()
             && let Some(h) = self.instances.intersect(ray, closest)
         {
-            closest = h.t;
-            instanced = Some(h);
-        }
-        let mut best_plane = None;
-        for (k, (plane, _)) in self.planes.iter().enumerate() {
-            if let Some(h) = plane.intersect(ray, closest) {
-                closest = h.t;
-                best_plane = Some((k, h));
-            }
-        }
-        if let Some((k, h)) = best_plane {
-            let (plane, material) = &self.planes[k];
-            let sp = plane.surface(ray, &h);
-            return Some(Self::hit(h.t, &sp, *material, NO_LIGHT, u32::MAX - k as u32));
-        }
-        if let Some(h) = instanced {
             let (sp, material, light) = self.instances.surface(&h, &self.meshes);
             return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }
@@ -188,21 +169,10 @@ impl Scene {
         if !self.instances.is_empty() {
             return None;
         }
-        let all = self.bvh.for_each_crossing(ray, t_max, |i, hit| {
+        self.bvh.for_each_crossing(ray, t_max, |i, hit| {
             let (material, _) = self.bvh.material_light(i);
-            visit(material, &Crossing { scene: self, ray, hit, on: CrossingOn::Primitive(i) })
-        })?;
-        if !all {
-            return Some(false);
-        }
-        for (k, (plane, material)) in self.planes.iter().enumerate() {
-            if let Some(hit) = plane.intersect(ray, t_max)
-                && !visit(*material, &Crossing { scene: self, ray, hit, on: CrossingOn::Plane(k) })
-            {
-                return Some(false);
-            }
-        }
-        Some(true)
+            visit(material, &Crossing { scene: self, ray, hit, prim: i })
+        })
     }
 
     #[inline]
@@ -214,8 +184,8 @@ impl Scene {
     #[inline]
     pub fn emitted(&self, h: &Hit, w: crate::math::Vec3) -> Color {
         match self.lights.get(h.light as usize) {
-            Some(light @ Light::Area { emitter, texture: Some(t), .. }) => {
-                light.emitted(h.ng, w) * self.materials.textures[t.texture as usize].eval(emitter.texture_uv(h.uv()))
+            Some(light @ Light::Area { shape, texture: Some(t), .. }) => {
+                light.emitted(h.ng, w) * self.materials.textures[t.texture as usize].eval(t.uv(shape, h.uv()))
             }
             Some(light) => light.emitted(h.ng, w),
             None => Color::ZERO,
@@ -254,10 +224,11 @@ impl Scene {
     /// anything behind it, whatever the bounds of the finite geometry (`PhotonDisk`) say.
     pub fn photon_entry(&self, ray: Ray) -> Ray {
         let mut t0 = 0.0f32;
-        for (plane, _) in &self.planes {
-            let denom = plane.normal.dot(ray.d);
+        for plane in self.bvh.unbounded() {
+            let CompactShape::Plane([point, normal]) = *plane else { continue };
+            let denom = normal.dot(ray.d);
             if denom != 0.0 {
-                let t = (plane.point - ray.o).dot(plane.normal) / denom;
+                let t = (point - ray.o).dot(normal) / denom;
                 if t.is_finite() && t < t0 {
                     t0 = t;
                 }
@@ -276,9 +247,7 @@ impl Scene {
     /// True when anything blocks the ray in (0, t_max).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.planes.iter().any(|(p, _)| p.intersect(ray, t_max).is_some())
-            || self.bvh.occluded(ray, t_max)
-            || (!self.instances.is_empty() && self.instances.occluded(ray, t_max))
+        self.bvh.occluded(ray, t_max) || (!self.instances.is_empty() && self.instances.occluded(ray, t_max))
     }
 
     /// True when nothing blocks the way from hit `h` to a light sample `dist` away along `wi`
@@ -331,8 +300,8 @@ impl Scene {
                     i + 1
                 ));
             }
-            if let Light::Area { emitter, .. } = l {
-                let a = emitter.area();
+            if let Light::Area { shape, .. } = l {
+                let a = shape.area();
                 if !(a > 0.0 && a.is_finite()) {
                     return Err(format!("area light {} has no usable area (area {a})", i + 1));
                 }
@@ -371,12 +340,8 @@ pub struct Crossing<'a> {
     scene: &'a Scene,
     ray: &'a Ray,
     hit: crate::shape::PrimHit,
-    on: CrossingOn,
-}
-
-enum CrossingOn {
-    Primitive(u32),
-    Plane(usize),
+    /// The primitive crossed (an index into the BVH's primitives).
+    prim: u32,
 }
 
 impl Crossing<'_> {
@@ -384,9 +349,6 @@ impl Crossing<'_> {
     #[inline]
     pub fn ng(&self) -> Vec3 {
         let s = self.scene;
-        match self.on {
-            CrossingOn::Primitive(i) => s.bvh.surface(i, self.ray, &self.hit, &s.meshes).0.ng,
-            CrossingOn::Plane(k) => s.planes[k].0.surface(self.ray, &self.hit).ng,
-        }
+        s.bvh.surface(self.prim, self.ray, &self.hit, &s.meshes).0.ng
     }
 }

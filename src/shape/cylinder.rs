@@ -6,7 +6,7 @@
 //! Duff et al. (`Frame::from_z`), then applies `to_world`; a mirroring `to_world` mirrors u,
 //! while the normal stays outward.
 
-use super::{AreaSample, PrimHit, SurfacePoint};
+use super::{PrimHit, SurfacePoint, SurfaceSample};
 use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::float::gamma;
 use crate::math::{Frame, Vec2, Vec3};
@@ -136,11 +136,11 @@ impl Cylinder {
 
     /// A point uniformly distributed by area (density 1 / area), with Mitsuba's use of the
     /// sample: `u.x` along the axis, `u.y` around it.
-    pub fn sample_area(&self, u: Vec2) -> AreaSample {
+    pub fn sample_area(&self, u: Vec2) -> SurfaceSample {
         let (s, c) = (TAU * u.y).sin_cos();
         let n = self.x * c + self.y() * s;
         let (along, radial) = (self.axis * u.x, n * self.radius);
-        AreaSample {
+        SurfaceSample {
             p: self.p0 + along + radial,
             p_error: gamma(8) * (self.p0.abs() + along.abs() + radial.abs())
                 + Vec3::splat(gamma(8) * (along + radial).length()),

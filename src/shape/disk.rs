@@ -3,7 +3,7 @@
 //! transform (an ellipse after a non-uniform scale) is exact and the test is that of a quad with
 //! a round inside test.
 
-use super::{AreaSample, PrimHit, SurfacePoint};
+use super::{PrimHit, SurfacePoint, SurfaceSample};
 use crate::geometry::{Aabb, Ray, SurfaceParam, Transform};
 use crate::math::float::gamma;
 use crate::math::{Vec2, Vec3};
@@ -89,7 +89,7 @@ impl Disk {
     /// A point uniformly distributed by area (density 1 / area): the concentric map of the
     /// unit square onto the unit disk, as Mitsuba samples it, then the affine map (whose
     /// Jacobian is constant).
-    pub fn sample_area(&self, u: Vec2) -> AreaSample {
+    pub fn sample_area(&self, u: Vec2) -> SurfaceSample {
         let d = concentric_disk(u);
         let p = self.center + self.a * d.x + self.b * d.y;
         let p = p - self.n * self.n.dot(p - self.center);
@@ -99,7 +99,7 @@ impl Disk {
             phi += TAU;
         }
         let uv = Vec2::new(d.length(), phi / TAU);
-        AreaSample { p, p_error: gamma(6) * (self.center.abs() + p.abs()), n: self.n, uv }
+        SurfaceSample { p, p_error: gamma(6) * (self.center.abs() + p.abs()), n: self.n, uv }
     }
 }
 

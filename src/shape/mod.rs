@@ -7,13 +7,14 @@ pub mod mesh;
 mod plane;
 mod primitives;
 mod quad;
+mod sampling;
 mod sphere;
 mod triangle;
 
 pub use cylinder::{Cylinder, intersect_cylinder};
 pub use disk::{Disk, intersect_disk};
 pub use mesh::TriangleMesh;
-pub use plane::Plane;
+pub use plane::{Plane, intersect_plane};
 pub use primitives::Primitives;
 pub use quad::{Quad, box_faces, intersect_quad, transformed_quad};
 pub use sphere::Sphere;
@@ -42,25 +43,34 @@ pub struct SurfacePoint {
     pub param: SurfaceParam,
 }
 
-/// A point sampled uniformly by area on a shape (for emitting shapes).
+/// A point sampled on a shape's surface (for emitting shapes: `Shape::sample_area`,
+/// `Shape::sample_towards`).
 #[derive(Clone, Copy, Debug)]
-pub struct AreaSample {
+pub struct SurfaceSample {
     pub p: Vec3,
     /// Conservative error bound of `p` (see `math::float`).
     pub p_error: Vec3,
-    /// Unit normal there, on the side the shape's normals point to.
+    /// Unit normal there, on the side the shape's normals point to (the side it emits from).
     pub n: Vec3,
-    /// The surface coordinates a hit at `p` reports (`SurfacePoint::param`'s uv).
+    /// The surface coordinates a hit at `p` reports (`SurfacePoint::param`'s uv; a triangle's
+    /// barycentrics (b1, b2)).
     pub uv: Vec2,
 }
 
-#[derive(Clone, Copy, Debug)]
+/// Texture coordinates of a triangle's vertices when it has none of its own, as Mitsuba gives
+/// them: the point with barycentrics (b0, b1, b2) reads uv = (b1, b2).
+pub const TRIANGLE_UV: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::Y];
+
+/// A geometric primitive: the one list of shape kinds. Finite shapes are built into the BVH;
+/// planes, which have no bounds, are kept beside its tree and tested with every ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
     Sphere(Sphere),
     Triangle(Triangle),
     Quad(Quad),
     Disk(Disk),
     Cylinder(Cylinder),
+    Plane(Plane),
 }
 
 /// Only what intersection needs, 40 bytes: the BVH keeps these in leaf order so a leaf of four
@@ -78,6 +88,8 @@ pub enum CompactShape {
         axis: Vec3,
         radius: f32,
     },
+    /// A point on the plane and its unit normal.
+    Plane([Vec3; 2]),
 }
 
 impl CompactShape {
@@ -104,6 +116,7 @@ impl CompactShape {
             CompactShape::Quad([p0, e1, e2]) => intersect_quad(*p0, *e1, *e2, ray, t_max),
             CompactShape::Disk([c, a, b]) => intersect_disk(*c, *a, *b, ray, t_max),
             CompactShape::Cylinder { p0, axis, radius } => intersect_cylinder(*p0, *axis, *radius, ray, t_max),
+            CompactShape::Plane([point, normal]) => intersect_plane(*point, *normal, ray, t_max),
         }
     }
 }
@@ -126,6 +139,7 @@ impl Shape {
             Shape::Quad(q) => CompactShape::Quad([q.p0, q.e1, q.e2]),
             Shape::Disk(d) => CompactShape::Disk([d.center, d.a, d.b]),
             Shape::Cylinder(c) => CompactShape::Cylinder { p0: c.p0, axis: c.axis, radius: c.radius },
+            Shape::Plane(p) => CompactShape::Plane([p.point, p.normal]),
         }
     }
 
@@ -137,6 +151,7 @@ impl Shape {
             Shape::Quad(q) => q.bounds(),
             Shape::Disk(d) => d.bounds(),
             Shape::Cylinder(c) => c.bounds(),
+            Shape::Plane(_) => Aabb::INFINITE,
         }
     }
 
@@ -148,6 +163,7 @@ impl Shape {
             Shape::Quad(q) => q.intersect(ray, t_max),
             Shape::Disk(d) => d.intersect(ray, t_max),
             Shape::Cylinder(c) => c.intersect(ray, t_max),
+            Shape::Plane(p) => p.intersect(ray, t_max),
         }
     }
 
@@ -160,18 +176,15 @@ impl Shape {
             Shape::Quad(q) => q.surface(h),
             Shape::Disk(d) => d.surface(h),
             Shape::Cylinder(c) => c.surface(ray, h),
+            Shape::Plane(p) => p.surface(ray, h),
         }
     }
 
-    /// Surface area (used by area lights and photon emission).
-    pub fn area(&self) -> f32 {
-        match self {
-            Shape::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
-            Shape::Triangle(t) => t.area(),
-            Shape::Quad(q) => q.area(),
-            Shape::Disk(d) => d.area(),
-            Shape::Cylinder(c) => c.area(),
-        }
+    /// True for shapes with finite bounds (every shape but the plane), which the BVH's tree
+    /// holds.
+    #[inline]
+    pub fn is_bounded(&self) -> bool {
+        !matches!(self, Shape::Plane(_))
     }
 }
 

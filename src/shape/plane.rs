@@ -1,4 +1,5 @@
-//! Infinite plane through a point with a normal. Unbounded, so it lives outside the BVH.
+//! Infinite plane through a point with a normal. Unbounded, so the BVH keeps planes beside its
+//! tree and tests them with every ray.
 
 use super::{PrimHit, SurfacePoint};
 use crate::geometry::{Ray, SurfaceParam};
@@ -10,26 +11,36 @@ pub struct Plane {
     pub point: Vec3,
     /// Unit normal.
     pub normal: Vec3,
-    /// A fixed tangent frame: uv are coordinates along `frame.x` and `frame.y`, in scene units.
-    frame: Frame,
+}
+
+/// The hit of `ray` in (0, t_max) with the plane through `point` with unit `normal`.
+#[inline]
+pub fn intersect_plane(point: Vec3, normal: Vec3, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+    let denom = normal.dot(ray.d);
+    if denom == 0.0 {
+        return None;
+    }
+    let t = normal.dot(point - ray.o) / denom;
+    // A ray nearly parallel to the plane can meet it so far away that the point (or the
+    // arithmetic on it) overflows; such distant hits are treated as misses.
+    (t > 0.0 && t < t_max && ray.at(t).abs().max_element() < 1e30).then_some(PrimHit { t, u: 0.0, v: 0.0 })
 }
 
 impl Plane {
     /// The plane through `point` with unit `normal`.
     pub fn new(point: Vec3, normal: Vec3) -> Self {
-        Plane { point, normal, frame: Frame::from_z(normal) }
+        Plane { point, normal }
     }
 
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let denom = self.normal.dot(ray.d);
-        if denom == 0.0 {
-            return None;
-        }
-        let t = self.normal.dot(self.point - ray.o) / denom;
-        // A ray nearly parallel to the plane can meet it so far away that the point (or the
-        // arithmetic on it) overflows; such distant hits are treated as misses.
-        (t > 0.0 && t < t_max && ray.at(t).abs().max_element() < 1e30).then_some(PrimHit { t, u: 0.0, v: 0.0 })
+        intersect_plane(self.point, self.normal, ray, t_max)
+    }
+
+    /// The fixed tangent frame uv are measured along (in scene units).
+    #[inline]
+    fn frame(&self) -> Frame {
+        Frame::from_z(self.normal)
     }
 
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
@@ -39,7 +50,8 @@ impl Plane {
         let p_error = gamma(6) * (p.abs() + self.point.abs());
         // Coordinates in the plane, in scene units, along its tangent frame.
         let d = p - self.point;
-        let (dpdu, dpdv) = (self.frame.x, self.frame.y);
+        let frame = self.frame();
+        let (dpdu, dpdv) = (frame.x, frame.y);
         let param = SurfaceParam::Known { uv: Vec2::new(d.dot(dpdu), d.dot(dpdv)), dpdu, dpdv };
         SurfacePoint { p, p_error, ng: self.normal, ns: self.normal, param }
     }

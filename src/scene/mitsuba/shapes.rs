@@ -5,7 +5,6 @@ use super::Build;
 use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
-use crate::light::Emitter;
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
@@ -68,7 +67,10 @@ impl<'a> Cx<'a> {
         // Other nested objects (media etc.) are reported by `finish`.
 
         let kind = p.kind.clone();
-        let mut emitters_out: Vec<Emitter> = Vec::new();
+        // Shapes that can emit (a light each when the shape has an area emitter).
+        let mut emitters_out: Vec<Shape> = Vec::new();
+        // An emitting mesh: a light per triangle.
+        let mut emitting_mesh = None;
         // Shapes that cannot emit yet.
         let mut plain_out: Vec<Shape> = Vec::new();
         let mut mesh_out = None;
@@ -78,7 +80,7 @@ impl<'a> Cx<'a> {
                 let q =
                     if flip { transformed_quad(&to_world, c, e2, e1) } else { transformed_quad(&to_world, c, e1, e2) };
                 let q = q.ok_or_else(|| self.err(el, "rectangle has no area after its to_world transform"))?;
-                emitters_out.push(Emitter::Quad(q));
+                emitters_out.push(Shape::Quad(q));
             }
             "cube" => {
                 for (c, e1, e2) in box_faces(Vec3::splat(-1.0), Vec3::ONE) {
@@ -88,7 +90,7 @@ impl<'a> Cx<'a> {
                         transformed_quad(&to_world, c, e1, e2)
                     };
                     let q = q.ok_or_else(|| self.err(el, "cube is degenerate after its to_world transform"))?;
-                    emitters_out.push(Emitter::Quad(q));
+                    emitters_out.push(Shape::Quad(q));
                 }
             }
             "sphere" => {
@@ -111,13 +113,13 @@ impl<'a> Cx<'a> {
                 if !proper {
                     self.warn(el, "a mirroring to_world on a sphere: its texture coordinates are not mirrored")?;
                 }
-                emitters_out.push(Emitter::Sphere(sphere));
+                emitters_out.push(Shape::Sphere(sphere));
             }
             "disk" => {
                 let d = Disk::from_transform(&to_world, flip)
                     .ok_or_else(|| self.err(el, "disk has no area after its to_world transform"))?;
                 if radiance.is_some() {
-                    emitters_out.push(Emitter::Disk(d));
+                    emitters_out.push(Shape::Disk(d));
                 } else {
                     plain_out.push(Shape::Disk(d));
                 }
@@ -132,7 +134,7 @@ impl<'a> Cx<'a> {
                     self.warn(el, w)?;
                 }
                 if radiance.is_some() {
-                    emitters_out.push(Emitter::Cylinder(c));
+                    emitters_out.push(Shape::Cylinder(c));
                 } else {
                     plain_out.push(Shape::Cylinder(c));
                 }
@@ -202,14 +204,11 @@ impl<'a> Cx<'a> {
                     // A textured parallelogram keeps its triangles: they carry its uv.
                     let quad = if texture.is_some() && mesh.uvs.is_some() { None } else { parallelogram(&mesh) };
                     match quad {
-                        Some(q) => emitters_out.push(Emitter::Quad(q)),
-                        None => emitters_out.extend(SceneBuilder::mesh_emitters(&mesh)),
+                        Some(q) => emitters_out.push(Shape::Quad(q)),
+                        None if SceneBuilder::mesh_can_emit(&mesh) => emitting_mesh = Some(mesh),
+                        None => return Err(self.err(el, "an emitting mesh has no triangle with an area")),
                     }
-                    if emitters_out.is_empty() {
-                        return Err(self.err(el, "an emitting mesh has no triangle with an area"));
-                    }
-                }
-                if emitters_out.is_empty() {
+                } else {
                     mesh_out = Some((mesh, name));
                 }
             }
@@ -231,6 +230,9 @@ impl<'a> Cx<'a> {
             // A `null` BSDF: nothing to see, only the emission (if any).
             if let Some((radiance, texture)) = radiance {
                 b.geometry.add_area_lights(emitters_out, radiance, texture, None);
+                if let Some(mesh) = &emitting_mesh {
+                    b.geometry.add_mesh_area_lights(mesh, radiance, texture, None);
+                }
             }
             return self.finish(&p);
         };
@@ -245,13 +247,16 @@ impl<'a> Cx<'a> {
                 }
             };
             b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
+            if let Some(mesh) = &emitting_mesh {
+                b.geometry.add_mesh_area_lights(mesh, radiance, texture, reflects.then_some(m));
+            }
             return self.finish(&p);
         }
         if let Some((mesh, mesh_name)) = mesh_out {
             b.geometry.add_mesh(mesh, material, &mesh_name);
         }
         if !emitters_out.is_empty() {
-            b.geometry.add_object(emitters_out.iter().map(Emitter::shape), material);
+            b.geometry.add_object(emitters_out, material);
         }
         if !plain_out.is_empty() {
             b.geometry.add_object(plain_out, material);

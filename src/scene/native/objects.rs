@@ -5,7 +5,7 @@ use super::Cx;
 use super::materials::{MaterialNames, TextureNames};
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
 use crate::geometry::Transform;
-use crate::light::{Emitter, Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
+use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
@@ -132,7 +132,7 @@ impl<'a> Cx<'a> {
                         let q = transformed_quad(&transform, corner, e1, e2).ok_or_else(|| {
                             self.at(span.clone(), "area light quad edges are parallel or zero: it has no area")
                         })?;
-                        Emitter::Quad(q)
+                        Shape::Quad(q)
                     }
                     "sphere" => {
                         if !transform.is_similarity() {
@@ -141,7 +141,7 @@ impl<'a> Cx<'a> {
                             );
                         }
                         let center = d.center.map_or(Vec3::ZERO, |p| p.0);
-                        Emitter::Sphere(Sphere::transformed(&transform, center, d.radius.map_or(0.5, |r| r.0)).0)
+                        Shape::Sphere(Sphere::transformed(&transform, center, d.radius.map_or(0.5, |r| r.0)).0)
                     }
                     other => {
                         return Err(
@@ -405,12 +405,11 @@ impl<'a> Cx<'a> {
                 };
                 match emission {
                     Some((radiance, texture)) => {
-                        let emitters = SceneBuilder::mesh_emitters(&mesh);
-                        if emitters.is_empty() {
+                        if !SceneBuilder::mesh_can_emit(&mesh) {
                             return Err(self.at(span, "an emitting mesh has no triangle with an area"));
                         }
                         let surface = d.material.as_ref().map(|_| *geometry.material(material));
-                        geometry.add_area_lights(emitters, radiance, texture, surface);
+                        geometry.add_mesh_area_lights(&mesh, radiance, texture, surface);
                     }
                     None => geometry.add_mesh(mesh, material, &name),
                 }
@@ -445,18 +444,8 @@ fn add_shapes(geometry: &mut SceneBuilder, shapes: Vec<Shape>, surface: Surface,
         geometry.add_object(shapes, material);
         return;
     };
-    let emitters: Vec<Emitter> = shapes
-        .into_iter()
-        .map(|s| match s {
-            Shape::Sphere(s) => Emitter::Sphere(s),
-            Shape::Quad(q) => Emitter::Quad(q),
-            Shape::Triangle(t) => Emitter::Triangle { p: t.p, uv: crate::light::TRIANGLE_UV },
-            Shape::Disk(d) => Emitter::Disk(d),
-            Shape::Cylinder(c) => Emitter::Cylinder(c),
-        })
-        .collect();
     let surface = d.material.as_ref().map(|_| *geometry.material(material));
-    geometry.add_area_lights(emitters, radiance, texture, surface);
+    geometry.add_area_lights(shapes, radiance, texture, surface);
 }
 
 /// What an object emits: radiance and an optional texture multiplying it; `None` when dark.
