@@ -5,8 +5,8 @@ use crate::accel::Bvh;
 use crate::app::{LoadedScene, load_toml_str};
 use crate::geometry::{Aabb, NO_LIGHT, Ray};
 use crate::math::{Vec2, Vec3};
+use crate::options::Options;
 use crate::render::RenderStats;
-use crate::scene::Overrides;
 use crate::shape::{Primitive, Shape, TriangleMesh};
 use rayon::prelude::*;
 use std::path::Path;
@@ -105,10 +105,10 @@ pub fn generated_scenes() -> Vec<(&'static str, String)> {
 }
 
 pub fn load(text: &str, name: &str) -> LoadedScene {
-    load_sized(text, name, &Overrides::default())
+    load_sized(text, name, &Options::default())
 }
 
-fn load_sized(text: &str, name: &str, o: &Overrides) -> LoadedScene {
+fn load_sized(text: &str, name: &str, o: &Options) -> LoadedScene {
     match load_toml_str(text, name, Path::new("."), o) {
         Ok(s) => s,
         Err(e) => panic!("built-in benchmark scene {name} is invalid: {e}"),
@@ -244,7 +244,7 @@ pub fn run_all(repeats: u32) {
     );
     drop(prims);
 
-    let size = Overrides { width: Some(1920), height: Some(1440), ..Default::default() };
+    let size = Options { width: Some(1920), height: Some(1440), ..Default::default() };
     let knot = load_sized(KNOT_EXAMPLE, "scenes/07-torus-knot.toml", &size);
     let best = (0..repeats).map(|_| primary_rays(&knot)).min_by_key(|r| r.2).unwrap_or_default();
     say!(
@@ -291,7 +291,7 @@ pub fn run_all(repeats: u32) {
 /// over 200k global photons (no caustics): with every sample gathering (rays per second of the
 /// render) and with the irradiance cache (its fill and the render).
 fn final_gather(repeats: u32) {
-    use crate::scene::desc::{IntegratorKind, PhotonOptions};
+    use crate::options::{IntegratorKind, PhotonOptions};
     let run = |a: f32| {
         let photon = PhotonOptions {
             photons: Some(200_000),
@@ -300,7 +300,7 @@ fn final_gather(repeats: u32) {
             irradiance_cache: Some(a),
             ..Default::default()
         };
-        let o = Overrides {
+        let o = Options {
             width: Some(128),
             height: Some(128),
             spp: Some(4),

@@ -17,6 +17,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod options;
 pub mod photon;
 pub mod progress;
 pub mod render;

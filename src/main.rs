@@ -3,9 +3,8 @@
 use anyhow::{Context, Result};
 use caustic::app::{AppError, RenderOptions, SlurmOptions, farm_slurm, merge_files, render_file};
 use caustic::farm::shard::ShardSpec;
-use caustic::sampling::SamplerKind;
-use caustic::scene::desc::{IntegratorKind, PhotonOptions};
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::options::{Options, PhotonOptions};
+use caustic::scene::LoadOptions;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -102,74 +101,15 @@ struct RenderArgs {
     /// Output image, .png or .exr [default: the scene's name with .png, in the current folder].
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
-    /// Image width in pixels (overrides the scene).
-    #[arg(long, value_name = "W")]
-    width: Option<u32>,
-    /// Image height in pixels (overrides the scene).
-    #[arg(long, value_name = "H")]
-    height: Option<u32>,
-    /// Samples per pixel axis: N gives N x N jittered samples per pixel (overrides the scene).
-    #[arg(long, value_name = "N")]
-    spp_axis: Option<u32>,
-    /// Total samples per pixel, any count (overrides --spp-axis and the scene).
-    #[arg(long, value_name = "N", visible_alias = "samples")]
-    spp: Option<u32>,
-    /// The most bounces a path may have: 1 is direct light only, each more adds a reflection or
-    /// refraction (overrides the scene).
-    #[arg(long, value_name = "D")]
-    max_depth: Option<u32>,
-    /// Whitted: reflected, refracted and shadow rays of less weight in the pixel than this go
-    /// on by Russian roulette (POV-Ray's adc_bailout; 0 ends none) [default: 1/255].
-    #[arg(long, value_name = "W", value_parser = unit_interval)]
-    adc_bailout: Option<f32>,
-    /// Worker threads [default: all cores].
-    #[arg(long, value_name = "N")]
-    threads: Option<usize>,
-    /// Seed of all random sampling; the same seed gives the same image on any thread count.
-    #[arg(long, value_name = "S")]
-    seed: Option<u64>,
-    /// The rendering algorithm (overrides the scene).
-    #[arg(long, value_name = "NAME", value_enum)]
-    integrator: Option<IntegratorArg>,
-    /// Sample pattern: jittered or sobol.
-    #[arg(long, value_name = "NAME")]
-    sampler: Option<SamplerKind>,
-    /// Trace every ray through the pixel centre (only the lens is sampled).
-    #[arg(long)]
-    no_antialias: bool,
-    /// Photons emitted for the global photon map (photon integrator).
-    #[arg(long, value_name = "N")]
-    photons: Option<u64>,
-    /// Caustic photons to store (photon integrator; 0 disables caustics).
-    #[arg(long, value_name = "N")]
-    caustic_photons: Option<u64>,
-    /// Final-gather rays per sample; 0 reads the global photon map directly (fast preview).
-    #[arg(long, value_name = "N")]
-    gather: Option<u32>,
-    /// Photons per radiance estimate.
-    #[arg(long, value_name = "K")]
-    gather_k: Option<usize>,
-    /// Irradiance cache error threshold (Ward's a): indirect diffuse light is interpolated
-    /// between final gathers made before rendering where it is smooth; smaller is more accurate
-    /// and slower; 0 turns the cache off and gathers at every sample [default: 0.25; see
-    /// docs/scene-format.md for what it trades].
-    #[arg(long, value_name = "A")]
-    irradiance_cache: Option<f32>,
-    /// Final-gather rays per irradiance-cache record [default: 512].
-    #[arg(long, value_name = "N")]
-    cache_rays: Option<u32>,
-    /// Largest radius of a radiance estimate, in scene units [default: 5% of the scene's size].
-    #[arg(long, value_name = "R")]
-    max_radius: Option<f32>,
+    /// What may replace the scene's values (`caustic::options`).
+    #[command(flatten)]
+    options: Options,
     /// SPPM iterations (the same as --spp for sppm: one sample per pixel per iteration).
     #[arg(long, value_name = "N")]
     iterations: Option<u32>,
-    /// SPPM photons per iteration [default: one per pixel].
+    /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
-    photons_per_iter: Option<u64>,
-    /// SPPM starting search radius in scene units [default: about two pixel footprints].
-    #[arg(long, value_name = "R")]
-    initial_radius: Option<f32>,
+    threads: Option<usize>,
     /// Also write the direct, specular, caustic and indirect parts as OUT.direct.EXT etc.
     #[arg(long)]
     layers: bool,
@@ -199,44 +139,12 @@ struct RenderArgs {
     strict: bool,
 }
 
-/// The integrators, as the command line offers them (each with its one-line description).
-#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
-enum IntegratorArg {
-    /// Classic Whitted ray tracing with the seed report's Phong model: fast, no indirect light
-    Whitted,
-    /// Path tracing with next-event estimation and MIS: unbiased reference, noisy caustics
-    Path,
-    /// Photon mapping (Jensen): caustic and global maps, final gathering; caustics from point lights
-    Photon,
-    /// Stochastic progressive photon mapping: converges to the exact image, caustics included
-    Sppm,
-}
-
-impl From<IntegratorArg> for IntegratorKind {
-    fn from(a: IntegratorArg) -> Self {
-        match a {
-            IntegratorArg::Whitted => IntegratorKind::Whitted,
-            IntegratorArg::Path => IntegratorKind::Path,
-            IntegratorArg::Photon => IntegratorKind::Photon,
-            IntegratorArg::Sppm => IntegratorKind::Sppm,
-        }
-    }
-}
-
 fn parse_define(s: &str) -> Result<(String, String), String> {
     match s.split_once('=') {
         Some((k, v)) if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => {
             Ok((k.to_string(), v.to_string()))
         }
         _ => Err(format!("expected NAME=VALUE (NAME of letters, digits and _), found `{s}`")),
-    }
-}
-
-fn unit_interval(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        // + 0.0 makes -0 into 0: a render's identity spells the value out.
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v + 0.0),
-        _ => Err(format!("expected a number from 0 to 1, found `{s}`")),
     }
 }
 
@@ -252,88 +160,126 @@ impl RenderArgs {
     /// The options that change what is rendered, as arguments that parse back to them (for the
     /// shards of a farm); the scene, output and shard are left out.
     fn to_args(&self) -> Vec<String> {
+        // Destructured without `..`: a new argument or option does not compile until it is passed
+        // on here, or named as one the shards do not take.
+        let RenderArgs {
+            scene: _,
+            output: _,
+            options,
+            iterations,
+            threads,
+            layers,
+            max_memory,
+            time,
+            checkpoint,
+            quiet,
+            shard: _,
+            define,
+            strict,
+        } = self;
+        let Options {
+            width,
+            height,
+            spp_axis,
+            spp,
+            max_depth,
+            adc_bailout,
+            seed,
+            integrator,
+            sampler,
+            antialias,
+            light_samples,
+            photon,
+        } = options;
+        let PhotonOptions {
+            photons,
+            caustic_photons,
+            gather,
+            gather_k,
+            irradiance_cache,
+            cache_rays,
+            // Scene files only (no flag): never given here.
+            caustic_k: _,
+            max_radius,
+            caustic_radius: _,
+            photons_per_iter,
+            initial_radius,
+        } = photon;
         let mut a: Vec<String> = Vec::new();
         let mut opt = |name: &str, v: Option<String>| {
             if let Some(v) = v {
                 a.push(format!("--{name}={v}"));
             }
         };
-        opt("width", self.width.map(|v| v.to_string()));
-        opt("height", self.height.map(|v| v.to_string()));
-        opt("spp-axis", self.spp_axis.map(|v| v.to_string()));
-        opt("spp", self.spp.map(|v| v.to_string()));
-        opt("max-depth", self.max_depth.map(|v| v.to_string()));
-        opt("adc-bailout", self.adc_bailout.map(|v| format!("{v:?}")));
-        opt("threads", self.threads.map(|v| v.to_string()));
-        opt("seed", self.seed.map(|v| v.to_string()));
-        opt("integrator", self.integrator.map(|v| format!("{v:?}").to_lowercase()));
-        opt("sampler", self.sampler.map(|v| format!("{v:?}").to_lowercase()));
-        opt("photons", self.photons.map(|v| v.to_string()));
-        opt("caustic-photons", self.caustic_photons.map(|v| v.to_string()));
-        opt("gather", self.gather.map(|v| v.to_string()));
-        opt("gather-k", self.gather_k.map(|v| v.to_string()));
-        opt("irradiance-cache", self.irradiance_cache.map(|v| format!("{v:?}")));
-        opt("cache-rays", self.cache_rays.map(|v| v.to_string()));
-        opt("max-radius", self.max_radius.map(|v| format!("{v:?}")));
-        opt("iterations", self.iterations.map(|v| v.to_string()));
-        opt("photons-per-iter", self.photons_per_iter.map(|v| v.to_string()));
-        opt("initial-radius", self.initial_radius.map(|v| format!("{v:?}")));
-        opt("max-memory", self.max_memory.map(|v| v.to_string()));
-        opt("time", self.time.map(|v| format!("{v:?}")));
-        opt("checkpoint", self.checkpoint.map(|v| format!("{v:?}")));
-        for flag in [
-            ("no-antialias", self.no_antialias),
-            ("layers", self.layers),
-            ("quiet", self.quiet),
-            ("strict", self.strict),
+        opt("width", width.map(|v| v.to_string()));
+        opt("height", height.map(|v| v.to_string()));
+        opt("spp-axis", spp_axis.map(|v| v.to_string()));
+        opt("spp", spp.map(|v| v.to_string()));
+        opt("max-depth", max_depth.map(|v| v.to_string()));
+        opt("adc-bailout", adc_bailout.map(|v| format!("{v:?}")));
+        opt("threads", threads.map(|v| v.to_string()));
+        opt("seed", seed.map(|v| v.to_string()));
+        opt("integrator", integrator.map(|v| v.name().to_string()));
+        opt("sampler", sampler.map(|v| format!("{v:?}").to_lowercase()));
+        opt("light-samples", light_samples.map(|v| v.to_string()));
+        opt("photons", photons.map(|v| v.to_string()));
+        opt("caustic-photons", caustic_photons.map(|v| v.to_string()));
+        opt("gather", gather.map(|v| v.to_string()));
+        opt("gather-k", gather_k.map(|v| v.to_string()));
+        opt("irradiance-cache", irradiance_cache.map(|v| format!("{v:?}")));
+        opt("cache-rays", cache_rays.map(|v| v.to_string()));
+        opt("max-radius", max_radius.map(|v| format!("{v:?}")));
+        opt("iterations", iterations.map(|v| v.to_string()));
+        opt("photons-per-iter", photons_per_iter.map(|v| v.to_string()));
+        opt("initial-radius", initial_radius.map(|v| format!("{v:?}")));
+        opt("max-memory", max_memory.map(|v| v.to_string()));
+        opt("time", time.map(|v| format!("{v:?}")));
+        opt("checkpoint", checkpoint.map(|v| format!("{v:?}")));
+        for (flag, given) in [
+            // The command line can only turn anti-aliasing off.
+            ("no-antialias", *antialias == Some(false)),
+            ("layers", *layers),
+            ("quiet", *quiet),
+            ("strict", *strict),
         ] {
-            if flag.1 {
-                a.push(format!("--{}", flag.0));
+            if given {
+                a.push(format!("--{flag}"));
             }
         }
-        for (k, v) in &self.define {
+        for (k, v) in define {
             a.push(format!("-D{k}={v}"));
         }
         a
     }
 
     fn options(self) -> Result<RenderOptions> {
-        let args = self;
+        let RenderArgs {
+            scene,
+            output,
+            options,
+            iterations,
+            threads,
+            layers,
+            max_memory,
+            time,
+            checkpoint,
+            quiet,
+            shard,
+            define,
+            strict,
+        } = self;
         Ok(RenderOptions {
-            scene: args.scene,
-            output: args.output,
-            overrides: Overrides {
-                width: args.width,
-                height: args.height,
-                spp_axis: args.spp_axis,
-                spp: args.spp.or(args.iterations),
-                max_depth: args.max_depth,
-                adc_bailout: args.adc_bailout,
-                seed: args.seed,
-                integrator: args.integrator.map(IntegratorKind::from),
-                sampler: args.sampler,
-                antialias: args.no_antialias.then_some(false),
-                photon: PhotonOptions {
-                    photons: args.photons,
-                    caustic_photons: args.caustic_photons,
-                    gather: args.gather,
-                    gather_k: args.gather_k,
-                    irradiance_cache: args.irradiance_cache,
-                    cache_rays: args.cache_rays,
-                    max_radius: args.max_radius,
-                    photons_per_iter: args.photons_per_iter,
-                    initial_radius: args.initial_radius,
-                    ..Default::default()
-                },
-            },
-            load: LoadOptions { defines: args.define, strict: args.strict },
-            layers: args.layers,
-            max_memory: args.max_memory.map(|m| m.saturating_mul(1 << 20)),
-            threads: args.threads,
-            time_limit: seconds(args.time, "time")?,
-            checkpoint: seconds(args.checkpoint, "checkpoint")?,
-            quiet: args.quiet,
-            shard: args.shard,
+            scene,
+            output,
+            overrides: Options { spp: options.spp.or(iterations), ..options },
+            load: LoadOptions { defines: define, strict },
+            layers,
+            max_memory: max_memory.map(|m| m.saturating_mul(1 << 20)),
+            threads,
+            time_limit: seconds(time, "time")?,
+            checkpoint: seconds(checkpoint, "checkpoint")?,
+            quiet,
+            shard,
         })
     }
 }
@@ -449,36 +395,154 @@ mod tests {
             "caustic",
             "render",
             "s.toml",
+            "-o",
+            "out.exr",
             "--width=64",
+            "--height",
+            "48",
+            "--spp-axis",
+            "3",
             "--spp",
             "7",
+            "--max-depth",
+            "4",
+            "--adc-bailout",
+            "0.004",
             "--seed",
             "3",
             "--integrator",
             "photon",
             "--sampler",
             "sobol",
+            "--no-antialias",
+            "--light-samples",
+            "5",
             "--photons",
             "1000",
-            "--max-radius",
-            "0.1",
+            "--caustic-photons",
+            "300",
             "--gather",
             "0",
+            "--gather-k",
+            "40",
+            "--irradiance-cache",
+            "0.1",
+            "--cache-rays",
+            "128",
+            "--max-radius",
+            "0.1",
+            "--photons-per-iter",
+            "5000",
+            "--initial-radius",
+            "0.03",
+            "--iterations",
+            "9",
+            "--threads",
+            "2",
             "--layers",
-            "--no-antialias",
-            "-D",
-            "name=a b'c",
+            "--max-memory",
+            "512",
+            "--time",
+            "30",
             "--checkpoint",
             "2.5",
-            "--max-depth",
-            "4",
-            "--adc-bailout",
-            "0.004",
+            "-q",
+            "--shard",
+            "1/4",
+            "-D",
+            "name=a b'c",
+            "--strict",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
+        // Every argument is given a value of its own above: destructured without `..`, so a new
+        // one does not compile until it is given there too.
+        let RenderArgs {
+            scene: _,
+            output,
+            options,
+            iterations,
+            threads,
+            layers,
+            max_memory,
+            time,
+            checkpoint,
+            quiet,
+            shard,
+            define,
+            strict,
+        } = &*args;
+        let Options {
+            width,
+            height,
+            spp_axis,
+            spp,
+            max_depth,
+            adc_bailout,
+            seed,
+            integrator,
+            sampler,
+            antialias,
+            light_samples,
+            photon,
+        } = options;
+        let PhotonOptions {
+            photons,
+            caustic_photons,
+            gather,
+            gather_k,
+            irradiance_cache,
+            cache_rays,
+            caustic_k: _,
+            max_radius,
+            caustic_radius: _,
+            photons_per_iter,
+            initial_radius,
+        } = photon;
+        let given = [
+            output.is_some(),
+            width.is_some(),
+            height.is_some(),
+            spp_axis.is_some(),
+            spp.is_some(),
+            max_depth.is_some(),
+            adc_bailout.is_some(),
+            seed.is_some(),
+            integrator.is_some(),
+            sampler.is_some(),
+            antialias.is_some(),
+            light_samples.is_some(),
+            photons.is_some(),
+            caustic_photons.is_some(),
+            gather.is_some(),
+            gather_k.is_some(),
+            irradiance_cache.is_some(),
+            cache_rays.is_some(),
+            max_radius.is_some(),
+            photons_per_iter.is_some(),
+            initial_radius.is_some(),
+            iterations.is_some(),
+            threads.is_some(),
+            *layers,
+            max_memory.is_some(),
+            time.is_some(),
+            checkpoint.is_some(),
+            *quiet,
+            shard.is_some(),
+            !define.is_empty(),
+            *strict,
+        ];
+        assert!(given.iter().all(|&g| g), "{given:?}");
         let mut again = vec!["caustic".to_string(), "render".into(), "s.toml".into()];
         again.extend(args.to_args());
         let Cli { command: Command::Render(back) } = Cli::parse_from(&again) else { panic!() };
-        assert_eq!(back, args);
+        // The output and the shard are each shard's own.
+        assert_eq!(*back, RenderArgs { output: None, shard: None, ..(*args).clone() });
+    }
+
+    #[test]
+    fn adc_bailout_minus_0_is_0() {
+        let argv = ["caustic", "render", "s.toml", "--adc-bailout=-0"];
+        let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
+        assert_eq!(args.options.adc_bailout.map(f32::to_bits), Some(0.0f32.to_bits()));
     }
 }

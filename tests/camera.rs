@@ -12,9 +12,10 @@ use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::film::filter::Filter;
 use caustic::integrator::Integrator;
+use caustic::options::Options;
 use caustic::render::RenderControl;
+use caustic::scene::LoadOptions;
 use caustic::scene::mitsuba::load_mitsuba_str;
-use caustic::scene::{LoadOptions, Overrides};
 use std::path::PathBuf;
 use std::sync::LazyLock;
 
@@ -29,14 +30,14 @@ fn case_text(case: &str) -> String {
     std::fs::read_to_string(dir().join(format!("{case}.xml"))).unwrap_or_else(|e| panic!("{case}: {e}"))
 }
 
-fn load_xml(text: &str, spp: u32, o: &Overrides) -> LoadedScene {
+fn load_xml(text: &str, spp: u32, o: &Options) -> LoadedScene {
     let lo = LoadOptions { defines: vec![("spp".into(), spp.to_string())], strict: true };
     let desc = load_mitsuba_str(text, "case.xml", &dir(), &lo).unwrap_or_else(|e| panic!("{e}"));
     caustic::app::prepare(desc, o).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn render_xml(text: &str, spp: u32, seed: u64) -> Image {
-    load_xml(text, spp, &Overrides { seed: Some(seed), ..Default::default() }).render().image
+    load_xml(text, spp, &Options { seed: Some(seed), ..Default::default() }).render().image
 }
 
 /// Our path tracer's samples per pixel against the 4096 of the references.
@@ -71,9 +72,9 @@ fn the_filter_visibly_matters_at_this_resolution() {
     // the Gaussian reference, and so is the Gaussian image against the box filter's: the test
     // above can tell the filters apart.
     let text = case_text("gaussian");
-    assert_eq!(load_xml(&text, 1, &Overrides::default()).settings.filter.filter, Filter::MITSUBA_DEFAULT);
+    assert_eq!(load_xml(&text, 1, &Options::default()).settings.filter.filter, Filter::MITSUBA_DEFAULT);
     let boxed = text.replace("</film>", "    <rfilter type=\"box\"/>\n        </film>");
-    assert_eq!(load_xml(&boxed, 1, &Overrides::default()).settings.filter.filter, Filter::Box);
+    assert_eq!(load_xml(&boxed, 1, &Options::default()).settings.filter.filter, Filter::Box);
     // At 4x the samples our noise is small next to the filters' difference (the constant sky is
     // a light sampled by shadow rays, which adds noise the reference's background did not have).
     let (_, ratio, _) = compare_at("gaussian", &boxed, 4 * SPP);
@@ -175,7 +176,7 @@ material = "white"
     )
 }
 
-fn render_toml(text: &str, o: &Overrides) -> Image {
+fn render_toml(text: &str, o: &Options) -> Image {
     common::scene_with(text, o).render().image
 }
 
@@ -185,7 +186,7 @@ fn a_principal_point_offset_shifts_the_image_by_whole_pixels() {
     // anti-aliasing each pixel's ray goes through its centre, so pixel (x, y) of the shifted
     // image is pixel (x + 10, y - 3) of the plain one bit for bit (Whitted with point lights
     // draws no random numbers).
-    let o = Overrides { antialias: Some(false), ..Default::default() };
+    let o = Options { antialias: Some(false), ..Default::default() };
     let plain = render_toml(&toml_scene("", "fov = 40"), &o);
     let shifted = render_toml(&toml_scene("", "fov = 40\nprincipal_point_offset = [0.25, -0.1]"), &o);
     assert!(mean_luminance(&plain) > 0.01);
@@ -202,9 +203,9 @@ fn crops_and_offsets_combine_into_exact_windows() {
     // window, is the same window of the whole render, on any thread count.
     let camera = "fov = 40\nprincipal_point_offset = [0.1, 0.05]";
     let filter = "filter = { type = \"mitchell\", B = 0.5, C = 0.25 }\nsample_border = true";
-    let whole = render_toml(&toml_scene(filter, camera), &Overrides::default());
+    let whole = render_toml(&toml_scene(filter, camera), &Options::default());
     let crop = format!("{filter}\ncrop = {{ x = 7, y = 5, width = 20, height = 16 }}");
-    let part = render_toml(&toml_scene(&crop, camera), &Overrides::default());
+    let part = render_toml(&toml_scene(&crop, camera), &Options::default());
     for y in 0..16 {
         for x in 0..20 {
             assert_eq!(bits(&part, x, y), bits(&whole, x + 7, y + 5), "pixel ({x}, {y})");
@@ -213,7 +214,7 @@ fn crops_and_offsets_combine_into_exact_windows() {
     // A smaller image from the command line keeps the crop on the same part of the view.
     let half = common::scene_with(
         &toml_scene(&crop, camera),
-        &Overrides { width: Some(20), height: Some(15), ..Default::default() },
+        &Options { width: Some(20), height: Some(15), ..Default::default() },
     );
     assert_eq!((half.settings.width, half.settings.height, half.settings.origin), (11, 9, (3, 2)));
 }
@@ -222,7 +223,7 @@ fn crops_and_offsets_combine_into_exact_windows() {
 fn filtered_images_are_bit_identical_for_any_thread_count_and_sample_split() {
     let text = toml_scene("filter = \"lanczos\"\ncrop = { x = 3, y = 2, width = 30, height = 25 }", "fov = 40")
         .replace("\"whitted\"", "\"path\"");
-    let s = common::scene_with(&text, &Overrides { spp: Some(6), ..Default::default() });
+    let s = common::scene_with(&text, &Options { spp: Some(6), ..Default::default() });
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| s.render())
@@ -252,7 +253,7 @@ fn orthographic_toml_cameras_span_the_view_they_name() {
     // 8 units across 40 pixels, or 6 up 30: the same square pixels.
     assert!((w.pixel_size - 0.2).abs() < 1e-7 && (h.pixel_size - 0.2).abs() < 1e-7);
     assert_eq!(w, h);
-    let img = render_toml(&toml_scene("", "projection = \"orthographic\"\nview_width = 8"), &Overrides::default());
+    let img = render_toml(&toml_scene("", "projection = \"orthographic\"\nview_width = 8"), &Options::default());
     assert!(mean_luminance(&img) > 0.01);
 }
 
@@ -274,7 +275,7 @@ fn scene_keys_are_checked_with_their_place() {
     ];
     for (render, camera, want) in cases {
         let text = toml_scene(render, camera);
-        let e = caustic::app::load_toml_str(&text, "c.toml", std::path::Path::new("."), &Overrides::default())
+        let e = caustic::app::load_toml_str(&text, "c.toml", std::path::Path::new("."), &Options::default())
             .err()
             .unwrap_or_else(|| panic!("`{render}{camera}` loaded"))
             .to_string();
@@ -292,7 +293,7 @@ fn mitsuba_films_read_crops_filters_and_refuse_bad_windows() {
     };
     let load = |text: &str| {
         load_mitsuba_str(text, "f.xml", &dir(), &LoadOptions::default())
-            .and_then(|d| caustic::app::prepare(d, &Overrides::default()))
+            .and_then(|d| caustic::app::prepare(d, &Options::default()))
     };
     let s = load(&film(
         r#"<integer name="crop_offset_x" value="10"/><integer name="crop_width" value="20"/>

@@ -44,6 +44,7 @@ fn help_documents_every_option() {
         "--checkpoint",
         "--quiet",
         "--no-antialias",
+        "--light-samples",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }

@@ -13,8 +13,7 @@ mod common;
 use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::math::luminance;
-use caustic::scene::Overrides;
-use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+use caustic::options::{IntegratorKind, Options, PhotonOptions};
 
 const MATERIALS: &[(&str, &str)] = &[
     (
@@ -261,7 +260,7 @@ fn render(s: &str, kind: IntegratorKind, seed: u64, (path_factor, all_factor): (
         ..Default::default()
     };
     let spp = all_factor * if kind == IntegratorKind::Path { SPP * path_factor } else { SPP };
-    let o = Overrides { integrator: Some(kind), spp: Some(spp), seed: Some(seed), photon, ..Default::default() };
+    let o = Options { integrator: Some(kind), spp: Some(spp), seed: Some(seed), photon, ..Default::default() };
     let mut loaded: LoadedScene = common::scene_with(s, &o);
     loaded.settings.layers = true;
     let out = loaded.render();

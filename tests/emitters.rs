@@ -8,8 +8,8 @@ mod common;
 use caustic::geometry::Ray;
 use caustic::light::Light;
 use caustic::math::Vec3;
-use caustic::scene::desc::IntegratorKind;
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::options::{IntegratorKind, Options};
+use caustic::scene::LoadOptions;
 use common::mitsuba_refs::References;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -24,7 +24,7 @@ fn xml(body: &str) -> caustic::app::LoadedScene {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let desc = caustic::scene::mitsuba::load_mitsuba_str(&text, "case.xml", root, &LoadOptions::default())
         .unwrap_or_else(|e| panic!("{e}"));
-    caustic::app::prepare(desc, &Overrides::default()).unwrap()
+    caustic::app::prepare(desc, &Options::default()).unwrap()
 }
 
 /// Irradiance at `p` on a surface facing `n`, by sampling every light of the scene (`n_samples`

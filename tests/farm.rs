@@ -7,8 +7,7 @@ mod common;
 use caustic::app::{AppError, RenderOptions, merge_files, render_file};
 use caustic::farm::shard::{Shard, ShardSpec};
 use caustic::film::output::read_exr;
-use caustic::scene::Overrides;
-use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+use caustic::options::{IntegratorKind, Options, PhotonOptions};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
@@ -22,7 +21,7 @@ fn options(scene: &Path, kind: IntegratorKind, spp: u32, output: PathBuf, shard:
     RenderOptions {
         scene: scene.to_path_buf(),
         output: Some(output),
-        overrides: Overrides {
+        overrides: Options {
             width: Some(24),
             height: Some(20),
             spp: Some(spp),

@@ -14,9 +14,9 @@ use common::mitsuba_refs::{References, mean_luminance, rmse};
 use caustic::app::LoadedScene;
 use caustic::geometry::{Hit, Ray, Transform};
 use caustic::math::{Vec2, Vec3};
+use caustic::options::{IntegratorKind, Options};
+use caustic::scene::LoadOptions;
 use caustic::scene::builder::SceneBuilder;
-use caustic::scene::desc::IntegratorKind;
-use caustic::scene::{LoadOptions, Overrides};
 use caustic::shape::TriangleMesh;
 use std::path::PathBuf;
 use std::sync::LazyLock;
@@ -177,7 +177,7 @@ fn compare_twins(instanced: &LoadedScene, flat: &LoadedScene, other_seed: &Loade
 #[test]
 fn toml_instances_render_as_the_flattened_scene() {
     let (instanced, flat) = instancing_scenes();
-    let o = Overrides::default();
+    let o = Options::default();
     let (i, f) = (common::scene_with(&instanced, &o), common::scene_with(&flat, &o));
     assert_eq!((i.info.instances, f.info.instances), (4, 0));
     // The group's triangles are stored once.
@@ -192,7 +192,7 @@ fn toml_instances_render_as_the_flattened_scene() {
         .count();
     eprintln!("instances seen by {seen} of {} pixels", 48 * 48);
     assert!(seen > 48 * 48 / 5, "{seen}");
-    let other = common::scene_with(&instanced, &Overrides { seed: Some(7), ..o });
+    let other = common::scene_with(&instanced, &Options { seed: Some(7), ..o });
     let (rel, diff, noise) = compare_twins(&i, &f, &other);
     eprintln!("TOML instanced vs flattened: mean {:+.4}%, rmse {diff:.3e} (noise {noise:.3e})", rel * 100.0);
     assert!(rel.abs() < 0.002 && diff < 0.2 * noise, "mean {rel}, rmse {diff} vs noise {noise}");
@@ -205,9 +205,9 @@ fn toml_instances_render_as_the_flattened_scene() {
 fn photon_mapping_and_sppm_see_instances_as_the_flattened_scene() {
     let (instanced, flat) = instancing_scenes();
     for (kind, spp) in [(IntegratorKind::Photon, 16), (IntegratorKind::Sppm, 64)] {
-        let o = Overrides { integrator: Some(kind), spp: Some(spp), ..Default::default() };
+        let o = Options { integrator: Some(kind), spp: Some(spp), ..Default::default() };
         let (i, f) = (common::scene_with(&instanced, &o), common::scene_with(&flat, &o));
-        let other = common::scene_with(&instanced, &Overrides { seed: Some(7), ..o });
+        let other = common::scene_with(&instanced, &Options { seed: Some(7), ..o });
         let (rel, diff, noise) = compare_twins(&i, &f, &other);
         eprintln!("{kind:?} instanced vs flattened: mean {:+.3}%, rmse {diff:.3e} (noise {noise:.3e})", rel * 100.0);
         assert!(rel.abs() < 0.005 && diff < 0.5 * noise, "{kind:?}: mean {rel}, rmse {diff} vs noise {noise}");
@@ -227,7 +227,7 @@ fn mitsuba_instances_render_as_the_flattened_scene() {
 
 fn load_xml(case: &str, res: u32, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("res".to_string(), res.to_string()), ("spp".to_string(), spp.to_string())];
-    let o = Overrides { seed: Some(seed), ..Default::default() };
+    let o = Options { seed: Some(seed), ..Default::default() };
     caustic::app::load(&dir().join(format!("{case}.xml")), &LoadOptions { defines, strict: true }, &o)
         .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
@@ -281,7 +281,7 @@ fn mitsuba_str(body: &str, base: &std::path::Path) -> Result<caustic::scene::Sce
 }
 
 fn built(desc: caustic::scene::SceneDescription) -> LoadedScene {
-    caustic::app::prepare(desc, &Overrides::default()).unwrap()
+    caustic::app::prepare(desc, &Options::default()).unwrap()
 }
 
 /// The `face_normals` parameter shades a serialized mesh flat, as on the other meshes; without
@@ -371,7 +371,7 @@ fn loaders_refuse_what_instancing_cannot_do() {
         (r#"<shape type="cylinder"><float name="radius" value="-1"/></shape>"#.to_string(), "radius must be positive"),
         (r#"<path/>"#.to_string(), "`value`"),
     ] {
-        let e = match mitsuba_str(&body, &base).and_then(|d| caustic::app::prepare(d, &Overrides::default()).map_err(|e| e.to_string())) {
+        let e = match mitsuba_str(&body, &base).and_then(|d| caustic::app::prepare(d, &Options::default()).map_err(|e| e.to_string())) {
             Ok(_) => panic!("accepted: {body}"),
             Err(e) => e,
         };
@@ -401,7 +401,7 @@ fn loaders_refuse_what_instancing_cannot_do() {
         ("[[objects]]\ntype = \"disk\"\nnormal = [0, 0, 0]\n".to_string(), "zero-length"),
     ] {
         let full = format!("{CAMERA}{text}");
-        let e = match caustic::app::load_toml_str(&full, "test.toml", &base, &Overrides::default()) {
+        let e = match caustic::app::load_toml_str(&full, "test.toml", &base, &Options::default()) {
             Ok(_) => panic!("accepted: {text}"),
             Err(e) => e.to_string(),
         };

@@ -13,9 +13,9 @@ use caustic::film::INDIRECT;
 use caustic::integrator::Integrator;
 use caustic::light::Light;
 use caustic::math::{Color, Vec3, luminance};
+use caustic::options::{IntegratorKind, Options};
 use caustic::render::{RenderControl, RenderOutput};
-use caustic::scene::desc::IntegratorKind;
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::scene::LoadOptions;
 use std::path::PathBuf;
 use std::sync::LazyLock;
 
@@ -101,8 +101,7 @@ fn furnace_white_sphere_reads_the_environment_radiance() {
         for (kind, spp) in [(IntegratorKind::Path, 64), (IntegratorKind::Photon, 16), (IntegratorKind::Sppm, 32)] {
             // Two seeds: their difference measures each pixel's noise.
             let [a, b] = [1, 2].map(|seed| {
-                render(&common::scene_with(&text, &Overrides { seed: Some(seed), ..Default::default() }), kind, spp)
-                    .image
+                render(&common::scene_with(&text, &Options { seed: Some(seed), ..Default::default() }), kind, spp).image
             });
             // For an unbiased renderer the mean image's RMSE against L is what the two seeds'
             // difference predicts: rmse(a, b) / 2.
@@ -126,7 +125,7 @@ fn furnace_white_sphere_reads_the_environment_radiance() {
 
 fn load(case: &str, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("spp".to_string(), spp.to_string())];
-    let o = Overrides { seed: Some(seed), ..Default::default() };
+    let o = Options { seed: Some(seed), ..Default::default() };
     caustic::app::load(&dir().join(format!("{case}.xml")), &LoadOptions { defines, strict: true }, &o)
         .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
@@ -210,7 +209,7 @@ const SKY: &str = "[[lights]]\ntype = \"constant\"\ncolor = [0.6, 0.7, 0.9]\n";
 /// Mean luminance of the image and of its indirect layer, by `kind`, relative to the path
 /// tracer's.
 fn against_path(text: &str, kinds: &[(IntegratorKind, u32)]) -> Vec<(IntegratorKind, f64, f64)> {
-    let s = common::scene_with(text, &Overrides { seed: Some(1), ..Default::default() });
+    let s = common::scene_with(text, &Options { seed: Some(1), ..Default::default() });
     let pt = render(&s, IntegratorKind::Path, 1024);
     let (pt_image, pt_indirect) = (mean_luminance(&pt.image), mean_luminance(&pt.layers[INDIRECT]));
     kinds
@@ -327,7 +326,7 @@ fn environment_errors_name_the_place() {
         ),
     ];
     for (text, message, line) in cases {
-        let e = caustic::app::load_toml_str(&text, "sky.toml", std::path::Path::new("."), &Overrides::default())
+        let e = caustic::app::load_toml_str(&text, "sky.toml", std::path::Path::new("."), &Options::default())
             .err()
             .unwrap_or_else(|| panic!("accepted:\n{text}"));
         let s = e.to_string();

@@ -8,7 +8,7 @@
 
 mod common;
 
-use caustic::scene::desc::IntegratorKind;
+use caustic::options::IntegratorKind;
 use common::mitsuba_refs::References;
 use std::sync::LazyLock;
 

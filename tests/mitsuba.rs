@@ -7,42 +7,37 @@ use caustic::app::{LoadedScene, prepare};
 use caustic::film::Image;
 use caustic::film::output::read_exr;
 use caustic::math::{Color, Vec3, luminance};
-use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+use caustic::options::{IntegratorKind, Options, PhotonOptions};
 use caustic::scene::mitsuba::load_mitsuba_str;
-use caustic::scene::{LoadOptions, Overrides, SceneError};
+use caustic::scene::{LoadOptions, SceneError};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn load(rel: &str, o: &Overrides) -> LoadedScene {
+fn load(rel: &str, o: &Options) -> LoadedScene {
     load_with(rel, &LoadOptions::default(), o)
 }
 
-fn load_with(rel: &str, lo: &LoadOptions, o: &Overrides) -> LoadedScene {
+fn load_with(rel: &str, lo: &LoadOptions, o: &Options) -> LoadedScene {
     let path = root().join(rel);
     caustic::app::load(&path, lo, o).unwrap_or_else(|e| panic!("{rel} failed to load: {e}"))
 }
 
 /// Loads Mitsuba XML text as the file `case.xml` in `base`, with its warnings.
-fn xml_opts(
-    text: &str,
-    base: &Path,
-    lo: &LoadOptions,
-    o: &Overrides,
-) -> Result<(LoadedScene, Vec<String>), SceneError> {
+fn xml_opts(text: &str, base: &Path, lo: &LoadOptions, o: &Options) -> Result<(LoadedScene, Vec<String>), SceneError> {
     let mut s = prepare(load_mitsuba_str(text, "case.xml", base, lo)?, o)?;
     let warnings = std::mem::take(&mut s.warnings);
     Ok((s, warnings))
 }
 
-fn xml_in(text: &str, base: &Path, o: &Overrides) -> Result<(LoadedScene, Vec<String>), SceneError> {
+fn xml_in(text: &str, base: &Path, o: &Options) -> Result<(LoadedScene, Vec<String>), SceneError> {
     xml_opts(text, base, &LoadOptions::default(), o)
 }
 
 fn xml(text: &str) -> (LoadedScene, Vec<String>) {
-    xml_in(text, &root(), &Overrides::default()).unwrap_or_else(|e| panic!("scene failed to load: {e}"))
+    xml_in(text, &root(), &Options::default()).unwrap_or_else(|e| panic!("scene failed to load: {e}"))
 }
 
 fn render_with(s: &LoadedScene) -> Image {
@@ -82,7 +77,7 @@ const PAIRS: &[&str] = &["cornell-box", "glass-point", "thinlens", "ply-mesh"];
 #[test]
 fn every_example_renders_bit_identically_to_its_native_twin() {
     for name in PAIRS {
-        let o = Overrides { width: Some(32), height: Some(32), spp: Some(4), seed: Some(3), ..Default::default() };
+        let o = Options { width: Some(32), height: Some(32), spp: Some(4), seed: Some(3), ..Default::default() };
         let x = load(&format!("scenes/mitsuba/{name}.xml"), &o);
         let t = load(&format!("scenes/mitsuba/{name}.toml"), &o);
         let mut camera = x.scene.camera;
@@ -108,7 +103,7 @@ fn every_example_renders_bit_identically_to_its_native_twin() {
 #[test]
 fn the_cornell_box_is_identical_with_every_integrator() {
     for kind in [IntegratorKind::Whitted, IntegratorKind::Photon] {
-        let o = Overrides {
+        let o = Options {
             width: Some(24),
             height: Some(24),
             spp: Some(2),
@@ -145,7 +140,7 @@ fn cornell_box_matches_mitsubas_own_render() {
     assert_eq!((reference.width, reference.height), (64, 64));
     let spp = 256u32;
     let ours = |seed: u64| {
-        let o = Overrides { seed: Some(seed), ..Default::default() };
+        let o = Options { seed: Some(seed), ..Default::default() };
         let defines = vec![("res".to_string(), "64".to_string()), ("spp".to_string(), spp.to_string())];
         render_with(&load_with("scenes/mitsuba/cornell-box.xml", &LoadOptions { defines, strict: false }, &o))
     };
@@ -182,7 +177,7 @@ fn max_depth_counts_segments_as_mitsuba_does() {
     let with = |depth: &str, kind: Option<IntegratorKind>| {
         let text =
             wrap(&format!(r#"<integrator type="path"><integer name="max_depth" value="{depth}"/></integrator>"#));
-        let o = Overrides { integrator: kind, ..Default::default() };
+        let o = Options { integrator: kind, ..Default::default() };
         let i = xml_in(&text, &root(), &o).unwrap().0.integrator;
         i.depth_limit(i.kind)
     };
@@ -200,7 +195,7 @@ fn max_depth_counts_segments_as_mitsuba_does() {
     // `direct` is a two-segment path.
     assert_eq!(xml(&wrap(r#"<integrator type="direct"/>"#)).0.integrator.max_depth, Some(1));
     // The command line's value is ours, unchanged.
-    let o = Overrides { max_depth: Some(3), ..Default::default() };
+    let o = Options { max_depth: Some(3), ..Default::default() };
     assert_eq!(
         xml_in(&wrap(r#"<integrator type="path"><integer name="max_depth" value="9"/></integrator>"#), &root(), &o)
             .unwrap()
@@ -281,7 +276,7 @@ fn camera_looks_along_local_z_with_image_x_along_local_minus_x() {
     let e = xml_in(
         &sensor_scene(r#"<transform name="to_world"><scale value="2"/></transform>"#, 8, 8),
         &root(),
-        &Overrides::default(),
+        &Options::default(),
     )
     .err()
     .unwrap();
@@ -400,7 +395,7 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
             .any(|t| matches!(t, caustic::texture::Texture::Constant(c) if *c == Color::splat(0.5)))
     );
     let strict = LoadOptions { strict: true, ..Default::default() };
-    let e = xml_opts(&text, &root(), &strict, &Overrides::default()).err().expect("strict must fail");
+    let e = xml_opts(&text, &root(), &strict, &Options::default()).err().expect("strict must fail");
     assert!(e.to_string().starts_with("case.xml:7:") && e.message().contains("--strict"), "{e}");
 }
 
@@ -417,7 +412,7 @@ fn constant_emitter_becomes_an_environment_light() {
     }
     // A scene has one environment, as in Mitsuba.
     let two = wrap(r#"<emitter type="constant"/><emitter type="constant"/>"#);
-    let e = xml_opts(&two, &root(), &LoadOptions::default(), &Overrides::default()).err().expect("two environments");
+    let e = xml_opts(&two, &root(), &LoadOptions::default(), &Options::default()).err().expect("two environments");
     assert!(e.message().contains("at most one environment"), "{e}");
 }
 
@@ -427,7 +422,7 @@ fn defaults_are_overridden_from_the_command_line() {
       <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="$w"/></film></sensor></scene>"#;
     assert_eq!(xml(text).0.settings.width, 20);
     let lo = LoadOptions { defines: vec![("w".into(), "12".into())], ..Default::default() };
-    assert_eq!(xml_opts(text, &root(), &lo, &Overrides::default()).unwrap().0.settings.width, 12);
+    assert_eq!(xml_opts(text, &root(), &lo, &Options::default()).unwrap().0.settings.width, 12);
 }
 
 #[test]
@@ -444,9 +439,9 @@ fn includes_splice_scenes_and_report_their_own_file() {
         "<scene version=\"3.0.0\">\n  <shape type=\"sphere\"><ref id=\"missing\"/></shape>\n</scene>",
     )
     .unwrap();
-    let (s, _) = xml_in(&wrap(r#"<include filename="sub/light.xml"/>"#), &dir, &Overrides::default()).unwrap();
+    let (s, _) = xml_in(&wrap(r#"<include filename="sub/light.xml"/>"#), &dir, &Options::default()).unwrap();
     assert_eq!(s.scene.lights.len(), 1);
-    let e = xml_in(&wrap(r#"<include filename="sub/bad.xml"/>"#), &dir, &Overrides::default()).err().unwrap();
+    let e = xml_in(&wrap(r#"<include filename="sub/bad.xml"/>"#), &dir, &Options::default()).err().unwrap();
     let shown = e.to_string();
     assert!(shown.contains("bad.xml:2:") && shown.contains("missing"), "{shown}");
     std::fs::remove_dir_all(&dir).ok();
@@ -464,7 +459,7 @@ fn disks_keep_their_area_and_emitting_obj_parallelograms_become_lights() {
     let (s, w) = xml_in(
         &wrap(r#"<shape type="obj"><string name="filename" value="quad.obj"/><emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>"#),
         &dir,
-        &Overrides::default(),
+        &Options::default(),
     )
     .unwrap();
     assert!(w.is_empty(), "{w:?}");
@@ -653,7 +648,7 @@ const MALFORMED: &[(&str, &str, usize, &[&str])] = &[
 #[test]
 fn every_malformed_input_names_the_problem_file_and_line() {
     for (what, text, line, words) in MALFORMED {
-        let e = match xml_in(text, &root(), &Overrides::default()) {
+        let e = match xml_in(text, &root(), &Options::default()) {
             Ok(_) => panic!("{what}: loaded without error"),
             Err(e) => e,
         };
@@ -669,7 +664,7 @@ fn every_malformed_input_names_the_problem_file_and_line() {
 
 #[test]
 fn a_missing_scene_file_is_an_error() {
-    let e = caustic::app::load(&root().join("scenes/mitsuba/none.xml"), &LoadOptions::default(), &Overrides::default())
+    let e = caustic::app::load(&root().join("scenes/mitsuba/none.xml"), &LoadOptions::default(), &Options::default())
         .err()
         .unwrap();
     assert!(e.to_string().contains("none.xml"), "{e}");
@@ -685,7 +680,7 @@ fn deeply_nested_elements_are_an_error_not_a_crash() {
                 format!("<{tag} type=\"diffuse\">").repeat(depth),
                 format!("</{tag}>").repeat(depth)
             );
-            let e = xml_in(&text, &root(), &Overrides::default()).err().expect("deep nesting must be refused");
+            let e = xml_in(&text, &root(), &Options::default()).err().expect("deep nesting must be refused");
             assert!(e.to_string().contains("nested more than"), "{depth} deep: {e}");
             assert!(e.to_string().starts_with("case.xml:1:"), "{e}");
         }

@@ -7,10 +7,10 @@ use caustic::film::Image;
 use caustic::integrator::photon::PhotonConfig;
 use caustic::integrator::{PathTracer, PhotonIntegrator};
 use caustic::math::{Color, Vec3, luminance};
+use caustic::options::Options;
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};
 use caustic::photon::{Gathered, Photon, PhotonMap};
 use caustic::render::{RenderControl, render_rays};
-use caustic::scene::Overrides;
 use std::f32::consts::PI;
 
 fn photon_integrator(s: &LoadedScene) -> PhotonIntegrator {
@@ -187,16 +187,14 @@ fn furnace_photon_mapping() {
 
 #[test]
 fn photon_mapping_matches_the_path_tracer_on_the_diffuse_cornell_box() {
-    let size = Overrides { width: Some(48), height: Some(48), ..Default::default() };
+    let size = Options { width: Some(48), height: Some(48), ..Default::default() };
     let reference = |seed: u64| {
-        let s =
-            common::bundled("11-cornell-area.toml", &Overrides { spp: Some(1024), seed: Some(seed), ..size.clone() });
+        let s = common::bundled("11-cornell-area.toml", &Options { spp: Some(1024), seed: Some(seed), ..size.clone() });
         common::render_with(&s, &PathTracer { max_depth: 12 })
     };
     let (pt_a, pt_b) = (reference(1), reference(2));
     let photon = |seed: u64| {
-        let s =
-            common::bundled("11-cornell-area.toml", &Overrides { spp: Some(256), seed: Some(seed), ..size.clone() });
+        let s = common::bundled("11-cornell-area.toml", &Options { spp: Some(256), seed: Some(seed), ..size.clone() });
         common::render_with(&s, &photon_integrator(&s))
     };
     let (pm_a, pm_b) = (photon(3), photon(4));
@@ -219,7 +217,7 @@ fn photon_mapping_matches_the_path_tracer_on_the_diffuse_cornell_box() {
 
 #[test]
 fn caustic_under_the_glass_sphere_is_bright_and_absent_without_caustics() {
-    let size = Overrides { width: Some(64), height: Some(64), spp: Some(4), ..Default::default() };
+    let size = Options { width: Some(64), height: Some(64), spp: Some(4), ..Default::default() };
     let s = common::bundled("13-cornell-caustics.toml", &size);
     let ratio = |img: &Image| {
         // Floor pixels under the glass sphere (front right) against open floor in front of the

@@ -255,7 +255,7 @@ fn issue16_cli_aliases_help_and_mesh_facts() {
 /// Issue 16: no bundled scene drops a sample as NaN or infinite, with any integrator.
 #[test]
 fn issue16_no_bundled_scene_drops_samples_with_any_integrator() {
-    use caustic::scene::desc::{IntegratorKind, PhotonOptions};
+    use caustic::options::{IntegratorKind, PhotonOptions};
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(&root)
         .unwrap()
@@ -271,7 +271,7 @@ fn issue16_no_bundled_scene_drops_samples_with_any_integrator() {
     files.sort();
     for file in &files {
         for kind in IntegratorKind::ALL {
-            let o = caustic::scene::Overrides {
+            let o = caustic::options::Options {
                 width: Some(32),
                 height: Some(24),
                 spp: Some(16),

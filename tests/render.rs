@@ -5,8 +5,8 @@ mod common;
 use caustic::app::{RenderOptions, render_file};
 use caustic::film::Image;
 use caustic::film::output::read_exr;
-use caustic::scene::desc::{IntegratorKind, PhotonOptions};
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::options::{IntegratorKind, Options, PhotonOptions};
+use caustic::scene::LoadOptions;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
@@ -21,8 +21,8 @@ fn scenes() -> Vec<PathBuf> {
     v
 }
 
-fn render_with_threads(path: &std::path::Path, threads: usize, o: &Overrides) -> Image {
-    let o = Overrides { integrator: Some(IntegratorKind::Whitted), ..o.clone() };
+fn render_with_threads(path: &std::path::Path, threads: usize, o: &Options) -> Image {
+    let o = Options { integrator: Some(IntegratorKind::Whitted), ..o.clone() };
     let loaded = caustic::app::load(path, &LoadOptions::default(), &o).unwrap();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     pool.install(|| loaded.render().image)
@@ -30,7 +30,7 @@ fn render_with_threads(path: &std::path::Path, threads: usize, o: &Overrides) ->
 
 #[test]
 fn same_seed_gives_identical_image_on_1_and_2_threads() {
-    let o = Overrides { width: Some(96), height: Some(72), spp_axis: Some(3), seed: Some(7), ..Default::default() };
+    let o = Options { width: Some(96), height: Some(72), spp_axis: Some(3), seed: Some(7), ..Default::default() };
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/06-fresnel-glass.toml");
     let a = render_with_threads(&path, 1, &o);
     let b = render_with_threads(&path, 2, &o);
@@ -38,7 +38,7 @@ fn same_seed_gives_identical_image_on_1_and_2_threads() {
         a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
     );
     // A different seed changes the jitter, so the image differs: the test can fail.
-    let c = render_with_threads(&path, 2, &Overrides { seed: Some(8), ..o.clone() });
+    let c = render_with_threads(&path, 2, &Options { seed: Some(8), ..o.clone() });
     assert_ne!(a, c);
 }
 
@@ -47,7 +47,7 @@ fn render_cli(scene: &str, integrator: &str, threads: usize, out: &std::path::Pa
     let opts = RenderOptions {
         scene: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene),
         output: Some(out.to_path_buf()),
-        overrides: Overrides {
+        overrides: Options {
             width: Some(40),
             height: Some(40),
             spp: Some(4),
@@ -104,7 +104,7 @@ fn every_bundled_scene_renders_to_png_and_exr_without_nan() {
             let opts = RenderOptions {
                 scene: scene.clone(),
                 output: Some(output.clone()),
-                overrides: Overrides { width: Some(64), height: Some(48), spp: Some(2), ..Default::default() },
+                overrides: Options { width: Some(64), height: Some(48), spp: Some(2), ..Default::default() },
                 quiet: true,
                 ..Default::default()
             };
@@ -128,7 +128,7 @@ fn thin_lens_with_zero_radius_renders_the_pinhole_image_bit_for_bit() {
     let text = std::fs::read_to_string(&path).unwrap();
     let lens = text.replace("fov = 45", "fov = 45\nlens_radius = 0.0\nfocal_distance = 2.5");
     assert_ne!(text, lens);
-    let o = Overrides { width: Some(64), height: Some(48), spp: Some(4), ..Default::default() };
+    let o = Options { width: Some(64), height: Some(48), spp: Some(4), ..Default::default() };
     let render_text =
         |t: &str| caustic::app::load_toml_str(t, "lens.toml", path.parent().unwrap(), &o).unwrap().render().image;
     let (a, b) = (render_text(&text), render_text(&lens));

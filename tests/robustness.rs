@@ -11,7 +11,8 @@ use caustic::app::{LoadedScene, load_toml_str, prepare};
 use caustic::geometry::Ray;
 use caustic::light::Light;
 use caustic::math::{Vec2, Vec3};
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::options::Options;
+use caustic::scene::LoadOptions;
 use caustic::shape::{Primitive, Quad, RayShear, Shape, Sphere, Triangle, TriangleMesh};
 use proptest::prelude::*;
 use proptest::test_runner::Config as ProptestConfig;
@@ -66,7 +67,7 @@ fn scratch_file(name: &str) -> PathBuf {
 /// Loads `text`; a panic fails the property. An accepted scene must be usable: finite bounds
 /// (or none), finite light power, and camera rays that trace without panicking.
 fn load_and_check(text: &str) -> Result<(), TestCaseError> {
-    let Ok(loaded) = load_toml_str(text, "fuzz.toml", mesh_dir(), &Overrides::default()) else {
+    let Ok(loaded) = load_toml_str(text, "fuzz.toml", mesh_dir(), &Options::default()) else {
         return Ok(());
     };
     check_loaded(&loaded).map_err(|m| TestCaseError::fail(format!("{m}\n--- scene ---\n{text}")))
@@ -1107,7 +1108,7 @@ fn self_intersection_cases_mostly_hit() {
 
 /// Loads a regression scene (mesh files from `mesh_dir`).
 fn load(text: &str) -> Result<LoadedScene, caustic::scene::SceneError> {
-    load_toml_str(text, "regression.toml", mesh_dir(), &Overrides::default())
+    load_toml_str(text, "regression.toml", mesh_dir(), &Options::default())
 }
 
 const CAMERA: &str = "[camera]\neye = [0, 1, 5]\nlook_at = [0, 0, 0]\n";
@@ -1219,8 +1220,8 @@ fn mitsuba_examples() -> Vec<String> {
 }
 
 fn load_mitsuba_and_check(text: &str, base: &Path) -> Result<(), TestCaseError> {
-    let Ok(loaded) = load_mitsuba_str(text, "fuzz.xml", base, &LoadOptions::default())
-        .and_then(|d| prepare(d, &Overrides::default()))
+    let Ok(loaded) =
+        load_mitsuba_str(text, "fuzz.xml", base, &LoadOptions::default()).and_then(|d| prepare(d, &Options::default()))
     else {
         return Ok(());
     };
@@ -1307,7 +1308,7 @@ fn ply_property_scene_loads_unedited_meshes() {
              <shape type=\"ply\"><string name=\"filename\" value=\"ok-{file}\"/></shape></scene>"
         );
         let r = load_mitsuba_str(&xml, "t.xml", mesh_dir(), &LoadOptions::default())
-            .and_then(|d| prepare(d, &Overrides::default()));
+            .and_then(|d| prepare(d, &Options::default()));
         assert!(r.is_ok(), "{file}: {:?}", r.err().map(|e| e.to_string()));
     }
 }

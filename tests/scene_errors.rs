@@ -3,13 +3,14 @@
 mod common;
 
 use caustic::app::{load as load_file, load_toml_str};
-use caustic::scene::{LoadOptions, Overrides, SceneError};
+use caustic::options::Options;
+use caustic::scene::{LoadOptions, SceneError};
 use std::path::Path;
 
 const CAMERA: &str = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
 
 fn load(text: &str) -> Result<(), SceneError> {
-    load_toml_str(text, "bad.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &Overrides::default()).map(|_| ())
+    load_toml_str(text, "bad.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &Options::default()).map(|_| ())
 }
 
 /// (name, scene text, words the message must contain, line the error must point at)
@@ -101,20 +102,19 @@ fn malformed_scenes_report_problem_and_place() {
 
 #[test]
 fn unreadable_files_are_named() {
-    let e = load_file(Path::new("/definitely/not/here.toml"), &LoadOptions::default(), &Overrides::default())
-        .err()
-        .unwrap();
+    let e =
+        load_file(Path::new("/definitely/not/here.toml"), &LoadOptions::default(), &Options::default()).err().unwrap();
     assert!(e.to_string().contains("/definitely/not/here.toml"));
     let dir = common::scratch("binary");
     let p = dir.join("binary.toml");
     std::fs::write(&p, [0xffu8, 0xfe, 0x00, 0x41]).unwrap();
-    let e = load_file(&p, &LoadOptions::default(), &Overrides::default()).err().unwrap();
+    let e = load_file(&p, &LoadOptions::default(), &Options::default()).err().unwrap();
     assert!(e.to_string().contains("binary.toml"), "{e}");
 }
 
 #[test]
 fn image_size_overrides_are_checked() {
-    let o = Overrides { width: Some(0), ..Default::default() };
+    let o = Options { width: Some(0), ..Default::default() };
     let e = load_toml_str(CAMERA, "x.toml", Path::new("."), &o).err().unwrap();
     assert!(e.to_string().contains("out of range"));
 }

@@ -8,9 +8,8 @@ use caustic::film::Image;
 use caustic::integrator::PathTracer;
 use caustic::integrator::sppm::{Sppm, SppmConfig};
 use caustic::math::luminance;
+use caustic::options::{IntegratorKind, Options};
 use caustic::render::{RenderControl, RenderStats};
-use caustic::scene::Overrides;
-use caustic::scene::desc::IntegratorKind;
 
 fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) {
     let mut settings = s.settings.clone();
@@ -32,9 +31,9 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
 
 #[test]
 fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
-    let size = Overrides { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
+    let size = Options { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
     let reference = common::render_with(
-        &common::bundled("11-cornell-area.toml", &Overrides { spp: Some(2048), ..size.clone() }),
+        &common::bundled("11-cornell-area.toml", &Options { spp: Some(2048), ..size.clone() }),
         &PathTracer { max_depth: 12 },
     );
     let s = common::bundled("11-cornell-area.toml", &size);
@@ -51,7 +50,7 @@ fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
 fn sppm_renders_and_converges_the_point_light_caustic() {
     let s = common::bundled(
         "13-cornell-caustics.toml",
-        &Overrides { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() },
+        &Options { width: Some(64), height: Some(64), seed: Some(9), ..Default::default() },
     );
     let (long, _) = sppm(&s, 512, 40_000);
     let (a, _) = sppm(&s, 16, 40_000);
@@ -75,7 +74,7 @@ fn sppm_renders_and_converges_the_point_light_caustic() {
 #[test]
 fn sppm_memory_does_not_grow_with_iterations() {
     let s =
-        common::bundled("11-cornell-area.toml", &Overrides { width: Some(32), height: Some(32), ..Default::default() });
+        common::bundled("11-cornell-area.toml", &Options { width: Some(32), height: Some(32), ..Default::default() });
     let (_, ten) = sppm(&s, 10, 10_000);
     let (_, hundred) = sppm(&s, 100, 10_000);
     let (m10, m100) = (ten.memory_bytes as f64, hundred.memory_bytes as f64);

@@ -4,7 +4,7 @@
 
 use caustic::math::Vec2;
 use caustic::app::load_toml_str;
-use caustic::scene::Overrides;
+use caustic::options::Options;
 use libfuzzer_sys::fuzz_target;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -43,7 +43,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     }
-    let Ok(loaded) = load_toml_str(text, "fuzz.toml", mesh_dir(), &Overrides::default()) else { return };
+    let Ok(loaded) = load_toml_str(text, "fuzz.toml", mesh_dir(), &Options::default()) else { return };
     // Trace a few camera rays through the accepted scene.
     let scene = &loaded.scene;
     let (w, h) = (loaded.settings.width as f32, loaded.settings.height as f32);

@@ -12,9 +12,10 @@ use crate::farm::shard::ShardSpec;
 use crate::film::output::{Format, OutputError, check_writable, layer_path, write_image};
 use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
+use crate::options::{IntegratorKind, Options};
 use crate::render::{CheckpointFn, RenderControl, RenderSettings, RenderStats};
-use crate::scene::desc::{IntegratorDesc, IntegratorKind, LoadInfo};
-use crate::scene::{LoadOptions, Overrides, Scene, SceneDescription, SceneError, load_scene};
+use crate::scene::desc::{IntegratorDesc, LoadInfo};
+use crate::scene::{LoadOptions, Scene, SceneDescription, SceneError, load_scene};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -24,7 +25,8 @@ pub struct RenderOptions {
     pub scene: PathBuf,
     /// Output image; defaults to the scene's file name with `.png` in the current folder.
     pub output: Option<PathBuf>,
-    pub overrides: Overrides,
+    /// The command line's options, each replacing the scene file's value when given.
+    pub overrides: Options,
     /// How the file is read (Mitsuba `-D` parameters, `--strict`).
     pub load: LoadOptions,
     /// Worker threads; all cores when `None`.
@@ -102,20 +104,20 @@ pub struct LoadedScene {
     pub warnings: Vec<String>,
 }
 
-/// Loads a scene file, applies `overrides` (the one place they meet the file's values) and
-/// builds the scene.
-pub fn load(path: &Path, options: &LoadOptions, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+/// Loads a scene file, applies `overrides` over its values (`SceneDescription::apply`) and builds
+/// the scene.
+pub fn load(path: &Path, options: &LoadOptions, overrides: &Options) -> Result<LoadedScene, SceneError> {
     prepare(load_scene(path, options)?, overrides)
 }
 
 /// `load` for a scene in caustic's TOML format given as text (`name` in messages, mesh paths
 /// relative to `base`).
-pub fn load_toml_str(text: &str, name: &str, base: &Path, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+pub fn load_toml_str(text: &str, name: &str, base: &Path, overrides: &Options) -> Result<LoadedScene, SceneError> {
     prepare(crate::scene::load_scene_str(text, name, base)?, overrides)
 }
 
 /// Applies the overrides to a description and builds it.
-pub fn prepare(mut desc: SceneDescription, overrides: &Overrides) -> Result<LoadedScene, SceneError> {
+pub fn prepare(mut desc: SceneDescription, overrides: &Options) -> Result<LoadedScene, SceneError> {
     desc.apply(overrides);
     let warnings = std::mem::take(&mut desc.warnings);
     let built = desc.build()?;

@@ -6,8 +6,8 @@ use crate::farm::identity::RenderId;
 use crate::farm::partial::{PartialHeader, SumKind, read_partial, write_partial};
 use crate::farm::shard::Shard;
 use crate::film::Film;
+use crate::options::IntegratorKind;
 use crate::render::RenderSettings;
-use crate::scene::desc::IntegratorKind;
 use std::path::{Path, PathBuf};
 
 /// A shard about to render.

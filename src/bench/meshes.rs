@@ -4,7 +4,7 @@
 //! and as an OBJ, so the figures never depend on files on disk.
 
 use crate::app::load_toml_str;
-use crate::scene::Overrides;
+use crate::options::Options;
 use crate::shape::TriangleMesh;
 use crate::shape::mesh::load_ply;
 use std::io::Write;
@@ -112,7 +112,7 @@ pub fn run(repeats: u32, say: impl Fn(std::fmt::Arguments)) {
     let before = status_bytes("VmRSS:");
     let reset = reset_peak();
     let t = Instant::now();
-    let loaded = load_toml_str(&scene, "bench:big-mesh", Path::new("."), &Overrides::default());
+    let loaded = load_toml_str(&scene, "bench:big-mesh", Path::new("."), &Options::default());
     let load_time = t.elapsed();
     let peak = status_bytes("VmHWM:");
     match loaded {

@@ -3,6 +3,7 @@
 //! every option that changes the image. Partial files carry it; `merge` compares it field by
 //! field so that a refusal names what differs.
 
+use crate::options::PhotonOptions;
 use crate::render::RenderSettings;
 use crate::scene::desc::IntegratorDesc;
 use std::fmt::Write as _;
@@ -34,34 +35,76 @@ impl RenderId {
         integrator: &IntegratorDesc,
         settings: &RenderSettings,
     ) -> std::io::Result<Self> {
-        let p = &integrator.photon;
+        // Destructured without `..`: a new field of the description or the settings does not
+        // compile until it is part of the identity, or named here as one that leaves the image as
+        // it is. The names and the text of the values are those of partial files already written.
+        let IntegratorDesc { kind, max_depth, light_samples, adc_bailout, photon } = integrator;
+        let PhotonOptions {
+            photons,
+            caustic_photons,
+            gather,
+            gather_k,
+            irradiance_cache,
+            cache_rays,
+            caustic_k,
+            max_radius,
+            caustic_radius,
+            photons_per_iter,
+            initial_radius,
+        } = photon;
+        let RenderSettings {
+            width,
+            height,
+            // The crop window's place in the film, the pixel filter and the window samples may
+            // fall in: they come from the scene file's `crop`, `filter` and `sample_border`
+            // (hashed in `scene`) and the film's size. Only the crop's size is compared (`width`,
+            // `height`), so two film sizes given by `--width`/`--height` whose rescaled crops
+            // round to the same window are not told apart; a field for the film's size would
+            // make every partial file written so far refuse to merge.
+            origin: _,
+            filter: _,
+            window: _,
+            spp,
+            // Where this shard starts: the shards of one render differ in it.
+            first_sample: _,
+            strata,
+            seed,
+            sampler,
+            antialias,
+            // When to stop, checkpoint and report progress: the samples are the same either way
+            // (a shard refuses a time limit).
+            time_limit: _,
+            checkpoint: _,
+            progress: _,
+            layers,
+        } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
         let mut fields: Vec<(String, String)> = vec![
             ("version".into(), env!("CARGO_PKG_VERSION").into()),
             ("scene".into(), format!("{:016x}", hash_files(files)?)),
-            ("integrator".into(), integrator.kind.name().into()),
-            ("seed".into(), settings.seed.to_string()),
-            ("samples".into(), settings.spp.to_string()),
-            ("width".into(), settings.width.to_string()),
-            ("height".into(), settings.height.to_string()),
-            ("layers".into(), settings.layers.to_string()),
-            ("strata".into(), settings.strata.to_string()),
-            ("sampler".into(), format!("{:?}", settings.sampler).to_lowercase()),
-            ("antialias".into(), settings.antialias.to_string()),
-            ("max_depth".into(), opt(integrator.max_depth.map(|d| d.to_string()))),
-            ("light_samples".into(), integrator.light_samples.to_string()),
-            ("adc_bailout".into(), format!("{:?}", integrator.adc_bailout)),
-            ("photons".into(), opt(p.photons.map(|v| v.to_string()))),
-            ("caustic_photons".into(), opt(p.caustic_photons.map(|v| v.to_string()))),
-            ("gather".into(), opt(p.gather.map(|v| v.to_string()))),
-            ("gather_k".into(), opt(p.gather_k.map(|v| v.to_string()))),
-            ("irradiance_cache".into(), opt(p.irradiance_cache.map(|v| format!("{v:?}")))),
-            ("cache_rays".into(), opt(p.cache_rays.map(|v| v.to_string()))),
-            ("caustic_k".into(), opt(p.caustic_k.map(|v| v.to_string()))),
-            ("max_radius".into(), opt(p.max_radius.map(|v| format!("{v:?}")))),
-            ("caustic_radius".into(), opt(p.caustic_radius.map(|v| format!("{v:?}")))),
-            ("photons_per_iter".into(), opt(p.photons_per_iter.map(|v| v.to_string()))),
-            ("initial_radius".into(), opt(p.initial_radius.map(|v| format!("{v:?}")))),
+            ("integrator".into(), kind.name().into()),
+            ("seed".into(), seed.to_string()),
+            ("samples".into(), spp.to_string()),
+            ("width".into(), width.to_string()),
+            ("height".into(), height.to_string()),
+            ("layers".into(), layers.to_string()),
+            ("strata".into(), strata.to_string()),
+            ("sampler".into(), format!("{sampler:?}").to_lowercase()),
+            ("antialias".into(), antialias.to_string()),
+            ("max_depth".into(), opt(max_depth.map(|d| d.to_string()))),
+            ("light_samples".into(), light_samples.to_string()),
+            ("adc_bailout".into(), format!("{adc_bailout:?}")),
+            ("photons".into(), opt(photons.map(|v| v.to_string()))),
+            ("caustic_photons".into(), opt(caustic_photons.map(|v| v.to_string()))),
+            ("gather".into(), opt(gather.map(|v| v.to_string()))),
+            ("gather_k".into(), opt(gather_k.map(|v| v.to_string()))),
+            ("irradiance_cache".into(), opt(irradiance_cache.map(|v| format!("{v:?}")))),
+            ("cache_rays".into(), opt(cache_rays.map(|v| v.to_string()))),
+            ("caustic_k".into(), opt(caustic_k.map(|v| v.to_string()))),
+            ("max_radius".into(), opt(max_radius.map(|v| format!("{v:?}")))),
+            ("caustic_radius".into(), opt(caustic_radius.map(|v| format!("{v:?}")))),
+            ("photons_per_iter".into(), opt(photons_per_iter.map(|v| v.to_string()))),
+            ("initial_radius".into(), opt(initial_radius.map(|v| format!("{v:?}")))),
         ];
         let mut defines = defines.to_vec();
         defines.sort();
@@ -145,6 +188,8 @@ fn read(path: &Path) -> std::io::Result<Vec<u8>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::options::{IntegratorKind, Options};
+    use crate::sampling::SamplerKind;
     use crate::scene::desc::Sampling;
 
     fn settings() -> RenderSettings {
@@ -199,5 +244,107 @@ mod tests {
         let err = hash_files(&[dir.join("missing.ply")]).unwrap_err();
         assert!(err.to_string().contains("missing.ply"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn every_option_that_changes_the_image_changes_the_identity() {
+        let scene = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+        let id = |o: &Options| {
+            let loaded = crate::app::load_toml_str(scene, "id.toml", Path::new("."), o).unwrap();
+            RenderId::new(&[], &[], &loaded.integrator, &loaded.settings).unwrap()
+        };
+        // A value for every option, none of them the scene's: built and destructured without
+        // `..`, so a new option does not compile until it is tried here too.
+        let every = Options {
+            width: Some(32),
+            height: Some(24),
+            spp_axis: Some(3),
+            spp: Some(5),
+            max_depth: Some(2),
+            adc_bailout: Some(0.5),
+            seed: Some(9),
+            integrator: Some(IntegratorKind::Path),
+            sampler: Some(SamplerKind::Sobol),
+            antialias: Some(false),
+            light_samples: Some(3),
+            photon: PhotonOptions {
+                photons: Some(1000),
+                caustic_photons: Some(500),
+                gather: Some(4),
+                gather_k: Some(20),
+                irradiance_cache: Some(0.1),
+                cache_rays: Some(64),
+                caustic_k: Some(8),
+                max_radius: Some(0.2),
+                caustic_radius: Some(0.1),
+                photons_per_iter: Some(300),
+                initial_radius: Some(0.05),
+            },
+        };
+        let Options {
+            width,
+            height,
+            spp_axis,
+            spp,
+            max_depth,
+            adc_bailout,
+            seed,
+            integrator,
+            sampler,
+            antialias,
+            light_samples,
+            photon,
+        } = every.clone();
+        let PhotonOptions {
+            photons,
+            caustic_photons,
+            gather,
+            gather_k,
+            irradiance_cache,
+            cache_rays,
+            caustic_k,
+            max_radius,
+            caustic_radius,
+            photons_per_iter,
+            initial_radius,
+        } = photon;
+        let none = Options::default;
+        let photon = |p: PhotonOptions| Options { photon: p, ..none() };
+        let nop = PhotonOptions::default;
+        let one_each = [
+            ("width", Options { width, ..none() }),
+            ("height", Options { height, ..none() }),
+            ("spp_axis", Options { spp_axis, ..none() }),
+            ("spp", Options { spp, ..none() }),
+            ("max_depth", Options { max_depth, ..none() }),
+            ("adc_bailout", Options { adc_bailout, ..none() }),
+            ("seed", Options { seed, ..none() }),
+            ("integrator", Options { integrator, ..none() }),
+            ("sampler", Options { sampler, ..none() }),
+            ("antialias", Options { antialias, ..none() }),
+            ("light_samples", Options { light_samples, ..none() }),
+            ("photons", photon(PhotonOptions { photons, ..nop() })),
+            ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
+            ("gather", photon(PhotonOptions { gather, ..nop() })),
+            ("gather_k", photon(PhotonOptions { gather_k, ..nop() })),
+            ("irradiance_cache", photon(PhotonOptions { irradiance_cache, ..nop() })),
+            ("cache_rays", photon(PhotonOptions { cache_rays, ..nop() })),
+            ("caustic_k", photon(PhotonOptions { caustic_k, ..nop() })),
+            ("max_radius", photon(PhotonOptions { max_radius, ..nop() })),
+            ("caustic_radius", photon(PhotonOptions { caustic_radius, ..nop() })),
+            ("photons_per_iter", photon(PhotonOptions { photons_per_iter, ..nop() })),
+            ("initial_radius", photon(PhotonOptions { initial_radius, ..nop() })),
+        ];
+        let base = id(&none());
+        let mut seen = vec![base.clone()];
+        for (name, o) in &one_each {
+            assert_ne!(o, &none(), "{name} is the scene's own value");
+            let other = id(o);
+            let d = base.difference(&other);
+            assert!(d.is_some(), "renders with and without {name} have the same identity");
+            assert!(!seen.contains(&other), "{name} gives the identity of another option");
+            seen.push(other);
+        }
+        assert_ne!(base.difference(&id(&every)), None);
     }
 }

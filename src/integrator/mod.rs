@@ -15,9 +15,10 @@ pub use sppm::Sppm;
 pub use whitted::Whitted;
 
 use crate::film::Film;
+use crate::options::IntegratorKind;
 use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays_from};
 use crate::scene::Scene;
-use crate::scene::desc::{IntegratorDesc, IntegratorKind};
+use crate::scene::desc::IntegratorDesc;
 use std::sync::atomic::AtomicBool;
 
 /// One of caustic's integrators, ready to render.

@@ -2,8 +2,9 @@
 //!
 //! Both loaders (TOML and Mitsuba XML) produce a [`SceneDescription`]: the geometry, materials
 //! and lights collected in a [`SceneBuilder`], the camera, the film, the sampler, and the
-//! integrator *as described* (its kind and options). Command-line overrides are applied to it
-//! once, by [`SceneDescription::apply`], and it is then built into a runtime [`Scene`] with its
+//! integrator *as described* (its kind and options). [`Options`] (the TOML loader's `[render]`
+//! keys over the defaults, then the command line's over the file's) are applied to it by one
+//! function, [`SceneDescription::apply`], and it is then built into a runtime [`Scene`] with its
 //! BVH by [`SceneDescription::build`]. The integrators read this description; nothing here knows
 //! how they work (pbrt-v4's `BasicScene` plays the same part).
 
@@ -13,6 +14,7 @@ use crate::camera::CameraDesc;
 use crate::film::Crop;
 use crate::film::filter::Filter;
 use crate::math::Color;
+use crate::options::{IntegratorKind, MAX_LIGHT_SAMPLES, Options, PhotonOptions};
 use crate::sampling::SamplerKind;
 use std::time::Duration;
 
@@ -27,86 +29,6 @@ pub const MAX_DEPTH_LIMIT: u32 = 1000;
 pub const DEFAULT_MAX_DEPTH: u32 = 6;
 /// Most strata per axis of the jittered sampler.
 pub const MAX_STRATA: u32 = 4096;
-
-/// Which integrator renders the image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum IntegratorKind {
-    /// Classic Whitted ray tracing with the seed report's Phong model.
-    #[default]
-    Whitted,
-    /// Unidirectional path tracing with next-event estimation and MIS: the reference.
-    Path,
-    /// Photon mapping: global and caustic maps, final gathering (Jensen 2001).
-    Photon,
-    /// Stochastic progressive photon mapping (Hachisuka and Jensen 2009).
-    Sppm,
-}
-
-impl IntegratorKind {
-    pub const ALL: [IntegratorKind; 4] =
-        [IntegratorKind::Whitted, IntegratorKind::Path, IntegratorKind::Photon, IntegratorKind::Sppm];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            IntegratorKind::Whitted => "whitted",
-            IntegratorKind::Path => "path",
-            IntegratorKind::Photon => "photon",
-            IntegratorKind::Sppm => "sppm",
-        }
-    }
-}
-
-impl std::str::FromStr for IntegratorKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        IntegratorKind::ALL
-            .into_iter()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown integrator `{s}` (expected whitted, path, photon or sppm)"))
-    }
-}
-
-/// Photon-mapping settings as given; defaults that depend on the scene are filled in when the
-/// integrator is built.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PhotonOptions {
-    pub photons: Option<u64>,
-    pub caustic_photons: Option<u64>,
-    pub gather: Option<u32>,
-    pub gather_k: Option<usize>,
-    /// Irradiance cache error threshold (0 turns the cache off).
-    pub irradiance_cache: Option<f32>,
-    /// Final-gather rays per irradiance record.
-    pub cache_rays: Option<u32>,
-    pub caustic_k: Option<usize>,
-    pub max_radius: Option<f32>,
-    pub caustic_radius: Option<f32>,
-    /// SPPM: photons per iteration (default: one per pixel).
-    pub photons_per_iter: Option<u64>,
-    /// SPPM: starting search radius (default: from the pixel footprint and the scene's size).
-    pub initial_radius: Option<f32>,
-}
-
-impl PhotonOptions {
-    /// `self` with every value `other` gives replaced.
-    pub fn overridden_by(&self, other: &PhotonOptions) -> PhotonOptions {
-        PhotonOptions {
-            photons: other.photons.or(self.photons),
-            caustic_photons: other.caustic_photons.or(self.caustic_photons),
-            gather: other.gather.or(self.gather),
-            gather_k: other.gather_k.or(self.gather_k),
-            irradiance_cache: other.irradiance_cache.or(self.irradiance_cache),
-            cache_rays: other.cache_rays.or(self.cache_rays),
-            caustic_k: other.caustic_k.or(self.caustic_k),
-            max_radius: other.max_radius.or(self.max_radius),
-            caustic_radius: other.caustic_radius.or(self.caustic_radius),
-            photons_per_iter: other.photons_per_iter.or(self.photons_per_iter),
-            initial_radius: other.initial_radius.or(self.initial_radius),
-        }
-    }
-}
 
 /// The integrator as the scene file describes it.
 #[derive(Clone, Debug, PartialEq)]
@@ -219,22 +141,6 @@ impl Default for ShadingDesc {
     }
 }
 
-/// Values given on the command line; each replaces the scene file's value when present.
-#[derive(Clone, Debug, Default)]
-pub struct Overrides {
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub spp_axis: Option<u32>,
-    pub spp: Option<u32>,
-    pub max_depth: Option<u32>,
-    pub adc_bailout: Option<f32>,
-    pub seed: Option<u64>,
-    pub integrator: Option<IntegratorKind>,
-    pub sampler: Option<SamplerKind>,
-    pub antialias: Option<bool>,
-    pub photon: PhotonOptions,
-}
-
 /// How a file is read (not part of the scene): Mitsuba parameters and strictness.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
@@ -304,15 +210,40 @@ impl SceneDescription {
         SceneError::File { path: self.name.clone(), message }
     }
 
-    /// Applies command-line overrides: the one place where they meet the scene's values.
-    pub fn apply(&mut self, o: &Overrides) {
+    /// Puts every value `o` gives in place of the description's: the one place where options
+    /// meet a scene (the command line's, and the TOML loader's `[render]` keys over the defaults).
+    pub fn apply(&mut self, o: &Options) {
+        // Destructured without `..`: a new option does not compile until it is applied here.
+        let Options {
+            width,
+            height,
+            spp_axis,
+            spp,
+            max_depth,
+            adc_bailout,
+            seed,
+            integrator,
+            sampler,
+            antialias,
+            light_samples,
+            photon,
+        } = o.clone();
+        let PhotonOptions {
+            photons,
+            caustic_photons,
+            gather,
+            gather_k,
+            irradiance_cache,
+            cache_rays,
+            caustic_k,
+            max_radius,
+            caustic_radius,
+            photons_per_iter,
+            initial_radius,
+        } = photon;
         let before = (self.width, self.height);
-        if let Some(w) = o.width {
-            self.width = w;
-        }
-        if let Some(h) = o.height {
-            self.height = h;
-        }
+        self.width = width.unwrap_or(self.width);
+        self.height = height.unwrap_or(self.height);
         // A new image size keeps the crop on the same part of the view.
         let after = (self.width, self.height);
         if let Some(c) = &mut self.film.crop
@@ -325,29 +256,31 @@ impl SceneDescription {
         }
         // A sample count on the command line replaces both of the file's (`--spp-axis 2` means 4
         // samples even where the file says `spp = 16`).
-        if o.spp.is_some() || o.spp_axis.is_some() {
-            self.sampler.spp = o.spp;
-            self.sampler.spp_axis = o.spp_axis;
+        let s = &mut self.sampler;
+        if spp.is_some() || spp_axis.is_some() {
+            s.spp = spp;
+            s.spp_axis = spp_axis;
         }
-        if let Some(s) = o.seed {
-            self.sampler.seed = s;
-        }
-        if let Some(k) = o.sampler {
-            self.sampler.kind = k;
-        }
-        if let Some(a) = o.antialias {
-            self.sampler.antialias = a;
-        }
-        if let Some(k) = o.integrator {
-            self.integrator.kind = k;
-        }
-        if let Some(d) = o.max_depth {
-            self.integrator.max_depth = Some(d);
-        }
-        if let Some(b) = o.adc_bailout {
-            self.integrator.adc_bailout = b;
-        }
-        self.integrator.photon = self.integrator.photon.overridden_by(&o.photon);
+        s.seed = seed.unwrap_or(s.seed);
+        s.kind = sampler.unwrap_or(s.kind);
+        s.antialias = antialias.unwrap_or(s.antialias);
+        let i = &mut self.integrator;
+        i.kind = integrator.unwrap_or(i.kind);
+        i.max_depth = max_depth.or(i.max_depth);
+        i.adc_bailout = adc_bailout.unwrap_or(i.adc_bailout);
+        i.light_samples = light_samples.map_or(i.light_samples, |n| n.clamp(1, MAX_LIGHT_SAMPLES));
+        let p = &mut i.photon;
+        p.photons = photons.or(p.photons);
+        p.caustic_photons = caustic_photons.or(p.caustic_photons);
+        p.gather = gather.or(p.gather);
+        p.gather_k = gather_k.or(p.gather_k);
+        p.irradiance_cache = irradiance_cache.or(p.irradiance_cache);
+        p.cache_rays = cache_rays.or(p.cache_rays);
+        p.caustic_k = caustic_k.or(p.caustic_k);
+        p.max_radius = max_radius.or(p.max_radius);
+        p.caustic_radius = caustic_radius.or(p.caustic_radius);
+        p.photons_per_iter = photons_per_iter.or(p.photons_per_iter);
+        p.initial_radius = initial_radius.or(p.initial_radius);
     }
 
     /// Checks the final values and resolves the sample counts.

@@ -12,7 +12,7 @@ pub mod footprint;
 pub mod mitsuba;
 pub mod native;
 
-pub use desc::{BuiltScene, LoadOptions, Overrides, SceneDescription};
+pub use desc::{BuiltScene, LoadOptions, SceneDescription};
 pub use error::SceneError;
 
 use crate::accel::{Bvh, Instances};

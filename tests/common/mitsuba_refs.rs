@@ -7,8 +7,8 @@ use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::film::output::read_exr;
 use caustic::math::luminance;
-use caustic::scene::desc::IntegratorKind;
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::options::{IntegratorKind, Options};
+use caustic::scene::LoadOptions;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ impl References {
         References { dir, noise }
     }
 
-    pub fn load(&self, case: &str, res: u32, spp: u32, o: &Overrides) -> LoadedScene {
+    pub fn load(&self, case: &str, res: u32, spp: u32, o: &Options) -> LoadedScene {
         let defines = vec![("res".to_string(), res.to_string()), ("spp".to_string(), spp.to_string())];
         let path = self.dir.join(format!("{case}.xml"));
         caustic::app::load(&path, &LoadOptions { defines, strict: true }, o)
@@ -50,7 +50,7 @@ impl References {
     }
 
     pub fn render(&self, case: &str, res: u32, spp: u32, seed: u64, integrator: Option<IntegratorKind>) -> Image {
-        let o = Overrides { seed: Some(seed), integrator, ..Default::default() };
+        let o = Options { seed: Some(seed), integrator, ..Default::default() };
         self.load(case, res, spp, &o).render().image
     }
 

@@ -6,16 +6,17 @@ pub mod slurm;
 
 use caustic::app::{LoadedScene, load, load_toml_str};
 use caustic::film::Image;
+use caustic::options::Options;
 use caustic::render::{RayIntegrator, RenderControl, render_rays};
-use caustic::scene::{LoadOptions, Overrides};
+use caustic::scene::LoadOptions;
 use std::path::Path;
 
 /// Loads a scene from TOML text (mesh paths relative to the crate root).
 pub fn scene(text: &str) -> LoadedScene {
-    scene_with(text, &Overrides::default())
+    scene_with(text, &Options::default())
 }
 
-pub fn scene_with(text: &str, o: &Overrides) -> LoadedScene {
+pub fn scene_with(text: &str, o: &Options) -> LoadedScene {
     match load_toml_str(text, "test.toml", Path::new(env!("CARGO_MANIFEST_DIR")), o) {
         Ok(s) => s,
         Err(e) => panic!("test scene failed to load: {e}"),
@@ -31,7 +32,7 @@ pub fn scratch(name: &str) -> std::path::PathBuf {
 }
 
 /// Loads a bundled scene from `scenes/` with overrides.
-pub fn bundled(name: &str, o: &Overrides) -> LoadedScene {
+pub fn bundled(name: &str, o: &Options) -> LoadedScene {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
     load(&path, &LoadOptions::default(), o).unwrap()
 }

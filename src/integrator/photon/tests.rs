@@ -1,6 +1,6 @@
 use super::*;
+use crate::options::Options;
 use crate::sampling::{Rng32, hash_seed};
-use crate::scene::Overrides;
 
 /// A closed box with a small ceiling light and a block on the floor: indirect light everywhere,
 /// corners and contact edges where it changes fast.
@@ -77,7 +77,7 @@ material = "white"
 
 fn box_scene() -> (Scene, IntegratorDesc) {
     let mut desc = crate::scene::load_scene_str(BOX, "box.toml", std::path::Path::new(".")).unwrap();
-    desc.apply(&Overrides::default());
+    desc.apply(&Options::default());
     let built = desc.build().unwrap();
     (built.scene, built.integrator)
 }

@@ -25,7 +25,8 @@ mod xml;
 
 use super::SceneError;
 use super::builder::SceneBuilder;
-use super::desc::{IntegratorDesc, IntegratorKind, LoadOptions, SceneDescription, ShadingDesc};
+use super::desc::{IntegratorDesc, LoadOptions, SceneDescription, ShadingDesc};
+use crate::options::IntegratorKind;
 use props::Cx;
 use std::collections::HashMap;
 use std::path::Path;

@@ -5,7 +5,8 @@
 //! against the keys that kind accepts, and the rest deserialized with serde from that tree, so
 //! every error, even one found by a validating type deep inside, points at its line and column.
 //! Loading runs in named steps, one per section: render settings, camera, materials, lights,
-//! objects.
+//! objects. `[render]`'s options are applied over the defaults by `SceneDescription::apply`, as
+//! the command line's are over the file's.
 
 mod camera;
 mod materials;
@@ -14,7 +15,7 @@ mod schema;
 
 use super::SceneError;
 use super::builder::SceneBuilder;
-use super::desc::{DEFAULT_ADC_BAILOUT, IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
+use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
 use crate::material::Material;
 use crate::math::Color;
 use materials::MaterialNames;
@@ -60,30 +61,18 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
         cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
     }
     let geometry_files = geometry.files().to_vec();
-    let (width, height) = (render.width.unwrap_or(DEFAULT_SIZE.0), render.height.unwrap_or(DEFAULT_SIZE.1));
+    let options = render.options();
+    let (width, height) = (options.width.unwrap_or(DEFAULT_SIZE.0), options.height.unwrap_or(DEFAULT_SIZE.1));
     let film = cx.film(&render, width, height)?;
-    Ok(SceneDescription {
+    let mut desc = SceneDescription {
         name: name.to_string(),
         geometry,
         camera,
         width,
         height,
         film,
-        sampler: SamplerDesc {
-            kind: render.sampler.unwrap_or_default(),
-            spp: render.spp,
-            spp_axis: render.spp_axis,
-            seed: render.seed.unwrap_or(0),
-            antialias: render.antialias.unwrap_or(true),
-        },
-        integrator: IntegratorDesc {
-            kind: render.integrator.unwrap_or_default(),
-            max_depth: render.max_depth.or(IntegratorDesc::default().max_depth),
-            light_samples: render.light_samples.unwrap_or(16).clamp(1, 4096),
-            // + 0.0 makes -0 into 0: a render's identity spells the value out.
-            adc_bailout: render.adc_bailout.map_or(DEFAULT_ADC_BAILOUT, |b| b.0 + 0.0),
-            photon: render.photon,
-        },
+        sampler: SamplerDesc::default(),
+        integrator: IntegratorDesc::default(),
         shading: ShadingDesc {
             ambient: render.ambient.map_or(Color::ZERO, |c| c.0),
             ray_bias: render.ray_bias.map(|b| b.0),
@@ -91,7 +80,11 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
         },
         warnings: Vec::new(),
         files: geometry_files,
-    })
+    };
+    // The file's options over the defaults, as the command line's go over the file's: the sampler
+    // and integrator are described in one place.
+    desc.apply(&options);
+    Ok(desc)
 }
 
 /// The file being loaded, for error positions.

@@ -2,11 +2,11 @@
 //! validating values, and the keys each `type` of material, light and object accepts.
 
 use super::camera::{CropSpec, FilterSpec};
+use crate::options::{IntegratorKind, Options, PhotonOptions};
 use crate::sampling::SamplerKind;
 use crate::scene::de::{
     ColorOrTexture, Direction, Finite, NonNegative, NumberOrTexture, Pair, Point, Positive, Rgb, Scale, Unit,
 };
-use crate::scene::desc::{IntegratorKind, PhotonOptions};
 use serde::Deserialize;
 use std::path::PathBuf;
 use toml::Spanned;
@@ -61,6 +61,10 @@ pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
     ("instance", &["group", "transform"]),
 ];
 
+/// `[render]`: the render's options (the keys of [`Options`], which the command line can also
+/// give) and the scene's own settings, in one table. serde's `flatten` cannot split it (it
+/// loses `deny_unknown_fields` and the positions of errors), so the options are listed here too
+/// and [`RenderDesc::options`] turns them into `Options`, field by field.
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct RenderDesc {
@@ -86,6 +90,52 @@ pub struct RenderDesc {
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
+}
+
+impl RenderDesc {
+    /// The table's options, to apply over the scene's defaults as the command line's are applied
+    /// over the file's (`SceneDescription::apply`).
+    pub fn options(&self) -> Options {
+        // Destructured without `..`, and `Options` built without it: a new option does not
+        // compile until it is read from the file here (or, for a new key of the scene's own, until
+        // it is named among those the loader reads itself).
+        let RenderDesc {
+            width,
+            height,
+            spp_axis,
+            spp,
+            max_depth,
+            seed,
+            integrator,
+            sampler,
+            antialias,
+            background: _,
+            ambient: _,
+            ray_bias: _,
+            transparent_shadows: _,
+            light_samples,
+            adc_bailout,
+            crop: _,
+            filter: _,
+            sample_border: _,
+            photon,
+        } = self;
+        Options {
+            width: *width,
+            height: *height,
+            spp_axis: *spp_axis,
+            spp: *spp,
+            max_depth: *max_depth,
+            // + 0.0 makes -0 into 0: a render's identity spells the value out.
+            adc_bailout: adc_bailout.map(|b| b.0 + 0.0),
+            seed: *seed,
+            integrator: *integrator,
+            sampler: *sampler,
+            antialias: *antialias,
+            light_samples: *light_samples,
+            photon: photon.clone(),
+        }
+    }
 }
 
 #[derive(Deserialize)]
