@@ -196,6 +196,38 @@ fn scenes_beyond_max_memory_are_refused_before_loading() {
     assert!(!dir.join("scan.png").exists());
 }
 
+/// The memory guard counts files as the loader reaches them: a scene whose first mesh fits and
+/// whose second does not is refused at the second, naming it, before it is read (its data is
+/// missing, which reading it would have reported instead).
+#[test]
+fn a_second_mesh_beyond_max_memory_is_refused_before_it_is_read() {
+    let dir = common::scratch("cli-second-mesh");
+    std::fs::copy(scene("mitsuba/meshes/icosphere.ply"), dir.join("ball.ply")).unwrap();
+    std::fs::write(dir.join("huge.ply"), "ply\nformat binary_little_endian 1.0\nelement vertex 15000000\nproperty float x\nproperty float y\nproperty float z\nelement face 30000000\nproperty list uchar int vertex_indices\nend_header\n").unwrap();
+    let toml = dir.join("two.toml");
+    std::fs::write(
+        &toml,
+        "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[objects]]\ntype = \"mesh\"\nfile = \"ball.ply\"\n[[objects]]\ntype = \"mesh\"\nfile = \"huge.ply\"\n",
+    )
+    .unwrap();
+    let out = caustic()
+        .arg("render")
+        .arg(&toml)
+        .args(["--max-memory", "64", "-o"])
+        .arg(dir.join("two.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("loading the scene would need about 2633 MiB")
+            && err.contains("huge.ply` would add about 2633 MiB and was not read")
+            && err.contains("64 MiB allowed"),
+        "{err}"
+    );
+    assert!(!dir.join("two.png").exists());
+}
+
 #[test]
 fn layers_are_written_and_sum_to_the_image() {
     let dir = common::scratch("cli-layers");

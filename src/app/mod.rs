@@ -15,7 +15,7 @@ use crate::integrator::Integrator;
 use crate::options::{IntegratorKind, Options};
 use crate::render::{CheckpointFn, RenderControl, RenderSettings, RenderStats};
 use crate::scene::desc::{IntegratorDesc, LoadInfo};
-use crate::scene::{LoadOptions, Scene, SceneDescription, SceneError, load_scene};
+use crate::scene::{FileBudget, LoadOptions, Scene, SceneDescription, SceneError, load_scene, load_scene_within};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -44,8 +44,9 @@ pub struct RenderOptions {
 
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
+    /// A scene that could not be loaded (one that would not fit in memory is `SceneMemory`).
     #[error(transparent)]
-    Scene(#[from] SceneError),
+    Scene(SceneError),
     #[error(transparent)]
     Output(#[from] OutputError),
     #[error("cannot start {threads} worker threads: {message}")]
@@ -80,6 +81,20 @@ pub enum AppError {
         if *existed { " and is left as it was" } else { "" }
     )]
     InterruptedEarly { path: String, existed: bool },
+}
+
+impl From<SceneError> for AppError {
+    /// A load stopped by the memory limit becomes `SceneMemory`, with the limit's option named.
+    fn from(e: SceneError) -> Self {
+        match e {
+            SceneError::Memory(o) => AppError::SceneMemory {
+                need_mib: o.need.div_ceil(1 << 20),
+                limit_mib: o.limit >> 20,
+                detail: format!("{} would add about {} MiB and was not read", o.what, o.bytes.div_ceil(1 << 20)),
+            },
+            e => AppError::Scene(e),
+        }
+    }
 }
 
 /// What a finished render reports.
@@ -206,9 +221,12 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     let pool =
         builder.build().map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
     pool.install(|| {
-        // The scene's big files, measured from their headers before any is read.
+        // The loaders report each file (and the builder each generated mesh and instance) to the
+        // budget before reading it, and the load stops at the first that would not fit.
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
-        let footprint = crate::scene::footprint::estimate(&opts.scene, &opts.load.defines);
+        let files = FileBudget::new(limit);
+        let loaded = prepare(load_scene_within(&opts.scene, &opts.load, &files)?, &opts.overrides)?;
+        let footprint = files.footprint();
         if footprint.total() > 0 {
             log(
                 opts.quiet,
@@ -221,19 +239,6 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                 ),
             );
         }
-        if footprint.total() > limit {
-            let largest = footprint.files.iter().max_by_key(|(_, b)| *b);
-            let detail = match largest {
-                Some((p, b)) => format!("the largest file, `{}`, about {} MiB", p.display(), b.div_ceil(1 << 20)),
-                None => "instances".to_string(),
-            };
-            return Err(AppError::SceneMemory {
-                need_mib: footprint.total().div_ceil(1 << 20),
-                limit_mib: limit >> 20,
-                detail,
-            });
-        }
-        let loaded = load(&opts.scene, &opts.load, &opts.overrides)?;
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
@@ -329,9 +334,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             let partial = 64 + if settings.layers { 240 } else { 0 };
             need += settings.pixels() * (crate::film::BYTES_PER_PIXEL + partial);
         }
-        let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
         // Loading peaks higher than the loaded scene (the BVH's build temporaries): the larger
-        // of the footprint estimated before loading and what rendering holds is the peak.
+        // of the footprint counted while loading and what rendering holds is the peak.
         log(
             opts.quiet,
             format_args!(

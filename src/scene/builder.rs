@@ -6,7 +6,9 @@
 //! image bit for bit).
 
 use super::Scene;
+use super::SceneError;
 use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
+use super::footprint::{FileBudget, OverBudget};
 use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
@@ -36,8 +38,10 @@ pub struct SceneBuilder {
     specular_targets: Vec<(Vec3, f32)>,
     triangles: usize,
     degenerate_triangles: usize,
-    /// Files read for the geometry (meshes), for the render's identity.
-    files: Vec<std::path::PathBuf>,
+    /// The hook the loader reports the files it reads to (shared with it): the builder counts
+    /// the meshes it is asked to generate and the instances it places there, and takes the
+    /// scene's list of files from it.
+    files: FileBudget,
     mesh_info: Vec<MeshInfo>,
     /// Primitives of each group of instanced geometry, in the group's own space.
     groups: Vec<Primitives>,
@@ -57,14 +61,20 @@ impl SceneBuilder {
         Self::default()
     }
 
-    /// Notes that the scene's content depends on the file `path` (a mesh read from it).
-    pub fn note_file(&mut self, path: &std::path::Path) {
-        self.files.push(path.to_path_buf());
+    /// A builder counting against `files`, the hook its loader reports files to.
+    pub fn with_files(files: FileBudget) -> Self {
+        SceneBuilder { files, ..Self::default() }
     }
 
-    /// The files noted with `note_file`, in order.
-    pub fn files(&self) -> &[std::path::PathBuf] {
-        &self.files
+    /// Every file the scene was read from so far, once each, in the order first read.
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        self.files.files()
+    }
+
+    /// Counts a mesh of `vertices` and `triangles` a loader is about to generate (`name`: what
+    /// it is), before it is made; refused when it would not fit in the memory allowed.
+    pub fn reserve_generated_mesh(&mut self, name: &str, vertices: u64, triangles: u64) -> Result<(), OverBudget> {
+        self.files.generated_mesh(name, vertices, triangles)
     }
 
     /// Adds a material; returns its index.
@@ -119,12 +129,15 @@ impl SceneBuilder {
         self.groups.get(group as usize).map_or(0, Primitives::len)
     }
 
-    /// Places group `group` in the scene, moved by `t`.
-    pub fn add_instance(&mut self, group: u32, t: &Transform) -> Result<(), String> {
+    /// Places group `group` in the scene, moved by `t`, once the instance fits in the memory
+    /// allowed.
+    pub fn add_instance(&mut self, group: u32, t: &Transform) -> Result<(), InstanceError> {
         if group as usize >= self.groups.len() {
-            return Err(format!("no group {group}"));
+            return Err(InstanceError::Invalid(format!("no group {group}")));
         }
-        let inst = Instance::new(group, t).ok_or("an instance's transform is singular or not finite")?;
+        let inst = Instance::new(group, t)
+            .ok_or_else(|| InstanceError::Invalid("an instance's transform is singular or not finite".into()))?;
+        self.files.instance().map_err(InstanceError::Memory)?;
         self.instances.push(inst);
         Ok(())
     }
@@ -328,7 +341,7 @@ impl SceneBuilder {
             degenerate_triangles: self.degenerate_triangles,
             bvh_nodes: bvh.node_count() + instances.node_count(),
             bvh_build: t0.elapsed(),
-            files: self.files,
+            files: self.files.files(),
             instances: instances.len(),
             instance_groups: instances.group_count(),
         };
@@ -370,6 +383,25 @@ impl SceneBuilder {
             specular_targets: self.specular_targets,
         };
         Ok((scene, info))
+    }
+}
+
+/// Why an instance was not placed.
+#[derive(Debug)]
+pub enum InstanceError {
+    /// It would not fit in the memory allowed.
+    Memory(OverBudget),
+    /// Its group or transform is unusable: the loader says where.
+    Invalid(String),
+}
+
+impl InstanceError {
+    /// The scene error, with `at` placing an unusable instance in its file.
+    pub fn placed(self, at: impl FnOnce(String) -> SceneError) -> SceneError {
+        match self {
+            InstanceError::Memory(o) => SceneError::Memory(o),
+            InstanceError::Invalid(message) => at(message),
+        }
     }
 }
 

@@ -165,9 +165,6 @@ pub struct SceneDescription {
     pub shading: ShadingDesc,
     /// Things the loader could not render exactly, each `file:line:col: message`.
     pub warnings: Vec<String>,
-    /// Every file the scene was read from: the scene file, files it includes and the files its
-    /// meshes come from, in the order read (what a render's identity hashes).
-    pub files: Vec<std::path::PathBuf>,
 }
 
 /// What the log says about a mesh: a user scaling a scanned model needs its size.
@@ -206,6 +203,13 @@ pub struct BuiltScene {
 }
 
 impl SceneDescription {
+    /// Every file the scene was read from, once each in the order first read: the scene file,
+    /// files it includes, meshes, textures and the environment map (what a render's identity
+    /// hashes). The loaders' file hook (`footprint::FileBudget`) keeps the list.
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        self.geometry.files()
+    }
+
     fn error(&self, message: String) -> SceneError {
         SceneError::File { path: self.name.clone(), message }
     }
@@ -352,11 +356,10 @@ impl SceneDescription {
             }
         }
         let camera = self.camera.build(sampling.width, sampling.height);
-        let (scene, mut info) = self
+        let (scene, info) = self
             .geometry
             .finish(camera, &self.shading)
             .map_err(|message| SceneError::File { path: self.name.clone(), message })?;
-        info.files = self.files;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }

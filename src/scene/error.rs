@@ -18,6 +18,9 @@ pub enum SceneError {
     At { path: String, line: usize, column: usize, message: String, snippet: String },
     #[error("{path}: {message}")]
     File { path: String, message: String },
+    /// The load stopped before reading what would not fit in the memory allowed.
+    #[error(transparent)]
+    Memory(#[from] super::footprint::OverBudget),
 }
 
 impl SceneError {
@@ -53,6 +56,7 @@ impl SceneError {
         match self {
             SceneError::Read { source, .. } => source.to_string(),
             SceneError::At { message, .. } | SceneError::File { message, .. } => message.clone(),
+            SceneError::Memory(o) => o.to_string(),
         }
     }
 

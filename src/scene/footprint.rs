@@ -1,16 +1,23 @@
-//! What loading a scene will cost in memory, estimated before anything big is read: the files
-//! a scene names (meshes, textures, environment maps) are measured from their headers (PLY
-//! element counts, image sizes) or, where the format has no such header (OBJ), by counting its
-//! face lines without keeping them, and instances are counted from the scene text. `caustic
-//! render` refuses a scene whose estimate exceeds `--max-memory` before loading it.
+//! What loading a scene costs in memory, counted while it is loaded. Both loaders report every
+//! file they read to one [`FileBudget`] (the hook) before they open it for its contents: the
+//! scene file and its includes (counted as nothing), meshes and images (textures, environment
+//! maps). The hook measures each file from its header (PLY element counts, image sizes) or, where
+//! the format has no such header (OBJ), by counting its face lines without keeping them; the
+//! scene builder counts the meshes it is asked to generate (the torus knot) and the instances it
+//! places, before they are made. When the running total would pass the limit, the load stops with
+//! [`OverBudget`] naming what did not fit, before that file is read. The files listed are also
+//! the scene's files for a render's identity (`LoadInfo::files`), so the two cannot disagree.
 //!
 //! The estimate is of the peak resident memory while loading, which is when the BVH's leaves
 //! are made: the mesh, its primitives, the BVH's nodes and leaf shapes (the build records,
 //! freed just before, take less). The PLY and OBJ readers stream into the mesh's arrays and need nothing
 //! per triangle beyond them, so reading never peaks higher.
 
+use crate::shape::mesh::MeshFormat;
+use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 /// Peak bytes per triangle while a scene is loaded: its indices in the mesh (12), its 8-byte
 /// primitive (mesh and triangle indices), the BVH's 40-byte leaf shape and node share (about
@@ -22,16 +29,41 @@ pub const BYTES_PER_TRIANGLE: u64 = 80;
 pub const BYTES_PER_VERTEX: u64 = 24;
 /// Bytes per instance: two transforms, bounds and the top-level BVH's share.
 pub const BYTES_PER_INSTANCE: u64 = 160;
+/// Bytes per texel of a decoded image (three 32-bit floats).
+pub const BYTES_PER_TEXEL: u64 = 12;
 
-/// The estimated memory of a scene's big parts, with the files it measured.
+/// What a file is read as, which says how it is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileKind {
+    /// The scene file itself (counted as nothing: it is small and freed after loading).
+    Scene,
+    /// A file the scene includes (Mitsuba's `<include>`; counted as nothing).
+    Include,
+    /// A mesh, read in this format (the loader's choice, not the file name's).
+    Mesh(MeshFormat),
+    /// An image: a bitmap texture or an environment map.
+    Image,
+}
+
+/// One file a scene read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileRead {
+    pub path: PathBuf,
+    pub kind: FileKind,
+    /// Estimated peak bytes of one read of it (0 for the scene and includes, and for a file that
+    /// could not be measured: loading it reports the problem).
+    pub bytes: u64,
+}
+
+/// The estimated memory of a scene's big parts, with the files it read.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Footprint {
     pub meshes: u64,
     pub textures: u64,
     pub instances: u64,
-    /// Each file measured and its estimated bytes (0 for a file that could not be measured:
-    /// loading it reports the problem).
-    pub files: Vec<(PathBuf, u64)>,
+    /// Every file read, once each, in the order first read (a file read twice, as two meshes or
+    /// as an image decoded two ways, is counted twice but listed once).
+    pub files: Vec<FileRead>,
 }
 
 impl Footprint {
@@ -39,151 +71,171 @@ impl Footprint {
         self.meshes.saturating_add(self.textures).saturating_add(self.instances)
     }
 
-    fn mesh(&mut self, path: PathBuf) {
-        let bytes = mesh_bytes(&path).unwrap_or(0);
-        self.meshes = self.meshes.saturating_add(bytes);
-        self.files.push((path, bytes));
-    }
-
-    fn image(&mut self, path: PathBuf) {
-        let bytes = image_size(&path).map_or(0, |(w, h)| w.saturating_mul(h).saturating_mul(12));
-        self.textures = self.textures.saturating_add(bytes);
-        self.files.push((path, bytes));
+    /// The files' paths, in the order first read.
+    pub fn paths(&self) -> Vec<PathBuf> {
+        self.files.iter().map(|f| f.path.clone()).collect()
     }
 }
 
-/// Estimates the footprint of the scene file `path` (Mitsuba XML or caustic TOML) with the
-/// Mitsuba parameters `defines`. Anything it cannot read counts as nothing: the loader reports
-/// the problem properly.
-pub fn estimate(path: &Path, defines: &[(String, String)]) -> Footprint {
-    let mut f = Footprint::default();
-    let Ok(text) = std::fs::read_to_string(path) else { return f };
-    let base = path.parent().unwrap_or(Path::new(""));
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
-        xml_files(&text, base, defines, &mut f, 0);
-    } else {
-        toml_files(&text, base, &mut f);
-    }
-    f
+/// The load stopped: `what` would have brought the estimate to `need` bytes, over `limit`.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "{what} would bring loading the scene to about {} MiB (adding {} MiB), more than the {} MiB allowed",
+    need.div_ceil(1 << 20),
+    bytes.div_ceil(1 << 20),
+    limit >> 20
+)]
+pub struct OverBudget {
+    /// What did not fit: a file (`` `path` ``), a generated mesh or an instance.
+    pub what: String,
+    /// Its estimated bytes.
+    pub bytes: u64,
+    /// The estimate with it.
+    pub need: u64,
+    pub limit: u64,
 }
 
-/// Meshes, images and instances named in Mitsuba XML (includes followed, 8 deep at most).
-fn xml_files(text: &str, base: &Path, defines: &[(String, String)], f: &mut Footprint, depth: usize) {
-    let Ok(doc) = roxmltree::Document::parse(text) else { return };
-    // `<default>` values, overridden by the command line's `-D`.
-    let mut params: Vec<(String, String)> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("default"))
-        .filter_map(|n| Some((n.attribute("name")?.to_string(), n.attribute("value")?.to_string())))
-        .collect();
-    params.extend(defines.iter().cloned());
-    let resolve = |v: &str| {
-        let mut v = v.to_string();
-        for (name, value) in params.iter().rev() {
-            v = v.replace(&format!("${name}"), value);
+/// The hook the loaders report every file to before reading it, and the scene builder every
+/// mesh it generates and instance it places. Clones share one ledger: the loader's context, the
+/// builder and whoever asked for the load (`caustic render`, for its log) see the same totals.
+/// Calls are per file or per instance, never per triangle. One budget serves one load.
+#[derive(Clone, Debug, Default)]
+pub struct FileBudget(Arc<Mutex<Ledger>>);
+
+#[derive(Debug)]
+struct Ledger {
+    limit: u64,
+    footprint: Footprint,
+    /// Index in `footprint.files` of each path read, so a file is measured and listed once.
+    index: HashMap<PathBuf, usize>,
+}
+
+impl Default for Ledger {
+    fn default() -> Self {
+        Ledger { limit: u64::MAX, footprint: Footprint::default(), index: HashMap::new() }
+    }
+}
+
+/// Which total a charge adds to.
+#[derive(Clone, Copy)]
+enum Part {
+    Meshes,
+    Textures,
+    Instances,
+}
+
+impl Ledger {
+    /// Adds `bytes` to `part`, or refuses when the total would pass the limit.
+    fn charge(&mut self, part: Part, bytes: u64, what: impl FnOnce() -> String) -> Result<(), OverBudget> {
+        let need = self.footprint.total().saturating_add(bytes);
+        if need > self.limit {
+            return Err(OverBudget { what: what(), bytes, need, limit: self.limit });
         }
-        v
-    };
-    let mut dirs = vec![base.to_path_buf()];
-    dirs.extend(
-        doc.descendants().filter(|n| n.has_tag_name("path")).filter_map(|n| n.attribute("value")).map(|v| base.join(v)),
-    );
-    let find = |file: &str| dirs.iter().map(|d| d.join(file)).find(|p| p.exists()).unwrap_or_else(|| base.join(file));
-    for n in doc.descendants() {
-        let kind = n.attribute("type").unwrap_or("");
-        if n.has_tag_name("shape") && kind == "instance" {
-            f.instances = f.instances.saturating_add(BYTES_PER_INSTANCE);
-        }
-        if n.has_tag_name("include") && depth < 8 {
-            if let Some(file) = n.attribute("filename") {
-                let p = find(&resolve(file));
-                if let Ok(t) = std::fs::read_to_string(&p) {
-                    xml_files(&t, p.parent().unwrap_or(base), defines, f, depth + 1);
-                }
-            }
-            continue;
-        }
-        let filename = || {
-            n.children()
-                .find(|c| c.has_tag_name("string") && c.attribute("name") == Some("filename"))
-                .and_then(|c| c.attribute("value"))
-                .map(|v| find(&resolve(v)))
+        let f = &mut self.footprint;
+        let total = match part {
+            Part::Meshes => &mut f.meshes,
+            Part::Textures => &mut f.textures,
+            Part::Instances => &mut f.instances,
         };
-        match (n.tag_name().name(), kind) {
-            ("shape", "obj" | "ply" | "serialized") => {
-                if let Some(p) = filename() {
-                    f.mesh(p);
-                }
-            }
-            ("texture", "bitmap") | ("emitter", "envmap") => {
-                if let Some(p) = filename() {
-                    f.image(p);
-                }
-            }
-            _ => {}
-        }
+        *total = total.saturating_add(bytes);
+        Ok(())
     }
 }
 
-/// Meshes and images named in a caustic TOML scene: `file` keys of objects, textures and lights.
-fn toml_files(text: &str, base: &Path, f: &mut Footprint) {
-    let Ok(doc) = text.parse::<toml::Table>() else { return };
-    let file_of = |v: &toml::Value| v.get("file").and_then(|p| p.as_str()).map(|p| base.join(p));
-    for o in doc.get("objects").and_then(|v| v.as_array()).into_iter().flatten() {
-        match o.get("type").and_then(|t| t.as_str()) {
-            Some("instance") => f.instances = f.instances.saturating_add(BYTES_PER_INSTANCE),
-            Some("torus_knot") => f.meshes = f.meshes.saturating_add(knot_bytes(o)),
-            _ => {
-                if let Some(p) = file_of(o) {
-                    f.mesh(p);
-                }
-            }
-        }
+impl FileBudget {
+    /// A budget of `limit` bytes.
+    pub fn new(limit: u64) -> Self {
+        FileBudget(Arc::new(Mutex::new(Ledger { limit, ..Ledger::default() })))
     }
-    for (_, group) in doc.get("groups").and_then(|v| v.as_table()).into_iter().flatten() {
-        for o in group.get("objects").and_then(|v| v.as_array()).into_iter().flatten() {
-            if o.get("type").and_then(|t| t.as_str()) == Some("torus_knot") {
-                f.meshes = f.meshes.saturating_add(knot_bytes(o));
-            } else if let Some(p) = file_of(o) {
-                f.mesh(p);
-            }
-        }
+
+    /// A budget without a limit: it only lists and measures (what `Default` gives).
+    pub fn unlimited() -> Self {
+        Self::default()
     }
-    for (_, t) in doc.get("textures").and_then(|v| v.as_table()).into_iter().flatten() {
-        if let Some(p) = file_of(t) {
-            f.image(p);
-        }
+
+    fn ledger(&self) -> MutexGuard<'_, Ledger> {
+        // Nothing panics while the ledger is held, but a poisoned one is still consistent.
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
     }
-    for l in doc.get("lights").and_then(|v| v.as_array()).into_iter().flatten() {
-        if let Some(p) = file_of(l) {
-            f.image(p);
+
+    /// Called by a loader just before it reads `path` as `kind`: measures the file (once per
+    /// path), adds its bytes and lists it, or refuses when it would not fit (it is then not
+    /// listed, and must not be read).
+    pub fn open(&self, path: &Path, kind: FileKind) -> Result<(), OverBudget> {
+        let mut ledger = self.ledger();
+        let known = ledger.index.get(path).map(|&i| &ledger.footprint.files[i]);
+        let listed = known.is_some();
+        let bytes = match known {
+            Some(f) if f.kind == kind => f.bytes,
+            _ => measure(path, kind),
+        };
+        let what = || format!("`{}`", path.display());
+        match kind {
+            FileKind::Scene | FileKind::Include => {}
+            FileKind::Mesh(_) => ledger.charge(Part::Meshes, bytes, what)?,
+            FileKind::Image => ledger.charge(Part::Textures, bytes, what)?,
         }
+        if !listed {
+            let i = ledger.footprint.files.len();
+            ledger.index.insert(path.to_path_buf(), i);
+            ledger.footprint.files.push(FileRead { path: path.to_path_buf(), kind, bytes });
+        }
+        Ok(())
+    }
+
+    /// Called by the builder before it generates a mesh of `vertices` and `triangles` (`name`
+    /// says what it is, for the refusal).
+    pub fn generated_mesh(&self, name: &str, vertices: u64, triangles: u64) -> Result<(), OverBudget> {
+        let bytes = mesh_estimate(vertices, triangles);
+        self.ledger().charge(Part::Meshes, bytes, || format!("a {name} of {triangles} triangles"))
+    }
+
+    /// Called by the builder before it places an instance.
+    pub fn instance(&self) -> Result<(), OverBudget> {
+        let mut ledger = self.ledger();
+        let n = ledger.footprint.instances / BYTES_PER_INSTANCE + 1;
+        ledger.charge(Part::Instances, BYTES_PER_INSTANCE, || format!("instance {n}"))
+    }
+
+    /// The totals and files so far.
+    pub fn footprint(&self) -> Footprint {
+        self.ledger().footprint.clone()
+    }
+
+    /// The files read so far, once each, in the order first read.
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.ledger().footprint.paths()
     }
 }
 
-/// A generated torus knot's bytes: `segments` x `sides` vertices, twice as many triangles
-/// (the defaults of `scene::native`).
-fn knot_bytes(o: &toml::Value) -> u64 {
-    let get = |k: &str, d: u64| o.get(k).and_then(|v| v.as_integer()).map_or(d, |v| v.max(0) as u64);
-    let vertices = get("segments", 256).saturating_mul(get("sides", 32));
-    vertices.saturating_mul(BYTES_PER_VERTEX).saturating_add(vertices.saturating_mul(2 * BYTES_PER_TRIANGLE))
+/// A file's estimated peak bytes as `kind`; 0 for what is not counted or cannot be measured.
+fn measure(path: &Path, kind: FileKind) -> u64 {
+    match kind {
+        FileKind::Scene | FileKind::Include => 0,
+        FileKind::Mesh(format) => mesh_bytes(path, format).unwrap_or(0),
+        FileKind::Image => image_size(path).map_or(0, |(w, h)| w.saturating_mul(h).saturating_mul(BYTES_PER_TEXEL)),
+    }
 }
 
-/// A mesh file's peak bytes while loaded: from a PLY header's element counts, an OBJ's `v`
-/// and `f` lines (polygons of n vertices count n - 2 triangles), or a Mitsuba serialized file's
-/// size (compressed about 3:1).
-pub fn mesh_bytes(path: &Path) -> Option<u64> {
-    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-    let (vertices, triangles) = match ext.as_str() {
-        "ply" => ply_counts(path)?,
-        "obj" => obj_counts(path)?,
-        _ => {
-            let size = std::fs::metadata(path).ok()?.len();
-            // Serialized: 12-byte positions and normals, 8-byte uv, 12-byte faces, compressed.
-            (size * 3 / 44, size * 3 / 22)
+/// A mesh file's peak bytes while loaded as `format`: from a PLY header's element counts, an
+/// OBJ's `v` and `f` lines (polygons of n vertices count n - 2 triangles), or a Mitsuba
+/// serialized file's size (compressed about 3:1).
+pub fn mesh_bytes(path: &Path, format: MeshFormat) -> Option<u64> {
+    let (vertices, triangles) = match format {
+        MeshFormat::Ply => ply_counts(path)?,
+        MeshFormat::Obj => obj_counts(path)?,
+        MeshFormat::Serialized => {
+            let size = std::fs::metadata(path).ok()?.len().saturating_mul(3);
+            // 12-byte positions and normals, 8-byte uv, 12-byte faces, compressed.
+            (size / 44, size / 22)
         }
     };
-    Some(vertices.saturating_mul(BYTES_PER_VERTEX).saturating_add(triangles.saturating_mul(BYTES_PER_TRIANGLE)))
+    Some(mesh_estimate(vertices, triangles))
+}
+
+/// Peak bytes of a mesh of `vertices` and `triangles` while loaded.
+fn mesh_estimate(vertices: u64, triangles: u64) -> u64 {
+    vertices.saturating_mul(BYTES_PER_VERTEX).saturating_add(triangles.saturating_mul(BYTES_PER_TRIANGLE))
 }
 
 /// (vertices, triangles) from a PLY header (faces count as triangles, two for quads is not
@@ -288,6 +340,8 @@ pub fn image_size(path: &Path) -> Option<(u64, u64)> {
 mod tests {
     use super::*;
 
+    const FORMATS: [MeshFormat; 3] = [MeshFormat::Obj, MeshFormat::Ply, MeshFormat::Serialized];
+
     fn data(p: &str) -> PathBuf {
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(p)
     }
@@ -316,15 +370,53 @@ mod tests {
         assert_eq!(obj_counts(&data("scenes/mitsuba/meshes/icosphere.obj")), Some((162, 320)));
     }
 
+    /// The footprint of loading the scene file `path` without a limit.
+    fn loaded(path: &str) -> Footprint {
+        let files = FileBudget::unlimited();
+        crate::scene::load_scene_within(&data(path), &Default::default(), &files).unwrap();
+        files.footprint()
+    }
+
     #[test]
-    fn scenes_count_what_they_name() {
-        let f = estimate(&data("tests/data/emitters/cornell_mesh.xml"), &[]);
-        assert_eq!(f.files.len(), 1);
+    fn scenes_count_what_they_read() {
+        let f = loaded("tests/data/emitters/cornell_mesh.xml");
+        assert_eq!(
+            f.files.iter().map(|r| r.kind).collect::<Vec<_>>(),
+            [FileKind::Scene, FileKind::Mesh(MeshFormat::Obj)]
+        );
         assert_eq!(f.meshes, 162 * BYTES_PER_VERTEX + 320 * BYTES_PER_TRIANGLE);
-        let f = estimate(&data("scenes/07-torus-knot.toml"), &[]);
+        let f = loaded("scenes/07-torus-knot.toml");
         assert_eq!(f.meshes, 1600 * 32 * (BYTES_PER_VERTEX + 2 * BYTES_PER_TRIANGLE));
-        let f = estimate(&data("scenes/15-materials.toml"), &[]);
-        assert!(f.textures > 0 && f.files.iter().all(|(_, b)| *b > 0), "{f:?}");
+        let f = loaded("scenes/15-materials.toml");
+        assert!(
+            f.textures > 0 && f.files[0].kind == FileKind::Scene && f.files[1..].iter().all(|r| r.bytes > 0),
+            "{f:?}"
+        );
+    }
+
+    /// The ledger: a file is measured and listed once however often it is read, but counted for
+    /// each read; a refused file is neither counted nor listed; what is counted as nothing never
+    /// fails, even with no room left.
+    #[test]
+    fn the_budget_counts_each_read_and_lists_each_file_once() {
+        let ply = data("scenes/mitsuba/meshes/icosphere.ply");
+        let one = 162 * BYTES_PER_VERTEX + 320 * BYTES_PER_TRIANGLE;
+        let files = FileBudget::new(2 * one);
+        files.open(Path::new("scene.xml"), FileKind::Scene).unwrap();
+        files.open(&ply, FileKind::Mesh(MeshFormat::Ply)).unwrap();
+        files.open(&ply, FileKind::Mesh(MeshFormat::Ply)).unwrap();
+        assert_eq!(files.footprint().meshes, 2 * one);
+        let err = files.open(&ply, FileKind::Mesh(MeshFormat::Ply)).unwrap_err();
+        assert_eq!(err, OverBudget { what: format!("`{}`", ply.display()), bytes: one, need: 3 * one, limit: 2 * one });
+        assert!(err.to_string().contains("icosphere.ply") && err.to_string().contains("MiB allowed"), "{err}");
+        files.open(Path::new("part.xml"), FileKind::Include).unwrap();
+        assert!(files.instance().is_err() && files.generated_mesh("torus_knot", 3, 1).is_err());
+        assert_eq!(files.files(), [PathBuf::from("scene.xml"), ply, PathBuf::from("part.xml")]);
+        assert_eq!(files.footprint().total(), 2 * one);
+        // A file that cannot be measured counts as nothing: its loader reports the problem.
+        let missing = Path::new("no/such/mesh.ply");
+        files.open(missing, FileKind::Mesh(MeshFormat::Ply)).unwrap();
+        assert_eq!(files.footprint().files.last().map(|f| f.bytes), Some(0));
     }
 
     /// Header readers see untrusted files: random bytes behind each format's magic, and every
@@ -348,7 +440,9 @@ mod tests {
                     let p = dir.join(format!("r{i}.{ext}"));
                     std::fs::write(&p, &bytes).unwrap();
                     let _ = image_size(&p);
-                    let _ = mesh_bytes(&p);
+                    for format in FORMATS {
+                        let _ = mesh_bytes(&p, format);
+                    }
                 }
             }
         }
@@ -363,7 +457,9 @@ mod tests {
                 let p = dir.join(format!("cut.{ext}"));
                 std::fs::write(&p, &bytes[..len]).unwrap();
                 let _ = image_size(&p);
-                let _ = mesh_bytes(&p);
+                for format in FORMATS {
+                    let _ = mesh_bytes(&p, format);
+                }
             }
         }
         std::fs::remove_dir_all(&dir).ok();

@@ -14,6 +14,7 @@ pub mod native;
 
 pub use desc::{BuiltScene, LoadOptions, SceneDescription};
 pub use error::SceneError;
+pub use footprint::{FileBudget, FileKind};
 
 use crate::accel::{Bvh, Instances};
 use crate::camera::Camera;
@@ -27,21 +28,31 @@ use std::path::Path;
 
 /// Reads a scene file: Mitsuba 3 XML for `.xml`, caustic's TOML format otherwise.
 pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<SceneDescription, SceneError> {
+    load_scene_within(path, options, &FileBudget::unlimited())
+}
+
+/// `load_scene` reporting every file it reads to `files` before reading it (the scene file
+/// first), which stops the load with `SceneError::Memory` when the next file, generated mesh or
+/// instance would not fit in its limit. Afterwards `files` holds the scene's estimated footprint.
+pub fn load_scene_within(
+    path: &Path,
+    options: &LoadOptions,
+    files: &FileBudget,
+) -> Result<SceneDescription, SceneError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
-        return mitsuba::load_mitsuba(path, options);
+        return mitsuba::load_mitsuba(path, options, files);
     }
+    files.open(path, FileKind::Scene)?;
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut desc = native::load_toml_str(&text, &path.display().to_string(), &base)?;
-    desc.files.insert(0, path.to_path_buf());
-    Ok(desc)
+    native::load_toml_str(&text, &path.display().to_string(), &base, files)
 }
 
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
 /// paths resolve against `base`.
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
-    native::load_toml_str(text, name, base)
+    native::load_toml_str(text, name, base, &FileBudget::unlimited())
 }
 
 /// Most masked surfaces a shadow ray looks through before it counts as blocked.

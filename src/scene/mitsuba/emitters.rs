@@ -7,8 +7,8 @@ use super::xml::El;
 use crate::geometry::Transform;
 use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Projector, Spot};
 use crate::math::{Color, Frame, Vec3};
-use crate::scene::SceneError;
 use crate::scene::environment::environment_map;
+use crate::scene::{FileKind, SceneError};
 use crate::texture::image::load_image;
 
 impl<'a> Cx<'a> {
@@ -140,8 +140,8 @@ impl<'a> Cx<'a> {
                 }
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
                 let path = self.src(fel).base.join(&file);
+                self.files.open(&path, FileKind::Image)?;
                 let image = load_image(&path, false).map_err(|e| self.err(fel, e.to_string()))?;
-                b.geometry.note_file(&path);
                 let env = environment_map(&image, scale, &x).map_err(|e| self.err(el, e))?;
                 b.geometry.set_environment(env).map_err(|e| self.err(el, e))?;
             }

@@ -26,20 +26,21 @@ mod xml;
 use super::SceneError;
 use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, LoadOptions, SceneDescription, ShadingDesc};
+use super::footprint::{FileBudget, FileKind};
 use crate::options::IntegratorKind;
 use props::Cx;
 use std::collections::HashMap;
 use std::path::Path;
 use xml::{El, Src};
 
-/// Loads a Mitsuba 3 XML scene file. Its warnings are in the description's `warnings`.
-pub fn load_mitsuba(path: &Path, options: &LoadOptions) -> Result<SceneDescription, SceneError> {
+/// Loads a Mitsuba 3 XML scene file, reporting it and every file it reads to `files` before
+/// reading it. Its warnings are in the description's `warnings`.
+pub fn load_mitsuba(path: &Path, options: &LoadOptions, files: &FileBudget) -> Result<SceneDescription, SceneError> {
+    files.open(path, FileKind::Scene)?;
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut desc = load_mitsuba_str(&text, &path.display().to_string(), &base, options)?;
-    desc.files.insert(0, path.to_path_buf());
-    Ok(desc)
+    load_mitsuba_text(&text, &path.display().to_string(), &base, options, files)
 }
 
 /// Loads a Mitsuba scene from `text`; `name` is used in messages, and files (meshes, includes)
@@ -50,8 +51,19 @@ pub fn load_mitsuba_str(
     base: &Path,
     options: &LoadOptions,
 ) -> Result<SceneDescription, SceneError> {
-    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf(), path: None }];
-    let root = xml::parse_source(&mut srcs, 0, 0, &mut Vec::new())?;
+    load_mitsuba_text(text, name, base, options, &FileBudget::unlimited())
+}
+
+/// `load_mitsuba_str` reporting every file it reads (includes, meshes, images) to `files`.
+fn load_mitsuba_text(
+    text: &str,
+    name: &str,
+    base: &Path,
+    options: &LoadOptions,
+    files: &FileBudget,
+) -> Result<SceneDescription, SceneError> {
+    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf() }];
+    let root = xml::parse_source(&mut srcs, 0, 0, &mut Vec::new(), files)?;
     let mut cx = Cx {
         srcs: &srcs,
         defines: HashMap::new(),
@@ -59,13 +71,13 @@ pub fn load_mitsuba_str(
         warnings: Vec::new(),
         strict: options.strict,
         search_paths: Vec::new(),
+        files,
     };
     for (k, v) in &options.defines {
         cx.defines.insert(k.clone(), v.clone());
     }
     let mut desc = cx.build(&root)?;
     desc.warnings = cx.warnings;
-    desc.files = srcs.iter().filter_map(|s| s.path.clone()).chain(desc.geometry.files().iter().cloned()).collect();
     Ok(desc)
 }
 
@@ -91,7 +103,7 @@ impl<'a> Cx<'a> {
         self.check_version(root)?;
         self.index(root)?;
         let mut b = Build {
-            geometry: SceneBuilder::new(),
+            geometry: SceneBuilder::with_files(self.files.clone()),
             bsdf_cache: HashMap::new(),
             texture_cache: HashMap::new(),
             images: HashMap::new(),
@@ -161,7 +173,6 @@ impl<'a> Cx<'a> {
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
             shading: ShadingDesc::default(),
             warnings: Vec::new(),
-            files: Vec::new(),
         })
     }
 

@@ -67,6 +67,8 @@ pub(super) struct Cx<'a> {
     pub strict: bool,
     /// Folders added by `<path value="..."/>`, in the order given (searched newest first).
     pub search_paths: Vec<std::path::PathBuf>,
+    /// The hook every file is reported to before it is read (shared with the scene builder).
+    pub files: &'a crate::scene::FileBudget,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).
@@ -546,6 +548,7 @@ impl<'a> Cx<'a> {
                 Some((file, fel)) => {
                     let path = self.src(fel).base.join(&file);
                     let raw = self.boolean(&p, "raw")? == Some(true);
+                    self.files.open(&path, crate::scene::FileKind::Image)?;
                     let image =
                         crate::texture::image::load_image(&path, raw).map_err(|e| self.err(fel, e.to_string()))?;
                     let t = crate::texture::Texture::Bitmap(crate::texture::Bitmap {

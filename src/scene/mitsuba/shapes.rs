@@ -6,8 +6,9 @@ use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
 use crate::math::{Color, Vec3};
-use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
+use crate::scene::{FileKind, SceneError};
+use crate::shape::mesh::MeshFormat;
 use crate::shape::{Cylinder, Disk, Quad, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
 
 impl<'a> Cx<'a> {
@@ -147,23 +148,29 @@ impl<'a> Cx<'a> {
                     })?;
                     let path = self.resolve_file(fel, &file);
                     name = file.clone();
-                    let loaded = match kind.as_str() {
-                        "obj" => TriangleMesh::load_obj(&path),
-                        "ply" => crate::shape::mesh::load_ply(&path),
-                        _ => {
-                            let index = match self.integer(&p, "shape_index")? {
-                                None => 0,
-                                Some((i, iel)) => u32::try_from(i).map_err(|_| {
-                                    self.err(iel, format!("shape_index must be a whole number from 0, found {i}"))
-                                })?,
-                            };
-                            // The file's own face-normals flag (0x0010) is not used: Mitsuba
-                            // 3.9.1 ignores it too, whatever its format description says.
-                            crate::shape::mesh::load_serialized(&path, index).map(|s| s.mesh)
-                        }
+                    let format = match kind.as_str() {
+                        "obj" => MeshFormat::Obj,
+                        "ply" => MeshFormat::Ply,
+                        _ => MeshFormat::Serialized,
+                    };
+                    let index = match format {
+                        MeshFormat::Serialized => match self.integer(&p, "shape_index")? {
+                            None => 0,
+                            Some((i, iel)) => u32::try_from(i).map_err(|_| {
+                                self.err(iel, format!("shape_index must be a whole number from 0, found {i}"))
+                            })?,
+                        },
+                        MeshFormat::Obj | MeshFormat::Ply => 0,
+                    };
+                    self.files.open(&path, FileKind::Mesh(format))?;
+                    let loaded = match format {
+                        MeshFormat::Obj => TriangleMesh::load_obj(&path),
+                        MeshFormat::Ply => crate::shape::mesh::load_ply(&path),
+                        // The file's own face-normals flag (0x0010) is not used: Mitsuba 3.9.1
+                        // ignores it too, whatever its format description says.
+                        MeshFormat::Serialized => crate::shape::mesh::load_serialized(&path, index).map(|s| s.mesh),
                     };
                     let mut mesh = loaded.map_err(|e| self.err(fel, e.to_string()))?;
-                    b.geometry.note_file(&path);
                     face_normals = self.boolean(&p, "face_normals")? == Some(true);
                     if face_normals {
                         mesh.normals = None;
@@ -306,7 +313,7 @@ impl<'a> Cx<'a> {
             return Err(self.err(at, "an instance must refer to a <shape type=\"shapegroup\">"));
         }
         let group = self.shapegroup(group_el, b)?;
-        b.geometry.add_instance(group, &to_world).map_err(|e| self.err(el, e))?;
+        b.geometry.add_instance(group, &to_world).map_err(|e| e.placed(|m| self.err(el, m)))?;
         self.finish(&p)
     }
 }

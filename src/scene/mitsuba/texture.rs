@@ -6,7 +6,7 @@ use super::props::{Cx, Props};
 use super::xml::El;
 use crate::material::{ColorParam, FloatParam, Param};
 use crate::math::{Color, Vec2};
-use crate::scene::SceneError;
+use crate::scene::{FileKind, SceneError};
 use crate::texture::image::load_image;
 use crate::texture::{Bitmap, Filter, Texture, Wrap};
 use glam::{Affine2, Mat2};
@@ -130,8 +130,8 @@ impl<'a> Cx<'a> {
         let image = match b.images.get(&key) {
             Some(img) => img.clone(),
             None => {
+                self.files.open(&path, FileKind::Image)?;
                 let img = Arc::new(load_image(&path, raw).map_err(|e| self.err(fel, e.to_string()))?);
-                b.geometry.note_file(&path);
                 b.images.insert(key, img.clone());
                 img
             }

@@ -2,6 +2,7 @@
 //! byte range it came from, `<include>`s are expanded, and nesting is bounded.
 
 use crate::scene::SceneError;
+use crate::scene::footprint::{FileBudget, FileKind};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -16,8 +17,6 @@ pub(super) struct Src {
     pub name: String,
     pub text: String,
     pub base: PathBuf,
-    /// The file it was read from (`None` for a scene given as text).
-    pub path: Option<PathBuf>,
 }
 
 /// An XML element with the places of its parts.
@@ -38,14 +37,15 @@ pub(super) struct Attr {
     pub span: Range<usize>,
 }
 
-/// Parses source `id` of `srcs`, expanding `<include>`s, and returns its `<scene>` element.
-/// `paths` gathers the `<path>` folders met so far in document order (an `<include>` is searched
-/// for in them, newest first, as Mitsuba does).
+/// Parses source `id` of `srcs`, expanding `<include>`s (each reported to `files` before it is
+/// read), and returns its `<scene>` element. `paths` gathers the `<path>` folders met so far in
+/// document order (an `<include>` is searched for in them, newest first, as Mitsuba does).
 pub(super) fn parse_source(
     srcs: &mut Vec<Src>,
     id: usize,
     depth: usize,
     paths: &mut Vec<PathBuf>,
+    files: &FileBudget,
 ) -> Result<El, SceneError> {
     let text = srcs[id].text.clone();
     let name = srcs[id].name.clone();
@@ -78,7 +78,7 @@ pub(super) fn parse_source(
             format!("the root element must be <scene version=\"3.0.0\">, found <{}>", el.tag),
         ));
     }
-    expand_includes(srcs, &mut el, depth, paths)?;
+    expand_includes(srcs, &mut el, depth, paths, files)?;
     Ok(el)
 }
 
@@ -115,7 +115,13 @@ fn convert<'d, 'i>(node: roxmltree::Node<'d, 'i>, src: usize, depth: usize) -> R
 
 /// Replaces every `<include filename="..."/>` below `el` by the children of the included scene,
 /// found in the `<path>` folders met before it (newest first), else next to the file naming it.
-fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize, paths: &mut Vec<PathBuf>) -> Result<(), SceneError> {
+fn expand_includes(
+    srcs: &mut Vec<Src>,
+    el: &mut El,
+    depth: usize,
+    paths: &mut Vec<PathBuf>,
+    files: &FileBudget,
+) -> Result<(), SceneError> {
     let children = std::mem::take(&mut el.children);
     for mut child in children {
         if child.tag == "path"
@@ -125,7 +131,7 @@ fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize, paths: &mut V
             paths.push(srcs[child.src].base.join(&v.value));
         }
         if child.tag != "include" {
-            expand_includes(srcs, &mut child, depth, paths)?;
+            expand_includes(srcs, &mut child, depth, paths, files)?;
             el.children.push(child);
             continue;
         }
@@ -146,12 +152,13 @@ fn expand_includes(srcs: &mut Vec<Src>, el: &mut El, depth: usize, paths: &mut V
         let rel = Path::new(&file.value);
         let path =
             paths.iter().rev().map(|dir| dir.join(rel)).find(|p| p.is_file()).unwrap_or_else(|| src.base.join(rel));
+        files.open(&path, FileKind::Include)?;
         let text = std::fs::read_to_string(&path)
             .map_err(|e| at(file.span.clone(), format!("cannot read included file `{}`: {e}", path.display())))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        srcs.push(Src { name: path.display().to_string(), text, base, path: Some(path.clone()) });
+        srcs.push(Src { name: path.display().to_string(), text, base });
         let id = srcs.len() - 1;
-        let included = parse_source(srcs, id, depth + 1, paths)?;
+        let included = parse_source(srcs, id, depth + 1, paths, files)?;
         el.children.extend(included.children);
     }
     Ok(())

@@ -12,6 +12,7 @@ use crate::math::{Color, Vec2};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
 use crate::scene::de::{ColorOrTexture, NumberOrTexture};
+use crate::scene::footprint::FileKind;
 use crate::texture::image::{TexImage, load_image};
 use crate::texture::{Bitmap, Filter, Texture, Wrap};
 use glam::Affine2;
@@ -67,8 +68,8 @@ impl<'a> Cx<'a> {
                     let image = match images.get(&(path.clone(), raw)) {
                         Some(i) => i.clone(),
                         None => {
+                            self.files.open(&path, FileKind::Image)?;
                             let i = Arc::new(load_image(&path, raw).map_err(|e| self.at(file.span(), e.to_string()))?);
-                            geometry.note_file(&path);
                             images.insert((path, raw), i.clone());
                             i
                         }

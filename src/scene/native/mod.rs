@@ -16,6 +16,7 @@ mod schema;
 use super::SceneError;
 use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
+use super::footprint::FileBudget;
 use crate::material::Material;
 use crate::math::Color;
 use materials::MaterialNames;
@@ -31,16 +32,16 @@ use toml::de::{DeString, DeTable, DeValue, ValueDeserializer};
 const DEFAULT_SIZE: (u32, u32) = (640, 480);
 
 /// Loads a TOML scene from `text`; `name` is used in messages and mesh paths resolve against
-/// `base`.
-pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
-    let cx = Cx { path: name, text, base };
+/// `base`. Every mesh and image is reported to `files` before it is read.
+pub fn load_toml_str(text: &str, name: &str, base: &Path, files: &FileBudget) -> Result<SceneDescription, SceneError> {
+    let cx = Cx { path: name, text, base, files };
     let mut sections = cx.sections()?;
     let render: RenderDesc = match sections.remove("render") {
         Some(v) => cx.de(v)?,
         None => RenderDesc::default(),
     };
     let camera = cx.camera(sections.remove("camera"))?;
-    let mut geometry = SceneBuilder::new();
+    let mut geometry = SceneBuilder::with_files(files.clone());
     let textures = cx.textures(sections.remove("textures"), &mut geometry)?;
     let materials = cx.materials(sections.remove("materials"), &textures, &mut geometry)?;
     if let Some(v) = sections.remove("lights") {
@@ -60,7 +61,6 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
     if let Some(v) = sections.remove("objects") {
         cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
     }
-    let geometry_files = geometry.files().to_vec();
     let options = render.options();
     let (width, height) = (options.width.unwrap_or(DEFAULT_SIZE.0), options.height.unwrap_or(DEFAULT_SIZE.1));
     let film = cx.film(&render, width, height)?;
@@ -79,7 +79,6 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
             transparent_shadows: render.transparent_shadows.unwrap_or(true),
         },
         warnings: Vec::new(),
-        files: geometry_files,
     };
     // The file's options over the defaults, as the command line's go over the file's: the sampler
     // and integrator are described in one place.
@@ -87,11 +86,12 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path) -> Result<SceneDescrip
     Ok(desc)
 }
 
-/// The file being loaded, for error positions.
+/// The file being loaded, for error positions, and the hook the files it names are reported to.
 struct Cx<'a> {
     path: &'a str,
     text: &'a str,
     base: &'a Path,
+    files: &'a FileBudget,
 }
 
 impl<'a> Cx<'a> {

@@ -10,6 +10,8 @@ use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
 use crate::scene::environment::environment_map;
+use crate::scene::footprint::FileKind;
+use crate::shape::mesh::MeshFormat;
 use crate::shape::{Cylinder, Disk, Plane, Shape, Sphere, TriangleMesh, box_faces, transformed_quad};
 use crate::texture::image::load_image;
 use std::collections::HashMap;
@@ -114,8 +116,8 @@ impl<'a> Cx<'a> {
                     return Err(self.at(span, "an envmap light needs `file`, the lat-long image (EXR, HDR, PNG...)"));
                 };
                 let path = self.base.join(file.get_ref());
+                self.files.open(&path, FileKind::Image)?;
                 let image = load_image(&path, false).map_err(|e| self.at(file.span(), e.to_string()))?;
-                geometry.note_file(&path);
                 let transform = self.transform(&d.transform, span.clone())?;
                 let env = environment_map(&image, d.scale.map_or(1.0, |s| s.0), &transform)
                     .map_err(|e| self.at(span.clone(), e))?;
@@ -283,7 +285,7 @@ impl<'a> Cx<'a> {
                 ),
             ));
         };
-        geometry.add_instance(g, transform).map_err(|e| self.at(span, e))
+        geometry.add_instance(g, transform).map_err(|e| e.placed(|m| self.at(span, m)))
     }
 
     fn object(
@@ -368,9 +370,11 @@ impl<'a> Cx<'a> {
                         .as_ref()
                         .ok_or_else(|| self.at(span.clone(), "a mesh needs `file` (an OBJ, PLY or serialized file)"))?;
                     let path = self.base.join(file.get_ref());
-                    let mesh = TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?;
-                    geometry.note_file(&path);
-                    mesh
+                    // A name of no mesh format is refused by `load` without opening the file.
+                    if let Some(format) = MeshFormat::of(&path) {
+                        self.files.open(&path, FileKind::Mesh(format))?;
+                    }
+                    TriangleMesh::load(&path).map_err(|e| self.at(file.span(), e.to_string()))?
                 } else {
                     let (segments, sides) = (d.segments.unwrap_or(256), d.sides.unwrap_or(32));
                     if segments < 3 || sides < 3 || 2 * segments as u64 * sides as u64 > MAX_GENERATED_TRIANGLES {
@@ -381,6 +385,8 @@ impl<'a> Cx<'a> {
                         return Err(self.at(span, "torus_knot p and q must be from 1 to 1000"));
                     }
                     let (radius, tube) = (d.radius.map_or(1.0, |r| r.0), d.tube.map_or(0.25, |t| t.0));
+                    let vertices = segments as u64 * sides as u64;
+                    geometry.reserve_generated_mesh("torus_knot", vertices, 2 * vertices)?;
                     TriangleMesh::torus_knot(p, q, radius, tube, segments, sides)
                 };
                 let mut mesh = mesh.transformed(transform);
