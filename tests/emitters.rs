@@ -36,7 +36,7 @@ fn irradiance(s: &caustic::app::LoadedScene, p: Vec3, n: Vec3, n_samples: u32) -
     for _ in 0..n_samples {
         let u = rng.uniform();
         let Some((i, prob)) = scene.light_picker.pick(u) else { continue };
-        let Some(ls) = scene.sample_light(&scene.lights[i], p, rng.uniform2()) else { continue };
+        let Some(ls) = scene.lights[i].sample(p, rng.uniform2(), scene.textures()) else { continue };
         let cos = ls.wi.dot(n).max(0.0) as f64;
         sum += caustic::math::luminance(ls.weight()) as f64 * cos / prob as f64;
     }
@@ -83,7 +83,7 @@ fn an_emitting_mesh_has_the_power_and_irradiance_of_the_formula() {
     let mut rng = caustic::sampling::Rng32::new(7);
     for _ in 0..n {
         let (i, prob) = s.scene.light_picker.pick(rng.uniform()).unwrap();
-        let e = s.scene.emit_photon(&s.scene.lights[i], rng.uniform2(), rng.uniform2()).unwrap();
+        let e = s.scene.lights[i].sample_le(rng.uniform2(), rng.uniform2(), s.scene.textures()).unwrap();
         flux += e.flux.r() as f64 / prob as f64;
     }
     flux /= n as f64;
@@ -302,7 +302,7 @@ fn textured_emitters_read_the_same_texture_where_sampled_and_where_hit() {
         let p = Vec3::new(0.05, -0.02, 0.0);
         for _ in 0..4000 {
             let (i, _) = scene.light_picker.pick(rng.uniform()).unwrap();
-            let Some(ls) = scene.sample_light(&scene.lights[i], p, rng.uniform2()) else { continue };
+            let Some(ls) = scene.lights[i].sample(p, rng.uniform2(), scene.textures()) else { continue };
             let Some(h) = scene.intersect(&Ray::new(p, ls.wi), f32::INFINITY) else { continue };
             total += 1;
             let seen = scene.emitted(&h, -ls.wi);

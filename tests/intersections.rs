@@ -152,12 +152,14 @@ fn emitting_primitives_know_their_light_after_the_bvh_reorders_them() {
         assert!((sp.center.x - x).abs() < 1e-6 && radiance.r() == (i + 1) as f32);
         assert_eq!(s.emitted(&h, Vec3::Z), radiance);
         // An area-light sample: radiance and a solid-angle pdf, not a delta.
-        let ls = s.lights[i as usize].sample(Vec3::new(x, 0.0, 0.0), caustic::math::Vec2::new(0.3, 0.6)).unwrap();
+        let ls = s.lights[i as usize]
+            .sample(Vec3::new(x, 0.0, 0.0), caustic::math::Vec2::new(0.3, 0.6), s.textures())
+            .unwrap();
         assert!(!ls.delta && ls.pdf > 0.0 && ls.radiance == radiance);
     }
     let miss = s.intersect(&Ray::new(Vec3::new(0.0, -5.0, 30.0), -Vec3::Z), f32::INFINITY).unwrap();
     assert_eq!(miss.light, caustic::geometry::NO_LIGHT);
     // A point light: radiance I / d^2 with pdf 1, flagged delta.
-    let ls = s.lights[5].sample(Vec3::new(0.0, 6.0, 0.0), caustic::math::Vec2::ZERO).unwrap();
+    let ls = s.lights[5].sample(Vec3::new(0.0, 6.0, 0.0), caustic::math::Vec2::ZERO, s.textures()).unwrap();
     assert!(ls.delta && ls.pdf == 1.0 && (ls.radiance.r() - 7.0 / 16.0).abs() < 1e-6);
 }

@@ -61,7 +61,7 @@ impl RayIntegrator for PathTracer {
                         1.0
                     } else {
                         let light_pdf = scene.light_picker.prob(env as usize)
-                            * scene.lights[env as usize].pdf(prev_p, prev_p, ray.d, ray.d);
+                            * scene.lights[env as usize].pdf_li(prev_p, prev_p, ray.d, ray.d);
                         power_heuristic(prev_pdf, light_pdf)
                     };
                     layers[layer.emitted()] += beta * le * w;
@@ -77,7 +77,7 @@ impl RayIntegrator for PathTracer {
                 } else {
                     let light = &scene.lights[hit.light as usize];
                     let light_pdf =
-                        scene.light_picker.prob(hit.light as usize) * light.pdf(prev_p, hit.p, hit.ng, ray.d);
+                        scene.light_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
                     layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
                 }
             }
@@ -126,7 +126,7 @@ pub fn direct_light(
 ) -> Color {
     let Some((li, p_pick)) = scene.light_picker.pick(sampler.next_1d()) else { return Color::ZERO };
     let light = &scene.lights[li];
-    let Some(ls) = scene.sample_light(light, hit.p, sampler.next_2d()) else { return Color::ZERO };
+    let Some(ls) = light.sample(hit.p, sampler.next_2d(), scene.textures()) else { return Color::ZERO };
     let f = bsdf.f(wo, ls.wi, Transport::Radiance);
     if f == Color::ZERO {
         return Color::ZERO;

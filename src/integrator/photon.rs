@@ -385,7 +385,7 @@ impl PhotonIntegrator {
         stats: &mut RayStats,
     ) -> Color {
         let one = |light: &Light, sampler: &mut Sampler, stats: &mut RayStats| {
-            let Some(ls) = scene.sample_light(light, hit.p, sampler.rng().uniform2()) else { return Color::ZERO };
+            let Some(ls) = light.sample(hit.p, sampler.rng().uniform2(), scene.textures()) else { return Color::ZERO };
             let f = bsdf.f(wo, ls.wi, Transport::Radiance);
             if f == Color::ZERO {
                 return Color::ZERO;

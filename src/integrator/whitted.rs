@@ -151,7 +151,7 @@ impl Whitted {
                 let n_samples = if light.is_delta() { 1 } else { self.area_samples.max(1) };
                 for _ in 0..n_samples {
                     let u = sampler.rng().uniform2();
-                    let Some(ls) = scene.sample_light(light, hit.p, u) else { continue };
+                    let Some(ls) = light.sample(hit.p, u, scene.textures()) else { continue };
                     let cos = n.dot(ls.wi);
                     if cos <= 0.0 || ng.dot(ls.wi) <= 0.0 {
                         continue;

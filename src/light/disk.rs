@@ -85,6 +85,14 @@ impl PhotonDisk {
         (p, self.density(p.length()))
     }
 
+    /// Density (per unit area of the disk) of the point where `ray` crosses it: what
+    /// `ray`'s origin was drawn with.
+    pub fn pdf_ray(&self, ray: &Ray) -> f32 {
+        let v = ray.o - self.center;
+        let off = v - ray.d * v.dot(ray.d);
+        self.density(off.length())
+    }
+
     /// A photon ray travelling along unit `d` through a sampled point of the disk, starting
     /// before the bounding sphere of the finite geometry, and 1 / density of the point. Lines
     /// that cross infinite planes before that start are moved back by `Scene::photon_entry`.

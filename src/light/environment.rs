@@ -15,7 +15,7 @@
 //! over the W x (H - 1) cells between texel centres, each cell weighted by the exact integral of
 //! the bilinear luminance times sin theta over it, so it is positive wherever the radiance is.
 
-use super::EmittedPhoton;
+use super::EmissionSample;
 use super::disk::PhotonDisk;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
 use crate::sampling::distribution::Distribution2D;
@@ -235,14 +235,15 @@ impl Environment {
     }
 
     /// A photon: a direction from `sample`, a point of the disk, flux L A_eff / pdf.
-    pub fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmittedPhoton> {
+    pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
         let (wi, radiance, pdf) = self.sample(u_dir)?;
         if !(pdf > 0.0) {
             return None;
         }
         let d = -wi;
         let (ray, inv_density) = self.disk.ray(d, u_pos)?;
-        Some(EmittedPhoton { ray, flux: radiance * (inv_density / pdf), n: d, uv: crate::math::Vec2::ZERO })
+        let flux = radiance * (inv_density / pdf);
+        Some(EmissionSample { ray, n: d, le: radiance, pdf_pos: 1.0 / inv_density, pdf_dir: pdf, flux })
     }
 }
 

@@ -1,5 +1,9 @@
 //! Light sources, in physical units. A closed set of `Copy` variants; each can be sampled from a
-//! shading point (for shadow rays and next-event estimation) and can emit photons. Area lights
+//! shading point (`sample`, for shadow rays and next-event estimation, with `pdf_li` its density
+//! for multiple importance sampling) and can start a path of light (`sample_le`, for photons,
+//! light tracing and bidirectional methods, with `pdf_le` its densities). A light reads its own
+//! textures (a spot's or projector's projected image, an area light's radiance texture) from the
+//! scene's textures it is given: no sample leaves without them. Area lights
 //! belong to an emitting primitive, which knows its light by index (`Primitive::light`), and
 //! sample through a copy of that primitive's shape (`Shape::sample_towards`). Environment lights (`environment`:
 //! a map or a constant) surround the scene; they and directional lights send their photons in
@@ -19,6 +23,7 @@ use crate::geometry::Ray;
 use crate::math::{Color, Frame, Vec2, Vec3, luminance};
 use crate::sampling::warp::{cosine_hemisphere, uniform_cone, uniform_sphere};
 use crate::shape::Shape;
+use crate::texture::Texture;
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -184,14 +189,12 @@ pub struct LightSample {
     /// The light is a delta light (point, spot, directional): no ray can hit it, so it takes no
     /// part in multiple importance sampling.
     pub delta: bool,
-    /// Texture coordinates of the sampled point of an area light (where its texture is read).
-    pub uv: Vec2,
 }
 
 /// A sample of a delta light: no area, so no density.
 #[inline(always)]
 fn delta_sample(wi: Vec3, dist: f32, radiance: Color) -> LightSample {
-    LightSample { wi, dist, radiance, pdf: 1.0, delta: true, uv: Vec2::ZERO }
+    LightSample { wi, dist, radiance, pdf: 1.0, delta: true }
 }
 
 /// Light from a point light at `position` arriving at `p`: inverse-square fall-off.
@@ -214,16 +217,26 @@ impl LightSample {
     }
 }
 
-/// A photon leaving a light: its ray and the flux it carries (before dividing by the number of
-/// photons emitted, and by the probability of having chosen this light).
+/// A ray leaving a light (`Light::sample_le`): the first vertex of a light path, with what the
+/// light sends along it and the densities it was drawn with (pbrt-v4's `LightLeSample`).
 #[derive(Clone, Copy, Debug)]
-pub struct EmittedPhoton {
+pub struct EmissionSample {
     pub ray: Ray,
-    pub flux: Color,
-    /// Normal at the emission point (for spawning the ray off an area light).
+    /// Normal at the emission point of an area light (the ray's direction for other lights).
     pub n: Vec3,
-    /// Texture coordinates of the emission point on an area light.
-    pub uv: Vec2,
+    /// What the light sends along the ray, textures applied: radiance (area and environment
+    /// lights), intensity (point, spot, projector) or irradiance (directional).
+    pub le: Color,
+    /// Density of the ray's origin: per unit area on an area light or on the entry disk of a
+    /// light at infinity; 1 for a light at a point (a delta position).
+    pub pdf_pos: f32,
+    /// Density of its direction, per unit solid angle; 1 for a directional light (a delta
+    /// direction).
+    pub pdf_dir: f32,
+    /// le |cos| / (pdf_pos pdf_dir), worked out for each light in closed form: the flux a
+    /// photon on this ray carries (before dividing by the number emitted and by the probability
+    /// of having chosen the light), and a light path's starting weight.
+    pub flux: Color,
 }
 
 impl Light {
@@ -246,7 +259,11 @@ impl Light {
     pub fn environment_radiance(&self, wi: Vec3) -> Color {
         match self {
             Light::Environment(e) => e.radiance(wi),
-            _ => Color::ZERO,
+            Light::Point { .. }
+            | Light::Spot(_)
+            | Light::Projector(_)
+            | Light::Directional { .. }
+            | Light::Area { .. } => Color::ZERO,
         }
     }
 
@@ -262,16 +279,16 @@ impl Light {
                 Some((_, local)) => p.intensity / (local.z * local.z * local.z),
                 None => Color::ZERO,
             },
-            _ => Color::ZERO,
+            Light::Directional { .. } | Light::Area { .. } | Light::Environment(_) => Color::ZERO,
         }
     }
 
     /// The texture a spot or projector casts, if any.
     pub fn projection_texture(&self) -> Option<u32> {
         match *self {
-            Light::Spot(s) if s.texture != NO_TEXTURE => Some(s.texture),
-            Light::Projector(p) if p.texture != NO_TEXTURE => Some(p.texture),
-            _ => None,
+            Light::Spot(s) => (s.texture != NO_TEXTURE).then_some(s.texture),
+            Light::Projector(p) => (p.texture != NO_TEXTURE).then_some(p.texture),
+            Light::Point { .. } | Light::Directional { .. } | Light::Area { .. } | Light::Environment(_) => None,
         }
     }
 
@@ -285,7 +302,31 @@ impl Light {
                 (local.z > 0.0).then(|| (s.texture, s.uv(local)))
             }
             Light::Projector(p) if p.texture != NO_TEXTURE => p.uv(d).map(|(uv, _)| (p.texture, uv)),
-            _ => None,
+            Light::Spot(_)
+            | Light::Projector(_)
+            | Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Area { .. }
+            | Light::Environment(_) => None,
+        }
+    }
+
+    /// The texture factor of light leaving this light in direction `d` from the point whose
+    /// surface coordinates are `uv` (on an area light): an area light's radiance texture there,
+    /// the texture a spot or projector casts along `d`, 1 for every other light (and for lights
+    /// without a texture).
+    #[inline]
+    pub fn texture_factor(&self, uv: Vec2, d: Vec3, textures: &[Texture]) -> Color {
+        match self {
+            Light::Area { shape, texture: Some(t), .. } => textures[t.texture as usize].eval(t.uv(shape, uv)),
+            Light::Spot(_) | Light::Projector(_) => match self.projection(d) {
+                Some((t, uv)) => textures[t as usize].eval(uv),
+                None => Color::ONE,
+            },
+            Light::Area { texture: None, .. }
+            | Light::Point { .. }
+            | Light::Directional { .. }
+            | Light::Environment(_) => Color::ONE,
         }
     }
 
@@ -315,21 +356,26 @@ impl Light {
         }
     }
 
-    /// Samples light arriving at `p`; `u` picks a point on area lights. `None` when `p` receives
-    /// nothing from this sample (outside a spot cone, behind an area light, at the light).
+    /// Samples light arriving at `p` (textures applied); `u` picks a point on area lights and a
+    /// direction of an environment. `None` when `p` receives nothing from this sample (outside a
+    /// spot cone, behind an area light, at the light).
     // The point light, the commonest in classic scenes, is inlined into the caller: called out
     // of line, `p` went through memory and its load stalled on the store just before it.
     #[inline(always)]
-    pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+    pub fn sample(&self, p: Vec3, u: Vec2, textures: &[Texture]) -> Option<LightSample> {
         match *self {
             Light::Point { position, intensity } => point_sample(position, intensity, p),
-            _ => self.sample_other(p, u),
+            Light::Spot(_)
+            | Light::Projector(_)
+            | Light::Directional { .. }
+            | Light::Area { .. }
+            | Light::Environment(_) => self.sample_other(p, u, textures),
         }
     }
 
     /// `sample`, out of line: every light (`sample` itself answers for point lights).
     #[inline(never)]
-    fn sample_other(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+    fn sample_other(&self, p: Vec3, u: Vec2, textures: &[Texture]) -> Option<LightSample> {
         match *self {
             Light::Point { position, intensity } => point_sample(position, intensity, p),
             Light::Spot(Spot { position, .. }) | Light::Projector(Projector { position, .. }) => {
@@ -341,12 +387,13 @@ impl Light {
                 let dist = d2.sqrt();
                 let wi = v / dist;
                 let i = self.intensity_towards(-wi);
-                (i.max_element() > 0.0).then(|| delta_sample(wi, dist, i / d2))
+                (i.max_element() > 0.0)
+                    .then(|| delta_sample(wi, dist, i / d2 * self.texture_factor(Vec2::ZERO, -wi, textures)))
             }
             Light::Directional { direction, irradiance, .. } => {
                 Some(delta_sample(-direction, f32::INFINITY, irradiance))
             }
-            Light::Area { shape, radiance, texture } => {
+            Light::Area { shape, radiance, .. } => {
                 let (s, pdf) = shape.sample_towards(p, u)?;
                 let v = s.p - p;
                 let d2 = v.length_squared();
@@ -358,12 +405,12 @@ impl Light {
                 if s.n.dot(-wi) <= 0.0 {
                     return None;
                 }
-                let uv = texture.map_or(s.uv, |t| t.uv(&shape, s.uv));
-                Some(LightSample { wi, dist, radiance, pdf, delta: false, uv })
+                let radiance = radiance * self.texture_factor(s.uv, -wi, textures);
+                Some(LightSample { wi, dist, radiance, pdf, delta: false })
             }
             Light::Environment(e) => {
                 let (wi, radiance, pdf) = e.sample(u)?;
-                Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false, uv: Vec2::ZERO })
+                Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false })
             }
         }
     }
@@ -371,67 +418,128 @@ impl Light {
     /// Solid-angle density with which `sample` from `p` would pick the light point `q` (normal
     /// `n`) in direction `wi`; 0 for delta lights. Used for multiple importance sampling.
     #[inline]
-    pub fn pdf(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf_li(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match *self {
             Light::Area { shape, .. } => shape.pdf_towards(p, q, n, wi),
             Light::Environment(e) => e.pdf(wi),
-            _ => 0.0,
+            Light::Point { .. } | Light::Spot(_) | Light::Projector(_) | Light::Directional { .. } => 0.0,
         }
     }
 
-    /// Radiance an area light sends from a point with normal `n` in direction `w`.
+    /// Radiance an area light sends from the point with normal `n` in direction `w`, its texture
+    /// read at the point's surface coordinates `uv` (asked for only then: a sphere's cost an arc
+    /// tangent); zero for other lights and behind the surface.
     #[inline]
-    pub fn emitted(&self, n: Vec3, w: Vec3) -> Color {
+    pub fn emitted(&self, n: Vec3, w: Vec3, uv: impl FnOnce() -> Vec2, textures: &[Texture]) -> Color {
         match *self {
-            Light::Area { radiance, .. } if n.dot(w) > 0.0 => radiance,
-            _ => Color::ZERO,
+            Light::Area { shape, radiance, texture } => {
+                if !(n.dot(w) > 0.0) {
+                    return Color::ZERO;
+                }
+                match texture {
+                    Some(t) => radiance * textures[t.texture as usize].eval(t.uv(&shape, uv())),
+                    None => radiance,
+                }
+            }
+            Light::Point { .. }
+            | Light::Spot(_)
+            | Light::Projector(_)
+            | Light::Directional { .. }
+            | Light::Environment(_) => Color::ZERO,
         }
     }
 
-    /// Emits a photon: position and direction from the light's emission distribution. The flux
-    /// is the light's emitted radiance (or intensity) divided by the sampling densities, so its
-    /// mean over many photons is the light's power. Photons leave area lights from just outside
-    /// the sampled point's error bound.
-    pub fn emit(&self, u_pos: Vec2, u_dir: Vec2) -> Option<EmittedPhoton> {
+    /// Samples a ray of light leaving the light, from its emission distribution (`u_pos` picks
+    /// the point on an area light or on the entry disk of a light at infinity, `u_dir` the
+    /// direction), with what it carries and both densities (`EmissionSample`). Rays leave area
+    /// lights from just outside the sampled point's error bound.
+    pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, textures: &[Texture]) -> Option<EmissionSample> {
         match *self {
             Light::Point { position, intensity } => {
                 let d = uniform_sphere(u_dir);
-                Some(EmittedPhoton { ray: Ray::new(position, d), flux: intensity * 4.0 * PI, n: d, uv: Vec2::ZERO })
+                let pdf_dir = 0.25 / PI;
+                Some(EmissionSample {
+                    ray: Ray::new(position, d),
+                    n: d,
+                    le: intensity,
+                    pdf_pos: 1.0,
+                    pdf_dir,
+                    flux: intensity * 4.0 * PI,
+                })
             }
             Light::Spot(s) => {
                 let local = uniform_cone(u_dir, s.cos_cutoff);
                 let d = s.frame.to_world(local);
                 let pdf = 1.0 / (2.0 * PI * (1.0 - s.cos_cutoff));
-                let flux = s.intensity * (s.falloff(local.z) / pdf);
-                Some(EmittedPhoton { ray: Ray::new(s.position, d), flux, n: d, uv: Vec2::ZERO })
+                let tex = self.texture_factor(Vec2::ZERO, d, textures);
+                let falloff = s.falloff(local.z);
+                let le = s.intensity * falloff * tex;
+                let flux = s.intensity * (falloff / pdf) * tex;
+                Some(EmissionSample { ray: Ray::new(s.position, d), n: d, le, pdf_pos: 1.0, pdf_dir: pdf, flux })
             }
             Light::Projector(p) => {
-                // A uniform point of the image plane: flux = intensity(d) / pdf(d), where
-                // pdf(d) = 1 / (area cos^3): pi scale x area (times the texel, applied by the
-                // scene).
+                // A uniform point of the image plane: pdf(d) = 1 / (area cos^3) and
+                // intensity(d) = pi scale / cos^3 times the texel, so the flux is pi scale x area
+                // times the texel.
                 let x = (1.0 - 2.0 * u_dir.x) * p.tan_x;
                 let y = (1.0 - 2.0 * u_dir.y) * p.tan_y;
-                let d = p.frame.to_world(Vec3::new(x, y, 1.0).normalize());
-                Some(EmittedPhoton {
-                    ray: Ray::new(p.position, d),
-                    flux: p.intensity * p.plane_area(),
-                    n: d,
-                    uv: Vec2::ZERO,
-                })
+                let local = Vec3::new(x, y, 1.0).normalize();
+                let d = p.frame.to_world(local);
+                let tex = self.texture_factor(Vec2::ZERO, d, textures);
+                let cos3 = local.z * local.z * local.z;
+                let le = p.intensity / cos3 * tex;
+                let pdf_dir = 1.0 / (p.plane_area() * cos3);
+                let flux = p.intensity * p.plane_area() * tex;
+                Some(EmissionSample { ray: Ray::new(p.position, d), n: d, le, pdf_pos: 1.0, pdf_dir, flux })
             }
             Light::Directional { direction, irradiance, disk } => {
                 let (ray, inv_density) = disk.ray(direction, u_pos)?;
-                Some(EmittedPhoton { ray, flux: irradiance * inv_density, n: direction, uv: Vec2::ZERO })
+                let flux = irradiance * inv_density;
+                Some(EmissionSample {
+                    ray,
+                    n: direction,
+                    le: irradiance,
+                    pdf_pos: 1.0 / inv_density,
+                    pdf_dir: 1.0,
+                    flux,
+                })
             }
-            Light::Area { shape, radiance, texture } => {
+            Light::Area { shape, radiance, .. } => {
                 let s = shape.sample_area(u_pos)?;
-                let d = Frame::from_z(s.n).to_world(cosine_hemisphere(u_dir));
-                // L cos / (pdf_area * cos / pi) = L * area * pi.
+                let local = cosine_hemisphere(u_dir);
+                let d = Frame::from_z(s.n).to_world(local);
                 let ray = Ray::spawn(s.p, s.p_error, s.n, d, 0.0);
-                let uv = texture.map_or(s.uv, |t| t.uv(&shape, s.uv));
-                Some(EmittedPhoton { ray, flux: radiance * (shape.area() * PI), n: s.n, uv })
+                let tex = self.texture_factor(s.uv, d, textures);
+                // L cos / (pdf_area * cos / pi) = L * area * pi.
+                let flux = radiance * (shape.area() * PI) * tex;
+                let le = radiance * tex;
+                Some(EmissionSample { ray, n: s.n, le, pdf_pos: 1.0 / shape.area(), pdf_dir: local.z / PI, flux })
             }
-            Light::Environment(e) => e.emit(u_pos, u_dir),
+            Light::Environment(e) => e.sample_le(u_pos, u_dir),
+        }
+    }
+
+    /// Densities (position, direction) with which `sample_le` gives `ray`, leaving a point with
+    /// normal `n` (area lights); as pbrt-v4's `PDF_Le`, a delta position has position density 0
+    /// and a delta direction direction density 0 (what `sample_le` reports as 1 there is a
+    /// discrete probability, not a density).
+    pub fn pdf_le(&self, ray: &Ray, n: Vec3) -> (f32, f32) {
+        match *self {
+            Light::Point { .. } => (0.0, 0.25 / PI),
+            Light::Spot(s) => {
+                let inside = ray.d.dot(s.frame.z) > s.cos_cutoff;
+                (0.0, if inside { 1.0 / (2.0 * PI * (1.0 - s.cos_cutoff)) } else { 0.0 })
+            }
+            Light::Projector(p) => match p.uv(ray.d) {
+                Some((_, local)) => (0.0, 1.0 / (p.plane_area() * local.z * local.z * local.z)),
+                None => (0.0, 0.0),
+            },
+            Light::Directional { disk, .. } => (disk.pdf_ray(ray), 0.0),
+            Light::Area { shape, .. } => {
+                let cos = n.dot(ray.d);
+                (1.0 / shape.area(), if cos > 0.0 { cos / PI } else { 0.0 })
+            }
+            Light::Environment(e) => (e.disk.pdf_ray(ray), e.pdf(-ray.d)),
         }
     }
 
@@ -442,7 +550,7 @@ impl Light {
         let power = match *self {
             Light::Directional { irradiance, disk, .. } => irradiance * disk.core_area(),
             Light::Environment(e) => e.integral() * e.disk.core_area(),
-            _ => self.power(),
+            Light::Point { .. } | Light::Spot(_) | Light::Projector(_) | Light::Area { .. } => self.power(),
         };
         luminance(power).max(0.0)
     }
@@ -498,7 +606,7 @@ mod tests {
             let n = if l.is_infinite() { 2_000_000 } else { 200_000 };
             let mut sum = Color::ZERO;
             for _ in 0..n {
-                sum += l.emit(rng.uniform2(), rng.uniform2()).unwrap().flux;
+                sum += l.sample_le(rng.uniform2(), rng.uniform2(), &[]).unwrap().flux;
             }
             let mean = sum / n as f32;
             let p = l.power();
@@ -563,9 +671,11 @@ mod tests {
         // Mitsuba's received value: irradiance x pi x scale / (z_local^2 cos a), z_local the
         // depth along the axis: a point at depth 2, off axis.
         let target = Vec3::new(0.3, -0.2, 2.0);
-        let ls = light.sample(Vec3::ZERO, Vec2::ZERO);
+        let white = [Texture::Constant(Color::ONE)];
+        let ls = light.sample(Vec3::ZERO, Vec2::ZERO, &white);
         assert!(ls.is_none(), "the projector's own position receives nothing");
-        let seen = Light::Projector(Projector { position: -target, ..p }).sample(Vec3::ZERO, Vec2::ZERO).unwrap();
+        let seen =
+            Light::Projector(Projector { position: -target, ..p }).sample(Vec3::ZERO, Vec2::ZERO, &white).unwrap();
         let cos_a = target.normalize().z;
         let want = PI / (target.z * target.z * cos_a);
         assert!((seen.radiance.r() - want).abs() < 1e-5 * want, "{} vs {want}", seen.radiance.r());

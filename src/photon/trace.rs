@@ -15,7 +15,7 @@
 //! same for any thread count.
 
 use crate::geometry::Ray;
-use crate::light::{EmittedPhoton, Light};
+use crate::light::Light;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Frame, Vec2, Vec3};
@@ -125,11 +125,10 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> Phot
             let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
             let (li, p) = scene.light_picker.pick(rng.uniform())?;
             let light = &scene.lights[li];
-            let mut e = scene.emit_photon(light, rng.uniform2(), rng.uniform2())?;
-            if light.is_infinite() {
-                e.ray = scene.photon_entry(e.ray);
-            }
-            Some((e, p, rng))
+            let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
+            let e = light.sample_le(u_pos, u_dir, scene.textures())?;
+            let ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+            Some((Emitted { ray, flux: e.flux }, p, rng))
         },
         scene,
         false,
@@ -156,12 +155,10 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
                 let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
                 let (li, p) = scene.light_picker.pick(rng.uniform())?;
                 let light = &scene.lights[li];
-                let mut e = emit_towards(light, &scene.specular_targets, &mut rng)?;
-                e.flux *= scene.emission_texture(light, &e);
-                if light.is_infinite() {
-                    e.ray = scene.photon_entry(e.ray);
-                }
-                Some((e, p, rng))
+                let (e, uv) = emit_towards(light, &scene.specular_targets, &mut rng)?;
+                let flux = e.flux * light.texture_factor(uv, e.ray.d, scene.textures());
+                let ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+                Some((Emitted { ray, flux }, p, rng))
             },
             scene,
             true,
@@ -177,13 +174,21 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
     PhotonPass { hits, emitted, capped, cancelled: watch.cancelled() }
 }
 
+/// A photon leaving a light: its ray and the flux it carries (before dividing by the number of
+/// photons emitted and by the probability of having chosen the light).
+#[derive(Clone, Copy, Debug)]
+struct Emitted {
+    ray: Ray,
+    flux: Color,
+}
+
 /// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order, each
 /// stored flux multiplied by `scale` (1 / photons emitted, when known beforehand). Once the
 /// watch's cancel flag is set, chunks not yet started are skipped.
 fn run_chunks(
     first: u64,
     n: u64,
-    emit: impl Fn(u64) -> Option<(EmittedPhoton, f32, Rng32)> + Sync,
+    emit: impl Fn(u64) -> Option<(Emitted, f32, Rng32)> + Sync,
     scene: &Scene,
     caustic_only: bool,
     scale: f32,
@@ -318,7 +323,7 @@ fn cone(p: Vec3, (c, r): (Vec3, f32)) -> (Vec3, f32, f32) {
 /// the position) is drawn from a mixture over the targets' cones (disks), and the flux divided
 /// by the mixture's density, so the caustic photons are an unbiased sample of the light's
 /// emission restricted to the directions that can reach a mirror or glass object.
-fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Option<EmittedPhoton> {
+fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Option<(Emitted, Vec2)> {
     let (u_pos, u_pick, u_dir) = (rng.uniform2(), rng.uniform(), rng.uniform2());
     match *light {
         Light::Directional { direction, irradiance, disk } => {
@@ -349,9 +354,9 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         | Light::Projector(crate::light::Projector { position, .. }) => {
             (position, Vec3::ZERO, Vec3::ZERO, 1.0, Color::ONE, Vec2::ZERO)
         }
-        Light::Area { shape, radiance, texture } => {
+        Light::Area { shape, radiance, .. } => {
             let s = shape.sample_area(u_pos)?;
-            (s.p, s.p_error, s.n, shape.area(), radiance, texture.map_or(s.uv, |t| t.uv(&shape, s.uv)))
+            (s.p, s.p_error, s.n, shape.area(), radiance, s.uv)
         }
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
@@ -375,8 +380,8 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         }
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
-    let (ray, n_out) = if n == Vec3::ZERO { (Ray::new(p, d), d) } else { (Ray::spawn(p, p_error, n, d, 0.0), n) };
-    Some(EmittedPhoton { ray, flux: emitted / pdf_dir, n: n_out, uv })
+    let ray = if n == Vec3::ZERO { Ray::new(p, d) } else { Ray::spawn(p, p_error, n, d, 0.0) };
+    Some((Emitted { ray, flux: emitted / pdf_dir }, uv))
 }
 
 /// A photon travelling along `direction` from infinity, through a point of the disks the targets
@@ -391,7 +396,7 @@ fn towards_from_infinity(
     targets: &[(Vec3, f32)],
     u_pick: f32,
     u_dir: crate::math::Vec2,
-) -> Option<EmittedPhoton> {
+) -> Option<(Emitted, Vec2)> {
     let frame = Frame::from_z(direction);
     let j = pick(targets.iter().map(|t| PI * t.1 * t.1), u_pick)?;
     let total: f32 = targets.iter().map(|t| PI * t.1 * t.1).sum();
@@ -410,7 +415,7 @@ fn towards_from_infinity(
     let pdf_area = covering as f32 / total;
     let back = (center - q).dot(-direction) + radius;
     let o = q - direction * back.max(r);
-    Some(EmittedPhoton { ray: Ray::new(o, direction), flux: irradiance / pdf_area, n: direction, uv: Vec2::ZERO })
+    Some((Emitted { ray: Ray::new(o, direction), flux: irradiance / pdf_area }, Vec2::ZERO))
 }
 
 /// Index chosen from `weights` in proportion to them, by the uniform number `u`.

@@ -361,10 +361,6 @@ impl SceneBuilder {
                 _ => {}
             }
         }
-        let any_light_texture = self
-            .lights
-            .iter()
-            .any(|l| l.projection_texture().is_some() || matches!(l, Light::Area { texture: Some(_), .. }));
         let scene = Scene {
             bvh,
             instances,
@@ -379,7 +375,6 @@ impl SceneBuilder {
             // the direction is kept as a tiny margin relative to the scene size.
             ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
             transparent_shadows: shading.transparent_shadows,
-            any_light_texture,
             specular_targets: self.specular_targets,
         };
         Ok((scene, info))

@@ -19,7 +19,7 @@ pub use footprint::{FileBudget, FileKind};
 use crate::accel::{Bvh, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, Hit, Ray};
-use crate::light::{EmittedPhoton, Light, LightPicker, LightSample};
+use crate::light::{Light, LightPicker};
 use crate::material::Materials;
 use crate::material::bsdf::Bsdf;
 use crate::math::{Color, Vec3};
@@ -77,66 +77,16 @@ pub struct Scene {
     pub ray_bias: f32,
     /// Whether transparent objects let (attenuated) light through to shadow rays.
     pub transparent_shadows: bool,
-    /// Some spot light or projector casts a texture, or some area light emits one (so light
-    /// samples look it up).
-    pub any_light_texture: bool,
     /// Bounding spheres (centre, radius) of objects with mirror or glass materials: where caustic
     /// photons are aimed.
     pub specular_targets: Vec<(crate::math::Vec3, f32)>,
 }
 
 impl Scene {
-    /// Samples light `light` from `p` (see `Light::sample`), with the texture a spot or
-    /// projector casts or an area light emits.
+    /// The textures materials and lights read.
     #[inline(always)]
-    pub fn sample_light(&self, light: &Light, p: Vec3, u: crate::math::Vec2) -> Option<LightSample> {
-        let mut s = light.sample(p, u)?;
-        s.radiance *= self.light_texture(light, s.uv, -s.wi);
-        Some(s)
-    }
-
-    /// Emits a photon from `light` (see `Light::emit`), with the texture it casts or emits.
-    pub fn emit_photon(
-        &self,
-        light: &Light,
-        u_pos: crate::math::Vec2,
-        u_dir: crate::math::Vec2,
-    ) -> Option<EmittedPhoton> {
-        let mut e = light.emit(u_pos, u_dir)?;
-        e.flux *= self.emission_texture(light, &e);
-        Some(e)
-    }
-
-    /// The texture factor of photon `e` leaving `light`: the texture a spot or projector casts
-    /// in its direction, or an area light's radiance texture at its starting point; 1 for every
-    /// other light.
-    #[inline]
-    pub fn emission_texture(&self, light: &Light, e: &EmittedPhoton) -> Color {
-        self.light_texture(light, e.uv, e.ray.d)
-    }
-
-    /// The texture factor of light leaving `light` in direction `d` from the point with texture
-    /// coordinates `uv` (on an area light): an area light's radiance texture at `uv`, the texture
-    /// a spot or projector casts along `d`, 1 otherwise.
-    #[inline(always)]
-    fn light_texture(&self, light: &Light, uv: crate::math::Vec2, d: Vec3) -> Color {
-        if !self.any_light_texture {
-            return Color::ONE;
-        }
-        match *light {
-            Light::Area { texture: Some(t), .. } => self.materials.textures[t.texture as usize].eval(uv),
-            _ => self.projected_texture(light, d),
-        }
-    }
-
-    /// The colour of the texture a spot or projector casts in direction `d` (leaving it); 1 for
-    /// every other light.
-    #[inline]
-    pub fn projected_texture(&self, light: &Light, d: Vec3) -> Color {
-        match light.projection(d) {
-            Some((t, uv)) => self.materials.textures[t as usize].eval(uv),
-            None => Color::ONE,
-        }
+    pub fn textures(&self) -> &[crate::texture::Texture] {
+        &self.materials.textures
     }
 
     /// Bounds of all bounded geometry (planes excluded).
@@ -195,10 +145,7 @@ impl Scene {
     #[inline]
     pub fn emitted(&self, h: &Hit, w: crate::math::Vec3) -> Color {
         match self.lights.get(h.light as usize) {
-            Some(light @ Light::Area { shape, texture: Some(t), .. }) => {
-                light.emitted(h.ng, w) * self.materials.textures[t.texture as usize].eval(t.uv(shape, h.uv()))
-            }
-            Some(light) => light.emitted(h.ng, w),
+            Some(light) => light.emitted(h.ng, w, || h.uv(), self.textures()),
             None => Color::ZERO,
         }
     }

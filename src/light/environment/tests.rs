@@ -160,7 +160,7 @@ fn photon_flux_averages_to_power() {
             let n = 400_000;
             let mut sum = Color::ZERO;
             for _ in 0..n {
-                if let Some(p) = e.emit(rng.uniform2(), rng.uniform2()) {
+                if let Some(p) = e.sample_le(rng.uniform2(), rng.uniform2()) {
                     assert!((p.ray.d.length() - 1.0).abs() < 1e-5 && p.flux.is_finite());
                     sum += p.flux;
                 }
