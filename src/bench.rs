@@ -258,8 +258,13 @@ pub fn run_all(repeats: u32) {
     let best = (0..repeats)
         .map(|r| {
             let t = Instant::now();
-            let pass =
-                crate::photon::trace::trace_global(&cornell.scene, n, r as u64, crate::photon::trace::Watch::none());
+            let pass = crate::photon::trace::trace_global(
+                &cornell.scene,
+                n,
+                r as u64,
+                cornell.integrator.ray_bias(&cornell.scene),
+                crate::photon::trace::Watch::none(),
+            );
             (t.elapsed(), pass.hits.len())
         })
         .min_by_key(|r| r.0)

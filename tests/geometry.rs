@@ -462,7 +462,7 @@ fn million_instances(n: usize) -> (caustic::scene::Scene, caustic::scene::desc::
         principal_point: caustic::math::Vec2::ZERO,
     }
     .build(4, 4);
-    b.finish(cam, &Default::default()).unwrap()
+    b.finish(cam).unwrap()
 }
 
 // --- robust ray origins -------------------------------------------------------------------------

@@ -257,7 +257,8 @@ fn photons_from_infinity_start_before_every_plane_they_cross() {
     let text = format!("{SPHERE_ON_PLANE}[[lights]]\ntype = \"directional\"\ndirection = [1, -0.2, 0]\n");
     let s = common::scene(&text);
     let n = 20_000;
-    let pass = caustic::photon::trace::trace_global(&s.scene, n, 3, caustic::photon::trace::Watch::none());
+    let pass =
+        caustic::photon::trace::trace_global(&s.scene, n, 3, common::bias(&s), caustic::photon::trace::Watch::none());
     let first = |h: &&caustic::photon::trace::PhotonHit| h.flags & caustic::photon::trace::DIRECT != 0;
     let landed = pass.hits.iter().filter(first).count();
     assert!(landed as f64 > 0.999 * n as f64, "only {landed} of {n} photons landed anywhere");

@@ -5,7 +5,7 @@ mod common;
 use caustic::app::LoadedScene;
 use caustic::film::Image;
 use caustic::integrator::photon::PhotonConfig;
-use caustic::integrator::{PathTracer, PhotonIntegrator};
+use caustic::integrator::PhotonIntegrator;
 use caustic::math::{Color, Vec3, luminance};
 use caustic::options::Options;
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};
@@ -41,7 +41,7 @@ material = "floor"
 #[test]
 fn photon_irradiance_under_a_point_light_matches_i_cos_over_d2() {
     let s = common::scene(FLOOR_UNDER_POINT_LIGHT);
-    let pass = trace::trace_global(&s.scene, 1_000_000, 1, trace::Watch::none());
+    let pass = trace::trace_global(&s.scene, 1_000_000, 1, common::bias(&s), trace::Watch::none());
     let map = PhotonMap::build(pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, h.flags)).collect());
     let light = Vec3::new(0.0, 2.0, 0.0);
     let mut g = Gathered::new(4000);
@@ -60,7 +60,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
     let text = FLOOR_UNDER_POINT_LIGHT
         .replace("type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "type = \"plane\"");
     let s = common::scene(&text);
-    let pass = trace::trace_global(&s.scene, 400_000, 3, trace::Watch::none());
+    let pass = trace::trace_global(&s.scene, 400_000, 3, common::bias(&s), trace::Watch::none());
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
     let expected = 4.0 * PI * 10.0 * 0.5;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
@@ -70,7 +70,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
         "corner = [-1, 0, 1]\nedge1 = [2, 0, 0]\nedge2 = [0, 0, -2]",
     );
     let s = common::scene(&square);
-    let pass = trace::trace_global(&s.scene, 400_000, 4, trace::Watch::none());
+    let pass = trace::trace_global(&s.scene, 400_000, 4, common::bias(&s), trace::Watch::none());
     let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
     let fraction = 4.0 * (1.0f32 / 5.0).asin() / (4.0 * PI);
     let expected = 4.0 * PI * 10.0 * fraction;
@@ -106,7 +106,15 @@ material = "clear"
 #[test]
 fn caustic_map_holds_only_specular_paths() {
     let s = common::scene(GLASS_OVER_FLOOR);
-    let pass = trace::trace_caustic(&s.scene, 50_000, 5_000_000, 5, trace::Watch::none());
+    let pass = trace::trace_caustic(
+        &s.scene,
+        &trace::specular_targets(&s.scene),
+        50_000,
+        5_000_000,
+        5,
+        common::bias(&s),
+        trace::Watch::none(),
+    );
     assert!(pass.hits.len() >= 50_000, "{} stored", pass.hits.len());
     assert!(pass.hits.iter().all(|h| h.flags == CAUSTIC));
     // The only specular object is the sphere, so the last bounce of every caustic photon was on
@@ -120,9 +128,21 @@ fn caustic_map_holds_only_specular_paths() {
     assert_eq!(stray, 0, "{stray} caustic photons did not come from the glass");
     // Without mirrors or glass there is no caustic map.
     let diffuse = common::scene(&GLASS_OVER_FLOOR.replace("material = \"clear\"", "material = \"floor\""));
-    assert!(trace::trace_caustic(&diffuse.scene, 1000, 100_000, 5, trace::Watch::none()).hits.is_empty());
+    assert!(
+        trace::trace_caustic(
+            &diffuse.scene,
+            &trace::specular_targets(&diffuse.scene),
+            1000,
+            100_000,
+            5,
+            common::bias(&diffuse),
+            trace::Watch::none()
+        )
+        .hits
+        .is_empty()
+    );
     // The global map flags as caustic exactly the photons that arrived through glass alone.
-    let global = trace::trace_global(&s.scene, 200_000, 6, trace::Watch::none());
+    let global = trace::trace_global(&s.scene, 200_000, 6, common::bias(&s), trace::Watch::none());
     let flagged = global.hits.iter().filter(|h| h.flags & CAUSTIC != 0);
     assert!(flagged.clone().count() > 100 && flagged.clone().all(came_through_glass));
     // ... and only those: photons landing outside the glass's shadow came straight.
@@ -166,9 +186,21 @@ material = "grey"
 
 #[test]
 fn furnace_path_tracer() {
-    let gi = luminance(common::render_with(&furnace(200), &PathTracer { max_depth: 200 }).mean());
+    let gi = luminance(
+        {
+            let f = furnace(200);
+            common::render_with(&f, &common::path_tracer(&f, 200))
+        }
+        .mean(),
+    );
     assert!((gi - 1.0).abs() < 0.03, "path tracer, all bounces: {gi}");
-    let direct = luminance(common::render_with(&furnace(1), &PathTracer { max_depth: 1 }).mean());
+    let direct = luminance(
+        {
+            let f = furnace(1);
+            common::render_with(&f, &common::path_tracer(&f, 1))
+        }
+        .mean(),
+    );
     assert!((direct - 0.5).abs() < 0.015, "path tracer, direct only: {direct}");
 }
 
@@ -190,7 +222,7 @@ fn photon_mapping_matches_the_path_tracer_on_the_diffuse_cornell_box() {
     let size = Options { width: Some(48), height: Some(48), ..Default::default() };
     let reference = |seed: u64| {
         let s = common::bundled("11-cornell-area.toml", &Options { spp: Some(1024), seed: Some(seed), ..size.clone() });
-        common::render_with(&s, &PathTracer { max_depth: 12 })
+        common::render_with(&s, &common::path_tracer(&s, 12))
     };
     let (pt_a, pt_b) = (reference(1), reference(2));
     let photon = |seed: u64| {

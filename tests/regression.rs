@@ -2,7 +2,7 @@
 
 mod common;
 
-use caustic::integrator::path::power_heuristic;
+use caustic::integrator::lighting::power_heuristic;
 
 /// Issue 16, defect 2: a path-traced floor plane under an area light dropped samples as NaN.
 /// From a point far along the plane, near the horizon, the light subtends a tiny solid angle and

@@ -5,7 +5,6 @@ mod common;
 
 use caustic::app::LoadedScene;
 use caustic::film::Image;
-use caustic::integrator::PathTracer;
 use caustic::integrator::sppm::{Sppm, SppmConfig};
 use caustic::math::luminance;
 use caustic::options::{IntegratorKind, Options};
@@ -19,6 +18,7 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
         initial_radius: None,
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
+        ray_bias: common::bias(s),
     };
     let out = Sppm { config }.render(
         &s.scene,
@@ -32,10 +32,10 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
 #[test]
 fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
     let size = Options { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
-    let reference = common::render_with(
-        &common::bundled("11-cornell-area.toml", &Options { spp: Some(2048), ..size.clone() }),
-        &PathTracer { max_depth: 12 },
-    );
+    let reference = {
+        let r = common::bundled("11-cornell-area.toml", &Options { spp: Some(2048), ..size.clone() });
+        common::render_with(&r, &common::path_tracer(&r, 12))
+    };
     let s = common::bundled("11-cornell-area.toml", &size);
     let (early, _) = sppm(&s, 16, 20_000);
     let (late, _) = sppm(&s, 256, 20_000);

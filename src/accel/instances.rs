@@ -156,6 +156,12 @@ impl Instances {
         self.bounds
     }
 
+    /// The material of every primitive of group `g`.
+    pub fn group_materials(&self, g: usize) -> impl Iterator<Item = u32> + '_ {
+        let bvh = &self.groups[g];
+        (0..bvh.len() as u32).map(move |i| bvh.material_light(i).0)
+    }
+
     /// World bounds of each instance (in `Instances`' order).
     pub fn instance_bounds(&self) -> impl Iterator<Item = (u32, Aabb)> + '_ {
         self.instances.iter().map(|i| (i.group, i.bounds_of(self.groups[i.group as usize].bounds())))

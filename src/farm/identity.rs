@@ -38,7 +38,18 @@ impl RenderId {
         // Destructured without `..`: a new field of the description or the settings does not
         // compile until it is part of the identity, or named here as one that leaves the image as
         // it is. The names and the text of the values are those of partial files already written.
-        let IntegratorDesc { kind, max_depth, light_samples, adc_bailout, photon } = integrator;
+        // The Whitted integrator's ambient light and shadows and the ray offset come from the
+        // scene file only (hashed in `scene`).
+        let IntegratorDesc {
+            kind,
+            max_depth,
+            light_samples,
+            adc_bailout,
+            photon,
+            ambient: _,
+            transparent_shadows: _,
+            ray_bias: _,
+        } = integrator;
         let PhotonOptions {
             photons,
             caustic_photons,

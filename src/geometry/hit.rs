@@ -93,6 +93,14 @@ pub struct Hit {
 }
 
 impl Hit {
+    /// A ray leaving the hit point in direction `d`, off the surface (outside the point's error
+    /// bound, on the side `d` leaves towards) and `bias` further along `d` (the seed report's
+    /// ray bias: `IntegratorDesc::ray_bias`).
+    #[inline(always)]
+    pub fn spawn(&self, d: Vec3, bias: f32) -> crate::geometry::Ray {
+        crate::geometry::Ray::spawn(self.p, self.p_error, self.ng, d, bias)
+    }
+
     /// True when the ray direction `d` arrives from the outward side of the surface.
     #[inline]
     pub fn is_front(&self, d: Vec3) -> bool {

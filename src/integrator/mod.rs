@@ -4,6 +4,7 @@
 //! an integrator is made from the scene's description.
 
 pub mod layers;
+pub mod lighting;
 pub mod path;
 pub mod photon;
 pub mod sppm;
@@ -44,16 +45,16 @@ impl Integrator {
     ) -> Result<Self, Cancelled> {
         let depth = desc.depth_limit(desc.kind);
         Ok(match desc.kind {
-            IntegratorKind::Whitted => {
-                Integrator::Whitted(Whitted::new(scene, depth, desc.light_samples, desc.adc_bailout))
-            }
-            IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth }),
+            IntegratorKind::Whitted => Integrator::Whitted(Whitted::new(scene, desc)),
+            IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
                 let pm = PhotonIntegrator::build_watched(scene, config, cancel, settings.progress).ok_or(Cancelled)?;
                 Integrator::Photon(Box::new(pm))
             }
-            IntegratorKind::Sppm => Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, settings.pixels()) }),
+            IntegratorKind::Sppm => {
+                Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, scene, settings.pixels()) })
+            }
         })
     }
 
@@ -106,7 +107,7 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
                 + photon::estimated_map_bytes(c.caustic_photons)
         }
         IntegratorKind::Sppm => {
-            let c = sppm::SppmConfig::new(desc, settings.pixels());
+            let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
             sppm::estimated_bytes(settings.pixels(), c.photons_per_iter, settings.layers)
         }
     }

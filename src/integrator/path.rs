@@ -5,11 +5,11 @@
 //! area and environment lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
 
 use super::layers::LayerPath;
+use super::lighting::{direct_light, power_heuristic};
 use crate::film::Layers;
 use crate::geometry::Ray;
-use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3};
+use crate::math::Color;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -17,25 +17,8 @@ use crate::scene::Scene;
 pub struct PathTracer {
     /// Longest path in bounces (0 = emitters only, 1 = direct light only).
     pub max_depth: u32,
-}
-
-/// Veach's power heuristic (exponent 2) weight of a sample of density `a` against one of `b`.
-/// Written as a ratio so that densities whose squares overflow (an area light seen edge-on from
-/// a point far along a floor plane has a solid-angle density near 1e23) give 1 or 0, not
-/// inf / inf = NaN (issue 16).
-#[inline]
-pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    if !(a > 0.0) {
-        return 0.0;
-    }
-    if a >= b {
-        let r = b / a;
-        1.0 / (1.0 + r * r)
-    } else {
-        let r = a / b;
-        let r2 = r * r;
-        r2 / (1.0 + r2)
-    }
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
 }
 
 impl RayIntegrator for PathTracer {
@@ -86,7 +69,9 @@ impl RayIntegrator for PathTracer {
             }
             let bsdf = scene.bsdf(&hit, wo);
             if !bsdf.is_specular_only() {
-                layers[layer.direct()] += beta * direct_light(scene, &hit, &bsdf, wo, sampler, stats, true);
+                let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+                layers[layer.direct()] +=
+                    beta * direct_light(scene, &hit, &bsdf, wo, u_pick, u, self.ray_bias, true, stats);
             }
             let uc = sampler.next_1d();
             let u = sampler.next_2d();
@@ -107,37 +92,8 @@ impl RayIntegrator for PathTracer {
             if !beta.is_finite() || beta == Color::ZERO {
                 break;
             }
-            ray = scene.spawn(&hit, s.wi);
+            ray = hit.spawn(s.wi, self.ray_bias);
         }
         layers
     }
-}
-
-/// One light sample at a hit: a light chosen by power, a point on it, a shadow ray. With `mis`,
-/// area-light samples are weighted against BSDF sampling (whose hits on lights add the rest).
-pub fn direct_light(
-    scene: &Scene,
-    hit: &crate::geometry::Hit,
-    bsdf: &Bsdf,
-    wo: Vec3,
-    sampler: &mut Sampler,
-    stats: &mut RayStats,
-    mis: bool,
-) -> Color {
-    let Some((li, p_pick)) = scene.light_picker.pick(sampler.next_1d()) else { return Color::ZERO };
-    let light = &scene.lights[li];
-    let Some(ls) = light.sample(hit.p, sampler.next_2d(), scene.textures()) else { return Color::ZERO };
-    let f = bsdf.f(wo, ls.wi, Transport::Radiance);
-    if f == Color::ZERO {
-        return Color::ZERO;
-    }
-    let cos = ls.wi.dot(bsdf.normal()).abs();
-    stats.shadow_rays += 1;
-    let visible = scene.visibility(hit, ls.wi, ls.dist);
-    if !(visible > 0.0) {
-        return Color::ZERO;
-    }
-    let w =
-        if ls.delta || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi, Transport::Radiance)) };
-    f * ls.weight() * (cos * w * visible / p_pick)
 }

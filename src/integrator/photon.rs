@@ -24,9 +24,9 @@
 //! the limit the path tracer keeps to (`trace::photon_depth_limit`).
 
 use super::layers::LayerPath;
+use super::lighting::EveryLight;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
-use crate::light::{Light, LightPicker};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
@@ -79,6 +79,8 @@ pub struct PhotonConfig {
     /// surface is still within it.
     pub max_depth: u32,
     pub seed: u64,
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
 }
 
 impl PhotonConfig {
@@ -110,6 +112,7 @@ impl PhotonConfig {
             light_samples: desc.light_samples,
             max_depth: desc.depth_limit(desc.kind),
             seed,
+            ray_bias: desc.ray_bias(scene),
         }
     }
 }
@@ -151,17 +154,10 @@ pub struct PhotonIntegrator {
     /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
     /// is off): filled once before rendering, then only read.
     cache: IrradianceCache,
-    /// With more area and environment lights than `LOOPED_AREA_LIGHTS` (an emitting mesh is a
-    /// light per triangle): their indices, and a picker among them by power.
-    area_lights: Vec<u32>,
-    area_picker: LightPicker,
+    /// Direct light: every light in turn, `light_samples` for each area light.
+    lights: EveryLight,
     pub stats: PhotonStats,
 }
-
-/// Up to this many area and environment lights, direct light takes `light_samples` from each;
-/// beyond, `light_samples` times this many in all, each from a light chosen by power (a mesh of
-/// 10,000 emitting triangles would otherwise cost 10,000 shadow rays per shading point).
-const LOOPED_AREA_LIGHTS: usize = 4;
 
 /// One global photon in this many gets a precomputed irradiance record.
 const IRRADIANCE_STRIDE: usize = 4;
@@ -198,7 +194,8 @@ impl PhotonIntegrator {
     pub fn build_watched(scene: &Scene, config: PhotonConfig, cancel: &AtomicBool, progress: bool) -> Option<Self> {
         let t0 = Instant::now();
         let bar = Progress::new(progress, "photons", config.photons, None);
-        let global = trace::trace_global(scene, config.photons, config.seed, Watch { cancel, progress: Some(&bar) });
+        let watch = Watch { cancel, progress: Some(&bar) };
+        let global = trace::trace_global(scene, config.photons, config.seed, config.ray_bias, watch);
         bar.finish(&format!("{} global photons traced, {} stored", global.emitted, global.hits.len()));
         if global.cancelled {
             return None;
@@ -206,9 +203,11 @@ impl PhotonIntegrator {
         let bar = Progress::new(progress, "caustics", config.caustic_cap, None);
         let caustic = trace::trace_caustic(
             scene,
+            &trace::specular_targets(scene),
             config.caustic_photons,
             config.caustic_cap,
             config.seed,
+            config.ray_bias,
             Watch { cancel, progress: Some(&bar) },
         );
         bar.finish(&format!("{} caustic photons traced, {} stored", caustic.emitted, caustic.hits.len()));
@@ -247,6 +246,7 @@ impl PhotonIntegrator {
             ..Default::default()
         };
         let a = config.cache_error;
+        let lights = EveryLight::new(scene, config.light_samples);
         let mut pm = PhotonIntegrator {
             config,
             global: global_map,
@@ -254,16 +254,9 @@ impl PhotonIntegrator {
             irradiance,
             irradiance_levels,
             cache: IrradianceCache::empty(a.max(1e-3)),
-            area_lights: Vec::new(),
-            area_picker: LightPicker::default(),
+            lights,
             stats,
         };
-        let area: Vec<u32> = (0..scene.lights.len() as u32).filter(|&i| !scene.lights[i as usize].is_delta()).collect();
-        if area.len() > LOOPED_AREA_LIGHTS {
-            let lights: Vec<Light> = area.iter().map(|&i| scene.lights[i as usize]).collect();
-            pm.area_picker = LightPicker::new(&lights);
-            pm.area_lights = area;
-        }
         if a > 0.0 && pm.config.gather_rays > 0 {
             let t2 = Instant::now();
             pm.cache = pm.fill_cache(scene, cancel, progress)?;
@@ -373,55 +366,6 @@ impl PhotonIntegrator {
         sum / (PI * r2 * norm)
     }
 
-    /// Direct light at a hit by shadow rays: one per delta light, `light_samples` per area or
-    /// environment light.
-    fn direct(
-        &self,
-        scene: &Scene,
-        hit: &Hit,
-        bsdf: &Bsdf,
-        wo: Vec3,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Color {
-        let one = |light: &Light, sampler: &mut Sampler, stats: &mut RayStats| {
-            let Some(ls) = light.sample(hit.p, sampler.rng().uniform2(), scene.textures()) else { return Color::ZERO };
-            let f = bsdf.f(wo, ls.wi, Transport::Radiance);
-            if f == Color::ZERO {
-                return Color::ZERO;
-            }
-            stats.shadow_rays += 1;
-            let visible = scene.visibility(hit, ls.wi, ls.dist);
-            if !(visible > 0.0) {
-                return Color::ZERO;
-            }
-            f * ls.weight() * (ls.wi.dot(bsdf.normal()).abs() * visible)
-        };
-        let picked = !self.area_lights.is_empty();
-        let mut sum = Color::ZERO;
-        for light in &scene.lights {
-            if picked && !light.is_delta() {
-                continue;
-            }
-            let n_samples = if light.is_delta() { 1 } else { self.config.light_samples.max(1) };
-            let mut acc = Color::ZERO;
-            for _ in 0..n_samples {
-                acc += one(light, sampler, stats);
-            }
-            sum += acc / n_samples as f32;
-        }
-        if picked {
-            let n_samples = self.config.light_samples.max(1) * LOOPED_AREA_LIGHTS as u32;
-            let mut acc = Color::ZERO;
-            for _ in 0..n_samples {
-                let Some((k, p)) = self.area_picker.pick(sampler.rng().uniform()) else { break };
-                acc += one(&scene.lights[self.area_lights[k] as usize], sampler, stats) / p;
-            }
-            sum += acc / n_samples as f32;
-        }
-        sum
-    }
-
     /// Radiance leaving a final-gather hit `y` towards `wo_y` from photons that scattered at
     /// most `depth` times: from the precomputed irradiance for a Lambertian surface, from a
     /// full estimate of the global map otherwise.
@@ -488,7 +432,7 @@ impl PhotonIntegrator {
         scratch: &mut Gathered,
         stats: &mut RayStats,
     ) -> GatherSample {
-        let mut ray = scene.spawn(hit, wi);
+        let mut ray = hit.spawn(wi, self.config.ray_bias);
         let mut beta = Color::ONE;
         let mut dist = f32::INFINITY;
         let mut l = Color::ZERO;
@@ -510,7 +454,7 @@ impl PhotonIntegrator {
             if by.is_specular_only() {
                 let Some(s) = by.sample(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
                 beta *= s.weight;
-                ray = scene.spawn(&y, s.wi);
+                ray = y.spawn(s.wi, self.config.ray_bias);
                 continue;
             }
             l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, depth, scratch);
@@ -520,7 +464,7 @@ impl PhotonIntegrator {
             }
             let Some(s) = by.sample_delta(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
             beta *= s.weight;
-            ray = scene.spawn(&y, s.wi);
+            ray = y.spawn(s.wi, self.config.ray_bias);
         }
         GatherSample { l, dist }
     }
@@ -679,10 +623,11 @@ impl RayIntegrator for PhotonIntegrator {
                 beta *= s.weight;
                 layer.bounce(true);
                 lit_by_shadow_rays = false;
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, self.config.ray_bias);
                 continue;
             }
-            layers[layer.direct()] += beta * self.direct(scene, &hit, &bsdf, wo, sampler, stats);
+            let direct = self.lights.estimate(scene, &hit, &bsdf, wo, self.config.ray_bias, sampler.rng(), stats);
+            layers[layer.direct()] += beta * direct;
             if bsdf.is_glossy_only() && !last {
                 // Ray-traced glossy reflection: one sampled direction carries the rest.
                 let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
@@ -690,7 +635,7 @@ impl RayIntegrator for PhotonIntegrator {
                 layer.bounce(s.flags.is_specular());
                 lit_by_shadow_rays = !s.flags.is_specular();
                 glossy_prefix |= !s.flags.is_specular();
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, self.config.ray_bias);
                 continue;
             }
             let c = &self.config;
@@ -737,7 +682,7 @@ impl RayIntegrator for PhotonIntegrator {
             beta *= s.weight;
             layer.bounce(true);
             lit_by_shadow_rays = false;
-            ray = scene.spawn(&hit, s.wi);
+            ray = hit.spawn(s.wi, self.config.ray_bias);
         }
         layers
     }

@@ -8,6 +8,7 @@
 //! reflection sending everything into S, and Fresnel weights (eq. 5-8) for dielectrics.
 //! The medium outside every object is air (index 1).
 
+use super::lighting::transmittance;
 use crate::film::{DIRECT, Layers, SPECULAR};
 use crate::geometry::{Hit, Ray};
 use crate::light::Light;
@@ -15,12 +16,11 @@ use crate::material::classic::classic_view;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::material::{Classic, ClassicKind};
 use crate::math::{Color, Vec3};
+use crate::options::IntegratorKind;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
-
-/// Transparent surfaces a shadow ray may pass through before it counts as blocked.
-const MAX_SHADOW_CROSSINGS: usize = 16;
+use crate::scene::desc::IntegratorDesc;
 
 pub struct Whitted {
     /// What each material of the scene is shaded with: the classic model, or the nearest
@@ -43,15 +43,30 @@ pub struct Whitted {
     /// highlight). The image's expected value is unchanged; the rays that could add little to
     /// it are mostly not traced. 0 ends no ray by roulette.
     pub adc_bailout: f32,
+    /// Ambient light I_a of seed eq. 1.
+    pub ambient: Color,
+    /// Whether transparent objects let (attenuated) light through to shadow rays.
+    pub transparent_shadows: bool,
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
 }
 
 impl Whitted {
-    /// The integrator for `scene`, with the settings described on the fields.
-    pub fn new(scene: &Scene, max_depth: u32, area_samples: u32, adc_bailout: f32) -> Self {
+    /// The integrator `desc` describes for `scene`.
+    pub fn new(scene: &Scene, desc: &IntegratorDesc) -> Self {
         let classic: Vec<Classic> =
             (0..scene.materials.len() as u32).map(|m| classic_view(&scene.materials, m)).collect();
         let any_transmissive = classic.iter().any(Classic::transmits);
-        Whitted { classic, any_transmissive, max_depth, area_samples, adc_bailout }
+        Whitted {
+            classic,
+            any_transmissive,
+            max_depth: desc.depth_limit(IntegratorKind::Whitted),
+            area_samples: desc.light_samples,
+            adc_bailout: desc.adc_bailout,
+            ambient: desc.ambient,
+            transparent_shadows: desc.transparent_shadows,
+            ray_bias: desc.ray_bias(scene),
+        }
     }
 
     /// The classic material hit `h` is shaded with, its texture applied.
@@ -142,7 +157,7 @@ impl Whitted {
         if depth >= self.max_depth {
             return (c, Color::ZERO);
         }
-        c += m.color * scene.ambient * m.ka;
+        c += m.color * self.ambient * m.ka;
         if m.kd > 0.0 || m.ks > 0.0 {
             // The seed report's model has no sky light (its ambient term stands for it), and its
             // k_d has no 1/pi: an environment is what rays that leave the scene see, not a light.
@@ -167,7 +182,7 @@ impl Whitted {
                     }
                     let Some(survive) = self.roulette(weight * reflectance.max_element(), sampler) else { continue };
                     let vis = self.shadow_transmittance(scene, hit, ls.wi, ls.dist, stats);
-                    if vis == Color::ZERO {
+                    if vis == 0.0 {
                         continue;
                     }
                     c += reflectance / survive * ls.weight() * vis / n_samples as f32;
@@ -182,7 +197,7 @@ impl Whitted {
         c = Color::ZERO;
         let reflected = |k: f32, sampler: &mut Sampler, stats: &mut RayStats| {
             let d = reflect(ray.d, n);
-            self.secondary(scene, &scene.spawn(hit, d), depth + 1, weight, k, sampler, stats)
+            self.secondary(scene, &hit.spawn(d, self.ray_bias), depth + 1, weight, k, sampler, stats)
         };
         match m.kind {
             ClassicKind::Diffuse => {}
@@ -199,7 +214,15 @@ impl Whitted {
                             c += reflected(m.kr, sampler, stats);
                         }
                         if m.kt > 0.0 {
-                            c += self.secondary(scene, &scene.spawn(hit, t), depth + 1, weight, m.kt, sampler, stats);
+                            c += self.secondary(
+                                scene,
+                                &hit.spawn(t, self.ray_bias),
+                                depth + 1,
+                                weight,
+                                m.kt,
+                                sampler,
+                                stats,
+                            );
                         }
                     }
                     // Total internal reflection: the reflection coefficient becomes 1.
@@ -213,7 +236,15 @@ impl Whitted {
                 if ks < 1.0
                     && let Some(t) = refract(ray.d, n, eta)
                 {
-                    c += self.secondary(scene, &scene.spawn(hit, t), depth + 1, weight, 1.0 - ks, sampler, stats);
+                    c += self.secondary(
+                        scene,
+                        &hit.spawn(t, self.ray_bias),
+                        depth + 1,
+                        weight,
+                        1.0 - ks,
+                        sampler,
+                        stats,
+                    );
                 }
             }
         }
@@ -235,54 +266,17 @@ fn phong_power(cos: f32, n: f32) -> f32 {
     c.powf(n)
 }
 
-/// Fraction of a light's contribution that reaches `hit` along `wi` over distance `dist`.
-/// Opaque surfaces block it; with `transparent_shadows`, transparent surfaces pass k_t and
-/// dielectrics pass 1 - Fresnel reflectance at each crossing (refraction does not bend shadow
-/// rays, so glass casts a lighter shadow rather than a caustic, which photon mapping renders).
 impl Whitted {
-    pub fn shadow_transmittance(&self, scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> Color {
-        let mut ray = scene.spawn(hit, wi);
-        // Stop just short of the light so a light's own surface does not shadow it.
-        let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
-        let target = hit.p + wi * dist;
-        let t_max = |ray: &Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
-        if !scene.transparent_shadows || !self.any_transmissive {
-            stats.shadow_rays += 1;
-            return if scene.occluded(&ray, t_max(&ray)) { Color::ZERO } else { Color::ONE };
-        }
-        // Transmittance is a product, so the crossings can be taken in any order, all from one
-        // traversal along the first ray.
-        let mut atten = Color::ONE;
-        let tm = t_max(&ray);
-        if !(tm > 0.0) {
-            stats.shadow_rays += 1;
-            return atten;
-        }
-        let mut crossings = 0;
-        let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
-            crossings += 1;
-            atten *= crossing_transmittance(&self.classic[material as usize], wi, || crossing.ng());
-            atten != Color::ZERO && crossings <= MAX_SHADOW_CROSSINGS
-        });
-        if let Some(all) = walked {
-            stats.shadow_rays += 1;
-            return if all { atten } else { Color::ZERO };
-        }
-        // As many crossings pass as in the walk above; a further one blocks.
-        for _ in 0..=MAX_SHADOW_CROSSINGS {
-            stats.shadow_rays += 1;
-            let tm = t_max(&ray);
-            if !(tm > 0.0) {
-                return atten;
-            }
-            let Some(h) = scene.intersect(&ray, tm) else { return atten };
-            atten *= crossing_transmittance(&self.classic[h.material as usize], wi, || h.ng);
-            if atten == Color::ZERO {
-                return atten;
-            }
-            ray = scene.spawn(&h, wi);
-        }
-        Color::ZERO
+    /// Fraction of a light's contribution that reaches `hit` along `wi` over distance `dist`
+    /// (the one shadow walk, `lighting::transmittance`). Opaque surfaces block it; with
+    /// `transparent_shadows`, transparent surfaces pass k_t and dielectrics pass 1 - Fresnel
+    /// reflectance at each crossing (refraction does not bend shadow rays, so glass casts a
+    /// lighter shadow rather than a caustic, which photon mapping renders).
+    pub fn shadow_transmittance(&self, scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> f32 {
+        let see_through = self.transparent_shadows && self.any_transmissive;
+        transmittance(scene, hit, wi, dist, self.ray_bias, see_through, stats, |material, crossing| {
+            crossing_transmittance(&self.classic[material as usize], wi, || crossing.ng())
+        })
     }
 }
 

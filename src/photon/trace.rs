@@ -116,8 +116,9 @@ const CHUNK: u64 = 4096;
 /// Bounces after which a photon is dropped (Russian roulette ends nearly all paths long before).
 pub const MAX_BOUNCES: u32 = 64;
 
-/// Traces `n_emit` photons from the scene's lights (chosen in proportion to power).
-pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> PhotonPass {
+/// Traces `n_emit` photons from the scene's lights (chosen in proportion to power); rays leave
+/// surfaces with offset `bias`.
+pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
     let hits = run_chunks(
         0,
         n_emit,
@@ -133,14 +134,25 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, watch: Watch) -> Phot
         scene,
         false,
         1.0 / n_emit.max(1) as f32,
+        bias,
         watch,
     );
     PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
-/// Traces caustic photons until `n_store` are stored or `cap` have been emitted.
-pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Watch) -> PhotonPass {
-    if scene.specular_targets.is_empty() || n_store == 0 {
+/// Traces caustic photons aimed at the bounding spheres `targets` (of mirrors, metals and glass:
+/// `specular_targets`) until `n_store` are stored or `cap` have been emitted.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_caustic(
+    scene: &Scene,
+    targets: &[(Vec3, f32)],
+    n_store: u64,
+    cap: u64,
+    seed: u64,
+    bias: f32,
+    watch: Watch,
+) -> PhotonPass {
+    if targets.is_empty() || n_store == 0 {
         return PhotonPass::default();
     }
     let batch = n_store.max(CHUNK * 4);
@@ -155,7 +167,7 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
                 let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
                 let (li, p) = scene.light_picker.pick(rng.uniform())?;
                 let light = &scene.lights[li];
-                let (e, uv) = emit_towards(light, &scene.specular_targets, &mut rng)?;
+                let (e, uv) = emit_towards(light, targets, &mut rng)?;
                 let flux = e.flux * light.texture_factor(uv, e.ray.d, scene.textures());
                 let ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
                 Some((Emitted { ray, flux }, p, rng))
@@ -163,6 +175,7 @@ pub fn trace_caustic(scene: &Scene, n_store: u64, cap: u64, seed: u64, watch: Wa
             scene,
             true,
             1.0,
+            bias,
             Watch { progress: None, ..watch },
         ));
         emitted += n;
@@ -185,6 +198,7 @@ struct Emitted {
 /// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order, each
 /// stored flux multiplied by `scale` (1 / photons emitted, when known beforehand). Once the
 /// watch's cancel flag is set, chunks not yet started are skipped.
+#[allow(clippy::too_many_arguments)]
 fn run_chunks(
     first: u64,
     n: u64,
@@ -192,6 +206,7 @@ fn run_chunks(
     scene: &Scene,
     caustic_only: bool,
     scale: f32,
+    bias: f32,
     watch: Watch,
 ) -> Vec<PhotonHit> {
     let chunks = n.div_ceil(CHUNK);
@@ -211,7 +226,7 @@ fn run_chunks(
                 if let Some((e, p_light, mut rng)) = emit(i) {
                     let flux = e.flux / p_light;
                     if flux.max_element() > 0.0 && flux.is_finite() {
-                        trace_photon(scene, e.ray, flux, &mut rng, caustic_only, &mut out);
+                        trace_photon(scene, e.ray, flux, &mut rng, caustic_only, bias, &mut out);
                     }
                 }
             }
@@ -232,6 +247,7 @@ pub fn trace_photon(
     mut flux: Color,
     rng: &mut Rng32,
     caustic_only: bool,
+    bias: f32,
     out: &mut Vec<PhotonHit>,
 ) {
     let mut only_specular = true;
@@ -279,7 +295,7 @@ pub fn trace_photon(
             }
         }
         flux = scattered;
-        ray = scene.spawn(&hit, wi);
+        ray = hit.spawn(wi, bias);
     }
 }
 
@@ -304,6 +320,35 @@ pub fn scatter_photon(
     }
     let flux = scattered / q;
     (flux.is_finite() && flux.max_element() > 0.0).then_some((s.wi, flux, s.flags))
+}
+
+/// Most caustic-photon targets made from instances: beyond it, the instances of each group
+/// share one bounding sphere (a photon looks at every target when it is emitted).
+const MAX_INSTANCE_TARGETS: usize = 64;
+
+/// Where caustic photons are aimed (Jensen 1996's projection map): the bounding spheres of the
+/// scene's objects whose material can focus light into caustics (smooth mirrors, metals, glass,
+/// plastic coatings: `Plain::casts_caustics`), and of the instances of groups holding any (each
+/// instance's, or one around all of a group's instances when there would be too many).
+pub fn specular_targets(scene: &Scene) -> Vec<(Vec3, f32)> {
+    let m = &scene.materials;
+    let mut targets: Vec<(Vec3, f32)> =
+        scene.objects.iter().filter(|o| m.casts_caustics(o.material)).map(|o| (o.center, o.radius)).collect();
+    let groups = scene.instances.group_count();
+    let group_specular: Vec<bool> =
+        (0..groups).map(|g| scene.instances.group_materials(g).any(|k| m.casts_caustics(k))).collect();
+    let boxes: Vec<(u32, crate::geometry::Aabb)> =
+        scene.instances.instance_bounds().filter(|(g, _)| group_specular[*g as usize]).collect();
+    if boxes.len() <= MAX_INSTANCE_TARGETS {
+        targets.extend(boxes.iter().map(|(_, b)| b.bounding_sphere()));
+        return targets;
+    }
+    let mut per_group = vec![crate::geometry::Aabb::EMPTY; groups];
+    for (g, b) in &boxes {
+        per_group[*g as usize] = per_group[*g as usize].union(*b);
+    }
+    targets.extend(per_group.into_iter().filter(|b| !b.is_empty()).map(|b| b.bounding_sphere()));
+    targets
 }
 
 /// Solid angle and cone of a target sphere seen from `p`: (axis, cos of the half-angle, solid

@@ -5,15 +5,15 @@
 //! a TOML scene and its Mitsuba twin give the same primitives in the same order (and so the same
 //! image bit for bit).
 
-use super::Scene;
 use super::SceneError;
-use super::desc::{LoadInfo, MeshInfo, ShadingDesc};
+use super::desc::{LoadInfo, MeshInfo};
 use super::footprint::{FileBudget, OverBudget};
+use super::{Scene, SceneObject};
 use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{EmissionTexture, Environment, Light, LightPicker, PhotonDisk};
-use crate::material::{Material, Materials, Plain};
+use crate::material::{Material, Materials};
 use crate::math::{Color, Vec2, Vec3};
 use crate::shape::{Plane, Primitive, Primitives, Shape, TRIANGLE_UV, Triangle, TriangleMesh};
 use crate::texture::Texture;
@@ -34,8 +34,8 @@ pub struct SceneBuilder {
     environment: Option<Environment>,
     /// Primitives of area lights, placed after all other primitives by `finish`.
     area_prims: Primitives,
-    /// Bounding spheres of mirror and glass objects: where caustic photons are aimed.
-    specular_targets: Vec<(Vec3, f32)>,
+    /// Every object added outside groups: its bounding sphere and material.
+    objects: Vec<SceneObject>,
     triangles: usize,
     degenerate_triangles: usize,
     /// The hook the loader reports the files it reads to (shared with it): the builder counts
@@ -45,16 +45,10 @@ pub struct SceneBuilder {
     mesh_info: Vec<MeshInfo>,
     /// Primitives of each group of instanced geometry, in the group's own space.
     groups: Vec<Primitives>,
-    /// Whether each group holds a mirror, metal or glass object.
-    group_specular: Vec<bool>,
     /// The group objects and meshes go to (between `begin_group` and `end_group`).
     open_group: Option<usize>,
     instances: Vec<Instance>,
 }
-
-/// Most caustic-photon targets made from instances: beyond it, the instances of each group
-/// share one bounding sphere (a photon looks at every target when it is emitted).
-const MAX_INSTANCE_TARGETS: usize = 64;
 
 impl SceneBuilder {
     pub fn new() -> Self {
@@ -110,7 +104,6 @@ impl SceneBuilder {
             return Err("groups of instanced shapes cannot be nested".into());
         }
         self.groups.push(Primitives::new());
-        self.group_specular.push(false);
         self.open_group = Some(self.groups.len() - 1);
         Ok((self.groups.len() - 1) as u32)
     }
@@ -156,7 +149,7 @@ impl SceneBuilder {
         for shape in shapes {
             self.target().push(Primitive { shape, material, light: NO_LIGHT });
         }
-        self.note_specular(first, material);
+        self.note_object(first, material);
     }
 
     /// Adds a triangle mesh (zero-area triangles are skipped and counted); `name` says where it
@@ -183,7 +176,7 @@ impl SceneBuilder {
         self.triangles += kept;
         self.degenerate_triangles += skipped;
         self.meshes.push(mesh);
-        self.note_specular(first, material);
+        self.note_object(first, material);
     }
 
     /// Adds an infinite plane (a primitive the BVH keeps beside its tree).
@@ -283,57 +276,29 @@ impl SceneBuilder {
         }
     }
 
-    /// True when light through material `m` (or any material it wraps) can form caustics.
-    fn casts_caustics(&self, m: u32) -> bool {
-        let model = |i: u32| self.materials[i as usize].model;
-        model(m).any_part(&model, &Plain::casts_caustics)
-    }
-
-    /// Records the bounding sphere of the object whose primitives start at `first`, when its
-    /// material is a mirror, metal or glass.
-    fn note_specular(&mut self, first: usize, material: u32) {
-        if !self.casts_caustics(material) || self.target().len() <= first {
-            return;
-        }
-        if let Some(g) = self.open_group {
-            // Instances of the group become targets when the scene is finished.
-            self.group_specular[g] = true;
+    /// Records the bounding sphere and material of the object whose primitives start at
+    /// `first` (objects in groups are known through their instances).
+    fn note_object(&mut self, first: usize, material: u32) {
+        if self.open_group.is_some() || self.target().len() <= first {
             return;
         }
         let (prims, meshes) = (&self.prims, &self.meshes);
-        let target = match prims.get(first, meshes).shape {
+        let (center, radius) = match prims.get(first, meshes).shape {
             Shape::Sphere(s) if prims.len() == first + 1 => (s.center, s.radius),
             _ => (first..prims.len()).fold(Aabb::EMPTY, |b, i| b.union(prims.bounds(i, meshes))).bounding_sphere(),
         };
-        self.specular_targets.push(target);
-    }
-
-    /// Caustic-photon targets for the instances of groups holding mirrors, metals or glass:
-    /// each instance's bounding sphere, or (when there would be too many) one sphere around all
-    /// the instances of each such group.
-    fn instance_targets(group_specular: &[bool], instances: &Instances) -> Vec<(Vec3, f32)> {
-        let boxes: Vec<(u32, Aabb)> =
-            instances.instance_bounds().filter(|(g, _)| group_specular[*g as usize]).collect();
-        if boxes.len() <= MAX_INSTANCE_TARGETS {
-            return boxes.iter().map(|(_, b)| b.bounding_sphere()).collect();
-        }
-        let mut per_group = vec![Aabb::EMPTY; group_specular.len()];
-        for (g, b) in &boxes {
-            per_group[*g as usize] = per_group[*g as usize].union(*b);
-        }
-        per_group.into_iter().filter(|b| !b.is_empty()).map(|b| b.bounding_sphere()).collect()
+        self.objects.push(SceneObject { center, radius, material });
     }
 
     /// Builds the BVH and the scene seen through `camera`; fails when materials refer to each
     /// other or to textures wrongly.
-    pub fn finish(mut self, camera: Camera, shading: &ShadingDesc) -> Result<(Scene, LoadInfo), String> {
+    pub fn finish(mut self, camera: Camera) -> Result<(Scene, LoadInfo), String> {
         let materials = Materials::new(self.materials, self.material_names, self.textures)?;
         self.prims.append(std::mem::take(&mut self.area_prims));
         let t0 = Instant::now();
         let bvh = Bvh::build(std::mem::take(&mut self.prims), &self.meshes);
         let instances =
             Instances::build(std::mem::take(&mut self.groups), std::mem::take(&mut self.instances), &self.meshes);
-        self.specular_targets.extend(Self::instance_targets(&self.group_specular, &instances));
         let info = LoadInfo {
             meshes: self.mesh_info,
             primitives: bvh.len() - bvh.unbounded_len(),
@@ -346,7 +311,6 @@ impl SceneBuilder {
             instance_groups: instances.group_count(),
         };
         let bounds = bvh.bounds().union(instances.bounds());
-        let diag = if bounds.is_empty() { 0.0 } else { bounds.diagonal() };
         let disk = photon_disk(bounds, &self.planes, camera.eye);
         // The environment comes last, so emitting primitives keep their light indices and a
         // scene's lights are in the same order whichever format it was written in.
@@ -358,7 +322,7 @@ impl SceneBuilder {
             match l {
                 Light::Directional { disk: d, .. } => *d = disk,
                 Light::Environment(e) => e.disk = disk,
-                _ => {}
+                Light::Point { .. } | Light::Spot(_) | Light::Projector(_) | Light::Area { .. } => {}
             }
         }
         let scene = Scene {
@@ -370,12 +334,7 @@ impl SceneBuilder {
             lights: self.lights,
             camera,
             environment,
-            ambient: shading.ambient,
-            // Error-bound offsets already keep rays off their own surface; the seed's bias along
-            // the direction is kept as a tiny margin relative to the scene size.
-            ray_bias: shading.ray_bias.unwrap_or(if diag.is_finite() { diag * 1e-6 } else { 0.0 }),
-            transparent_shadows: shading.transparent_shadows,
-            specular_targets: self.specular_targets,
+            objects: self.objects,
         };
         Ok((scene, info))
     }

@@ -45,6 +45,14 @@ pub struct IntegratorDesc {
     /// less weight in the pixel go on by Russian roulette (see `Whitted::adc_bailout`).
     pub adc_bailout: f32,
     pub photon: PhotonOptions,
+    /// Ambient light I_a of seed eq. 1 (the Whitted integrator's).
+    pub ambient: Color,
+    /// Whether transparent objects let (attenuated) light through to the Whitted integrator's
+    /// shadow rays.
+    pub transparent_shadows: bool,
+    /// Extra offset of spawned rays along their direction (the seed report's bias), in scene
+    /// units, for every integrator; `None`: 1e-6 x the scene's diagonal (`ray_bias`).
+    pub ray_bias: Option<f32>,
 }
 
 /// POV-Ray's default `adc_bailout`: one step of an 8-bit pixel.
@@ -58,6 +66,9 @@ impl Default for IntegratorDesc {
             light_samples: 16,
             adc_bailout: DEFAULT_ADC_BAILOUT,
             photon: PhotonOptions::default(),
+            ambient: Color::ZERO,
+            transparent_shadows: true,
+            ray_bias: None,
         }
     }
 }
@@ -66,6 +77,16 @@ impl IntegratorDesc {
     /// The depth limit `kind` works with: the given one, or for "unlimited" the largest limit
     /// (Russian roulette ends paths long before it), except for the Whitted integrator, whose
     /// recursion branches at every glass surface and so keeps the default.
+    /// The ray offset rays leaving surfaces of `scene` take: the given one, or 1e-6 of the
+    /// diagonal of the scene's bounded geometry (0 for a scene without any).
+    pub fn ray_bias(&self, scene: &Scene) -> f32 {
+        self.ray_bias.unwrap_or_else(|| {
+            let b = scene.bounds();
+            let diag = if b.is_empty() { 0.0 } else { b.diagonal() };
+            if diag.is_finite() { diag * 1e-6 } else { 0.0 }
+        })
+    }
+
     pub fn depth_limit(&self, kind: IntegratorKind) -> u32 {
         match (self.max_depth, kind) {
             (Some(d), _) => d,
@@ -125,22 +146,6 @@ pub struct Sampling {
     pub antialias: bool,
 }
 
-/// Settings that change how surfaces are shaded and rays spawned, not what is in the scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShadingDesc {
-    /// Ambient light I_a of seed eq. 1.
-    pub ambient: Color,
-    /// Extra offset of spawned rays along their direction; `None`: 1e-6 x the scene's diagonal.
-    pub ray_bias: Option<f32>,
-    pub transparent_shadows: bool,
-}
-
-impl Default for ShadingDesc {
-    fn default() -> Self {
-        ShadingDesc { ambient: Color::ZERO, ray_bias: None, transparent_shadows: true }
-    }
-}
-
 /// How a file is read (not part of the scene): Mitsuba parameters and strictness.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
@@ -162,7 +167,6 @@ pub struct SceneDescription {
     pub film: FilmDesc,
     pub sampler: SamplerDesc,
     pub integrator: IntegratorDesc,
-    pub shading: ShadingDesc,
     /// Things the loader could not render exactly, each `file:line:col: message`.
     pub warnings: Vec<String>,
 }
@@ -356,10 +360,8 @@ impl SceneDescription {
             }
         }
         let camera = self.camera.build(sampling.width, sampling.height);
-        let (scene, info) = self
-            .geometry
-            .finish(camera, &self.shading)
-            .map_err(|message| SceneError::File { path: self.name.clone(), message })?;
+        let (scene, info) =
+            self.geometry.finish(camera).map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }

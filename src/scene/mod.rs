@@ -55,9 +55,6 @@ pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescri
     native::load_toml_str(text, name, base, &FileBudget::unlimited())
 }
 
-/// Most masked surfaces a shadow ray looks through before it counts as blocked.
-const MAX_MASK_CROSSINGS: usize = 64;
-
 pub struct Scene {
     pub bvh: Bvh,
     /// Instanced groups of shapes and the top-level BVH over their instances.
@@ -71,15 +68,18 @@ pub struct Scene {
     pub camera: Camera,
     /// Index in `lights` of the environment (map or constant) rays that leave the scene see.
     pub environment: Option<u32>,
-    /// Ambient light I_a of seed eq. 1.
-    pub ambient: Color,
-    /// Extra offset of spawned rays along their direction (seed report's bias), in scene units.
-    pub ray_bias: f32,
-    /// Whether transparent objects let (attenuated) light through to shadow rays.
-    pub transparent_shadows: bool,
-    /// Bounding spheres (centre, radius) of objects with mirror or glass materials: where caustic
-    /// photons are aimed.
-    pub specular_targets: Vec<(crate::math::Vec3, f32)>,
+    /// The objects the loaders added outside instanced groups (a sphere, a box, a mesh), with
+    /// their bounding spheres and materials, for methods that aim at objects (caustic photons).
+    pub objects: Vec<SceneObject>,
+}
+
+/// An object of a scene as its file gave it: the bounding sphere of its primitives and its
+/// material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneObject {
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: u32,
 }
 
 impl Scene {
@@ -132,7 +132,7 @@ impl Scene {
         }
         self.bvh.for_each_crossing(ray, t_max, |i, hit| {
             let (material, _) = self.bvh.material_light(i);
-            visit(material, &Crossing { scene: self, ray, hit, prim: i })
+            visit(material, &Crossing::Traversed { scene: self, ray, hit, prim: i })
         })
     }
 
@@ -172,7 +172,11 @@ impl Scene {
         self.environment
             .and_then(|i| match &self.lights[i as usize] {
                 Light::Environment(e) => e.map.map(|m| m.memory_bytes() as u64),
-                _ => None,
+                Light::Point { .. }
+                | Light::Spot(_)
+                | Light::Projector(_)
+                | Light::Directional { .. }
+                | Light::Area { .. } => None,
             })
             .unwrap_or(0)
     }
@@ -206,40 +210,6 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.bvh.occluded(ray, t_max) || (!self.instances.is_empty() && self.instances.occluded(ray, t_max))
-    }
-
-    /// True when nothing blocks the way from hit `h` to a light sample `dist` away along `wi`
-    /// (infinitely far for directional lights). The ray stops just short of the sample, so the
-    /// light's own surface does not shadow it.
-    #[inline]
-    pub fn unoccluded(&self, h: &Hit, wi: crate::math::Vec3, dist: f32) -> bool {
-        self.visibility(h, wi, dist) > 0.0
-    }
-
-    /// The fraction of light that travels from hit `h` a distance `dist` along `wi`: 0 when an
-    /// opaque surface is in the way, else the product of the transparencies of the masks crossed
-    /// (1 with none). Each crossing costs one more ray.
-    pub fn visibility(&self, h: &Hit, wi: crate::math::Vec3, dist: f32) -> f32 {
-        let mut ray = self.spawn(h, wi);
-        let end = h.p + wi * dist;
-        let t_max = |ray: &Ray| if dist.is_finite() { (end - ray.o).dot(wi) * (1.0 - 1e-4) } else { f32::INFINITY };
-        if !self.materials.has_masks {
-            return if self.occluded(&ray, t_max(&ray)) { 0.0 } else { 1.0 };
-        }
-        let mut through = 1.0;
-        for _ in 0..MAX_MASK_CROSSINGS {
-            let tm = t_max(&ray);
-            if !(tm > 0.0) {
-                return through;
-            }
-            let Some(x) = self.intersect(&ray, tm) else { return through };
-            through *= self.materials.transparency(&x, x.is_front(-wi));
-            if !(through > 0.0) {
-                return 0.0;
-            }
-            ray = self.spawn(&x, wi);
-        }
-        0.0
     }
 
     /// Checks what a scene built from finite, in-range values can still get wrong through
@@ -279,12 +249,6 @@ impl Scene {
         Ok(())
     }
 
-    /// A ray leaving hit `h` in direction `d`.
-    #[inline(always)]
-    pub fn spawn(&self, h: &Hit, d: crate::math::Vec3) -> Ray {
-        Ray::spawn(h.p, h.p_error, h.ng, d, self.ray_bias)
-    }
-
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
     #[inline(always)]
     pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf<'_> {
@@ -292,21 +256,39 @@ impl Scene {
     }
 }
 
-/// A surface a ray crosses (see `Scene::for_each_crossing`). Its normal is worked out only when
-/// asked: a shadow ray stopped by an opaque surface, or passing a `transparent` one, needs none.
-pub struct Crossing<'a> {
-    scene: &'a Scene,
-    ray: &'a Ray,
-    hit: crate::shape::PrimHit,
-    /// The primitive crossed (an index into the BVH's primitives).
-    prim: u32,
+/// A surface a ray crosses: one found by `Scene::for_each_crossing` (its surface worked out only
+/// when asked: a shadow ray stopped by an opaque surface, or passing a `transparent` one, needs
+/// none) or a closest hit.
+pub enum Crossing<'a> {
+    Traversed {
+        scene: &'a Scene,
+        ray: &'a Ray,
+        hit: crate::shape::PrimHit,
+        /// The primitive crossed (an index into the BVH's primitives).
+        prim: u32,
+    },
+    Hit(&'a Hit),
 }
 
 impl Crossing<'_> {
     /// The geometric normal a closest hit there reports (`Hit::ng`).
     #[inline]
     pub fn ng(&self) -> Vec3 {
-        let s = self.scene;
-        s.bvh.surface(self.prim, self.ray, &self.hit, &s.meshes).0.ng
+        match self {
+            Crossing::Traversed { scene, ray, hit, prim } => scene.bvh.surface(*prim, ray, hit, &scene.meshes).0.ng,
+            Crossing::Hit(h) => h.ng,
+        }
+    }
+
+    /// The whole surface interaction there, as a closest hit reports it.
+    #[inline]
+    pub fn hit(&self) -> Hit {
+        match self {
+            Crossing::Traversed { scene, ray, hit, prim } => {
+                let (sp, material, light) = scene.bvh.surface(*prim, ray, hit, &scene.meshes);
+                Scene::hit(hit.t, &sp, material, light, *prim)
+            }
+            Crossing::Hit(h) => **h,
+        }
     }
 }

@@ -38,6 +38,18 @@ pub fn bundled(name: &str, o: &Options) -> LoadedScene {
 }
 
 /// Renders a loaded scene with its own settings and a ray integrator made by the test.
+/// The path tracer of depth limit `max_depth` for scene `s` (with its ray offset).
+#[allow(dead_code)]
+pub fn path_tracer(s: &LoadedScene, max_depth: u32) -> caustic::integrator::PathTracer {
+    caustic::integrator::PathTracer { max_depth, ray_bias: s.integrator.ray_bias(&s.scene) }
+}
+
+/// The offset rays leave surfaces of scene `s` with.
+#[allow(dead_code)]
+pub fn bias(s: &LoadedScene) -> f32 {
+    s.integrator.ray_bias(&s.scene)
+}
+
 pub fn render_with<I: RayIntegrator>(s: &LoadedScene, integrator: &I) -> Image {
     render_rays(&s.scene, integrator, &s.settings, &RenderControl::uncancelled()).image
 }

@@ -69,7 +69,7 @@ impl PhotonIntegrator {
                     return None;
                 }
                 let s = bsdf.sample(wo, rng.uniform(), rng.uniform2(), Transport::Radiance)?;
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, self.config.ray_bias);
                 continue;
             }
             return bsdf.lambert_albedo().is_some().then_some(Candidate { hit, bsdf, dist, bounce: depth + 1 });

@@ -23,7 +23,7 @@
 mod grid;
 
 use super::layers::LayerPath;
-use super::path::direct_light;
+use super::lighting::direct_light;
 use crate::film::{Film, Image, Layers};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
@@ -51,16 +51,19 @@ pub struct SppmConfig {
     /// Depth limit in bounces: specular bounces are followed from the camera while the next
     /// surface is still within it.
     pub max_depth: u32,
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
 }
 
 impl SppmConfig {
-    /// Settings from the scene's description, for an image of `pixels` pixels.
-    pub fn new(desc: &IntegratorDesc, pixels: u64) -> Self {
+    /// Settings from the scene's description, for an image of `pixels` pixels of `scene`.
+    pub fn new(desc: &IntegratorDesc, scene: &Scene, pixels: u64) -> Self {
         SppmConfig {
             photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
             initial_radius: desc.photon.initial_radius,
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
+            ray_bias: desc.ray_bias(scene),
         }
     }
 }
@@ -219,7 +222,7 @@ impl Sppm {
         // here abandons the iteration before any pixel has changed.
         let seed = hash_seed(&[settings.seed, it as u64]);
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
-        let pass = trace::trace_global(scene, config.photons_per_iter, seed, watch);
+        let pass = trace::trace_global(scene, config.photons_per_iter, seed, config.ray_bias, watch);
         if pass.cancelled {
             return false;
         }
@@ -373,16 +376,18 @@ impl Sppm {
                 let Some(s) = follow(sample, &mut beta) else { break };
                 layer.bounce(true);
                 lit_by_light_sample = false;
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, config.ray_bias);
                 continue;
             }
-            add(layer.direct(), beta * direct_light(scene, &hit, &bsdf, wo, &mut sampler, stats, false));
+            let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+            let direct = direct_light(scene, &hit, &bsdf, wo, u_pick, u, config.ray_bias, false, stats);
+            add(layer.direct(), beta * direct);
             if bsdf.is_glossy_only() && !last {
                 let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = follow(sample, &mut beta) else { break };
                 layer.bounce(s.flags.is_specular());
                 lit_by_light_sample = !s.flags.is_specular();
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, config.ray_bias);
                 continue;
             }
             let choice = sampler.next_1d();
@@ -393,7 +398,7 @@ impl Sppm {
                 beta /= 1.0 - q;
                 layer.bounce(true);
                 lit_by_light_sample = false;
-                ray = scene.spawn(&hit, s.wi);
+                ray = hit.spawn(s.wi, config.ray_bias);
                 continue;
             }
             // This surface is bounce depth + 1, within the limit (checked above).

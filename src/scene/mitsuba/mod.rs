@@ -25,7 +25,7 @@ mod xml;
 
 use super::SceneError;
 use super::builder::SceneBuilder;
-use super::desc::{IntegratorDesc, LoadOptions, SceneDescription, ShadingDesc};
+use super::desc::{IntegratorDesc, LoadOptions, SceneDescription};
 use super::footprint::{FileBudget, FileKind};
 use crate::options::IntegratorKind;
 use props::Cx;
@@ -171,7 +171,6 @@ impl<'a> Cx<'a> {
             film: sensor.film,
             sampler: sensor.sampler,
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
-            shading: ShadingDesc::default(),
             warnings: Vec::new(),
         })
     }

@@ -15,7 +15,7 @@ mod schema;
 
 use super::SceneError;
 use super::builder::SceneBuilder;
-use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription, ShadingDesc};
+use super::desc::{IntegratorDesc, SamplerDesc, SceneDescription};
 use super::footprint::FileBudget;
 use crate::material::Material;
 use crate::math::Color;
@@ -72,11 +72,11 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path, files: &FileBudget) ->
         height,
         film,
         sampler: SamplerDesc::default(),
-        integrator: IntegratorDesc::default(),
-        shading: ShadingDesc {
+        integrator: IntegratorDesc {
             ambient: render.ambient.map_or(Color::ZERO, |c| c.0),
             ray_bias: render.ray_bias.map(|b| b.0),
             transparent_shadows: render.transparent_shadows.unwrap_or(true),
+            ..IntegratorDesc::default()
         },
         warnings: Vec::new(),
     };

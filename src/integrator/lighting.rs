@@ -1,0 +1,237 @@
+//! Light at a surface, for every integrator: the one shadow walk (transmittance along a segment
+//! through the surfaces that let light through, with one limit on how many it passes) and
+//! direct lighting from the lights (one light chosen by power, with multiple importance sampling
+//! against the BSDF when asked, or every light in turn). The Whitted integrator shades with the
+//! seed report's classic model and passes its own crossing rule (glass lets `1 - F` through);
+//! the physical integrators pass masks' transparent parts.
+
+use crate::geometry::Hit;
+use crate::light::{Light, LightPicker};
+use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
+use crate::math::{Color, Vec2, Vec3};
+use crate::render::RayStats;
+use crate::scene::{Crossing, Scene};
+
+/// The most surfaces a shadow ray passes through (masks, or glass for the Whitted integrator)
+/// before it counts as blocked.
+pub const MAX_CROSSINGS: usize = 64;
+
+/// The fraction of light that travels from hit `from` a distance `dist` along unit `wi`
+/// (infinitely far for a light at infinity), stopping just short of the end so a light's own
+/// surface does not shadow it: 0 when a surface that passes nothing is in the way, else the
+/// product of what each surface crossed passes (`pass(material, crossing)` in [0, 1]). Without
+/// `see_through` (no surface in the scene passes light) it is one occlusion ray. Rays leave
+/// surfaces with offset `bias`; each ray traced counts as a shadow ray.
+///
+/// Transmittance is a product, so the crossings are taken in any order, all from one traversal
+/// along the first ray; scenes whose crossings cannot be enumerated that way (instances,
+/// cylinders) walk them one closest hit at a time, passing as many.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn transmittance(
+    scene: &Scene,
+    from: &Hit,
+    wi: Vec3,
+    dist: f32,
+    bias: f32,
+    see_through: bool,
+    stats: &mut RayStats,
+    mut pass: impl FnMut(u32, &Crossing) -> f32,
+) -> f32 {
+    let mut ray = from.spawn(wi, bias);
+    // Stop just short of the light so a light's own surface does not shadow it.
+    let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
+    let target = from.p + wi * dist;
+    let t_max = |ray: &crate::geometry::Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
+    stats.shadow_rays += 1;
+    if !see_through {
+        return if scene.occluded(&ray, t_max(&ray)) { 0.0 } else { 1.0 };
+    }
+    let mut through = 1.0f32;
+    let tm = t_max(&ray);
+    if !(tm > 0.0) {
+        return through;
+    }
+    let mut crossings = 0;
+    let walked = scene.for_each_crossing(&ray, tm, |material, crossing| {
+        crossings += 1;
+        through *= pass(material, crossing);
+        through != 0.0 && crossings <= MAX_CROSSINGS
+    });
+    if let Some(all) = walked {
+        return if all { through } else { 0.0 };
+    }
+    // As many crossings pass as in the walk above; a further one blocks.
+    for k in 0..=MAX_CROSSINGS {
+        if k > 0 {
+            stats.shadow_rays += 1;
+        }
+        let tm = t_max(&ray);
+        if !(tm > 0.0) {
+            return through;
+        }
+        let Some(h) = scene.intersect(&ray, tm) else { return through };
+        through *= pass(h.material, &Crossing::Hit(&h));
+        if through == 0.0 {
+            return through;
+        }
+        ray = h.spawn(wi, bias);
+    }
+    0.0
+}
+
+/// What the physical integrators' shadow rays pass: the transparent part of a mask (1 - its
+/// opacity), nothing through any other surface.
+#[inline]
+pub fn mask_transparency(scene: &Scene, crossing: &Crossing, wi: Vec3) -> f32 {
+    let h = crossing.hit();
+    scene.materials.transparency(&h, h.is_front(-wi))
+}
+
+/// The transmittance a physical integrator's shadow ray sees: through masks' transparent parts.
+#[inline]
+pub fn visibility(scene: &Scene, from: &Hit, wi: Vec3, dist: f32, bias: f32, stats: &mut RayStats) -> f32 {
+    transmittance(scene, from, wi, dist, bias, scene.materials.has_masks, stats, |_, c| mask_transparency(scene, c, wi))
+}
+
+/// One sample of light `light` (chosen with probability `p_pick`) arriving at hit `hit` (BSDF
+/// `bsdf`, viewer towards `wo`): `u` picks the point on the light, a shadow ray checks it, and
+/// the light's radiance times the BSDF and cosine over the densities is the estimate. With
+/// `mis`, samples of area and environment lights are weighted against BSDF sampling by the power
+/// heuristic (BSDF-sampled hits on lights then add the rest).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn light_sample(
+    scene: &Scene,
+    light: &Light,
+    p_pick: f32,
+    hit: &Hit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    u: Vec2,
+    bias: f32,
+    mis: bool,
+    stats: &mut RayStats,
+) -> Color {
+    let Some(ls) = light.sample(hit.p, u, scene.textures()) else { return Color::ZERO };
+    let f = bsdf.f(wo, ls.wi, Transport::Radiance);
+    if f == Color::ZERO {
+        return Color::ZERO;
+    }
+    let cos = ls.wi.dot(bsdf.normal()).abs();
+    let visible = visibility(scene, hit, ls.wi, ls.dist, bias, stats);
+    if !(visible > 0.0) {
+        return Color::ZERO;
+    }
+    let w =
+        if ls.delta || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi, Transport::Radiance)) };
+    f * ls.weight() * (cos * w * visible / p_pick)
+}
+
+/// Direct light at a hit by one light sample: a light chosen by power (`u_pick`), a point on it
+/// (`u`), a shadow ray (see `light_sample`).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn direct_light(
+    scene: &Scene,
+    hit: &Hit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    u_pick: f32,
+    u: Vec2,
+    bias: f32,
+    mis: bool,
+    stats: &mut RayStats,
+) -> Color {
+    let Some((li, p_pick)) = scene.light_picker.pick(u_pick) else { return Color::ZERO };
+    light_sample(scene, &scene.lights[li], p_pick, hit, bsdf, wo, u, bias, mis, stats)
+}
+
+/// Direct light from every light in turn (photon mapping's estimator, Jensen 2001 sec. 9.1):
+/// one sample of each delta light and `light_samples` of each area and environment light; a
+/// scene with more of those than `LOOPED_AREA_LIGHTS` (an emitting mesh is a light per
+/// triangle) takes `light_samples` times that many from them in all, each from a light chosen
+/// by power, or it would cost a shadow ray per triangle of every emitting mesh.
+pub struct EveryLight {
+    light_samples: u32,
+    /// With many area and environment lights: their indices and a picker among them by power.
+    area_lights: Vec<u32>,
+    area_picker: LightPicker,
+}
+
+/// Up to this many area and environment lights, `EveryLight` samples each of them.
+pub const LOOPED_AREA_LIGHTS: usize = 4;
+
+impl EveryLight {
+    pub fn new(scene: &Scene, light_samples: u32) -> Self {
+        let area: Vec<u32> = (0..scene.lights.len() as u32).filter(|&i| !scene.lights[i as usize].is_delta()).collect();
+        let (area_lights, area_picker) = if area.len() > LOOPED_AREA_LIGHTS {
+            let lights: Vec<Light> = area.iter().map(|&i| scene.lights[i as usize]).collect();
+            (area, LightPicker::new(&lights))
+        } else {
+            (Vec::new(), LightPicker::default())
+        };
+        EveryLight { light_samples: light_samples.max(1), area_lights, area_picker }
+    }
+
+    /// The direct light at `hit`, drawing its numbers from `u` (a point on a light per call,
+    /// and a light choice per picked sample).
+    #[allow(clippy::too_many_arguments)]
+    pub fn estimate(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        bias: f32,
+        rng: &mut crate::sampling::Rng32,
+        stats: &mut RayStats,
+    ) -> Color {
+        let one = |light: &Light, rng: &mut crate::sampling::Rng32, stats: &mut RayStats| {
+            light_sample(scene, light, 1.0, hit, bsdf, wo, rng.uniform2(), bias, false, stats)
+        };
+        let picked = !self.area_lights.is_empty();
+        let mut sum = Color::ZERO;
+        for light in &scene.lights {
+            if picked && !light.is_delta() {
+                continue;
+            }
+            let n_samples = if light.is_delta() { 1 } else { self.light_samples };
+            let mut acc = Color::ZERO;
+            for _ in 0..n_samples {
+                acc += one(light, rng, stats);
+            }
+            sum += acc / n_samples as f32;
+        }
+        if picked {
+            let n_samples = self.light_samples * LOOPED_AREA_LIGHTS as u32;
+            let mut acc = Color::ZERO;
+            for _ in 0..n_samples {
+                let Some((k, p)) = self.area_picker.pick(rng.uniform()) else { break };
+                acc += one(&scene.lights[self.area_lights[k] as usize], rng, stats) / p;
+            }
+            sum += acc / n_samples as f32;
+        }
+        sum
+    }
+}
+
+/// Veach's power heuristic (exponent 2) weight of a sample of density `a` against one of `b`.
+/// Written as a ratio so that densities whose squares overflow (an area light seen edge-on from
+/// a point far along a floor plane has a solid-angle density near 1e23) give 1 or 0, not
+/// inf / inf = NaN (issue 16).
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    if !(a > 0.0) {
+        return 0.0;
+    }
+    if a >= b {
+        let r = b / a;
+        1.0 / (1.0 + r * r)
+    } else {
+        let r = a / b;
+        let r2 = r * r;
+        r2 / (1.0 + r2)
+    }
+}
