@@ -4,8 +4,8 @@ mod common;
 
 use caustic::app::LoadedScene;
 use caustic::film::Image;
-use caustic::integrator::photon::PhotonConfig;
 use caustic::integrator::PhotonIntegrator;
+use caustic::integrator::photon::PhotonConfig;
 use caustic::math::{Color, Vec3, luminance};
 use caustic::options::Options;
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};

@@ -3,6 +3,7 @@
 //! multi-pass method with its own passes in the same driver. [`Integrator::new`] is the one place
 //! an integrator is made from the scene's description.
 
+pub mod camera_walk;
 pub mod layers;
 pub mod lighting;
 pub mod path;

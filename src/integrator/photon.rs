@@ -23,7 +23,7 @@
 //! path counts only photons of at most `max_depth - b` bounces, so every light path keeps to
 //! the limit the path tracer keeps to (`trace::photon_depth_limit`).
 
-use super::layers::LayerPath;
+use super::camera_walk::CameraWalk;
 use super::lighting::EveryLight;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
@@ -582,71 +582,21 @@ impl RayIntegrator for PhotonIntegrator {
         stats: &mut RayStats,
     ) -> Layers {
         let mut layers = [Color::ZERO; 4];
-        let mut beta = Color::ONE;
-        let mut ray = *ray;
-        let mut layer = LayerPath::CAMERA;
-        // The last bounce was glossy and its direct light came from shadow rays: a light hit
-        // now would count it twice.
-        let mut lit_by_shadow_rays = false;
-        // A glossy bounce was sampled on the way: the cache's records (made where camera paths
-        // through mirrors and glass land) are not read after one (see `indirect`).
-        let mut glossy_prefix = false;
-        for depth in 0.. {
-            stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                if !lit_by_shadow_rays {
-                    layers[layer.emitted()] += beta * scene.environment(ray.d);
-                }
-                break;
+        let c = &self.config;
+        let mut walk = CameraWalk::new(*ray, Color::ONE);
+        loop {
+            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, stats: &mut RayStats| {
+                self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), stats)
             };
-            let wo = -ray.d;
-            if hit.is_emitter() {
-                if hit.is_front(ray.d) && !lit_by_shadow_rays {
-                    layers[layer.emitted()] += beta * scene.emitted(&hit, wo);
-                }
-                // A reflecting emitter (one with a BSDF) also reflects.
-                if scene.bsdf(&hit, wo).is_black() {
-                    break;
-                }
-            }
-            // This surface is bounce depth + 1: lit only within the depth limit.
-            if depth >= self.config.max_depth {
-                break;
-            }
-            let bsdf = scene.bsdf(&hit, wo);
-            let last = depth + 1 >= self.config.max_depth;
-            if bsdf.is_specular_only() {
-                if last {
-                    break;
-                }
-                let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
-                beta *= s.weight;
-                layer.bounce(true);
-                lit_by_shadow_rays = false;
-                ray = hit.spawn(s.wi, self.config.ray_bias);
-                continue;
-            }
-            let direct = self.lights.estimate(scene, &hit, &bsdf, wo, self.config.ray_bias, sampler.rng(), stats);
-            layers[layer.direct()] += beta * direct;
-            if bsdf.is_glossy_only() && !last {
-                // Ray-traced glossy reflection: one sampled direction carries the rest.
-                let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else { break };
-                beta *= s.weight;
-                layer.bounce(s.flags.is_specular());
-                lit_by_shadow_rays = !s.flags.is_specular();
-                glossy_prefix |= !s.flags.is_specular();
-                ray = hit.spawn(s.wi, self.config.ray_bias);
-                continue;
-            }
-            let c = &self.config;
-            // This surface is bounce depth + 1, within the limit (checked above).
-            let bounce = depth + 1;
-            let photon_depth = trace::photon_depth_limit(c.max_depth, bounce).unwrap_or(0);
+            let add = |k: usize, l: Color| layers[k] += l;
+            let Some(v) = walk.next_vertex(scene, c.max_depth, c.ray_bias, sampler, stats, add, direct) else { break };
+            let (hit, bsdf, wo, beta, layer) = (&v.hit, &v.bsdf, v.wo, walk.beta, walk.layer);
+            let photon_depth = trace::photon_depth_limit(c.max_depth, v.bounce).unwrap_or(0);
             layers[layer.caustic_photons()] += beta
                 * Self::estimate(
                     &self.caustic,
-                    &hit,
-                    &bsdf,
+                    hit,
+                    bsdf,
                     wo,
                     c.caustic_k,
                     c.caustic_radius,
@@ -658,8 +608,8 @@ impl RayIntegrator for PhotonIntegrator {
             let indirect = if c.gather_rays == 0 {
                 Self::estimate(
                     &self.global,
-                    &hit,
-                    &bsdf,
+                    hit,
+                    bsdf,
                     wo,
                     c.gather_k,
                     c.max_radius,
@@ -669,20 +619,19 @@ impl RayIntegrator for PhotonIntegrator {
                     scratch,
                 )
             } else {
-                self.indirect(scene, &hit, bounce, &bsdf, wo, !glossy_prefix, sampler, scratch, stats)
+                // The cache's records (made where camera paths through mirrors and glass land)
+                // are not read after a glossy bounce (see `indirect`).
+                self.indirect(scene, hit, v.bounce, bsdf, wo, !walk.glossy_prefix, sampler, scratch, stats)
             };
             layers[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
-            if !bsdf.has_delta() || last {
+            if !bsdf.has_delta() || v.last {
                 break;
             }
             let Some(s) = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
                 break;
             };
-            beta *= s.weight;
-            layer.bounce(true);
-            lit_by_shadow_rays = false;
-            ray = hit.spawn(s.wi, self.config.ray_bias);
+            walk.follow_delta(hit, &s, c.ray_bias);
         }
         layers
     }

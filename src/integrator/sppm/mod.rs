@@ -22,14 +22,17 @@
 
 mod grid;
 
+use super::camera_walk::CameraWalk;
 use super::layers::LayerPath;
 use super::lighting::direct_light;
 use crate::film::{Film, Image, Layers};
+use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec3};
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
+use crate::sampling::Sampler;
 use crate::sampling::hash_seed;
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
@@ -325,85 +328,44 @@ impl Sppm {
         stats: &mut RayStats,
     ) -> CameraSample<'s> {
         let config = &self.config;
-        let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
+        let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, it);
         // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
-        let mut beta = Color::splat(weight);
-        let mut dist = 0.0;
+        let mut walk = CameraWalk::new(ray, Color::splat(weight));
         let mut ld = Color::ZERO;
         let mut ld_layers = [Color::ZERO; 4];
-        let mut layer = LayerPath::CAMERA;
-        let mut add = |k: usize, l: Color| {
-            ld += l;
-            ld_layers[k] += l;
-        };
-        // The last bounce was glossy and its direct light came from a light sample.
-        let mut lit_by_light_sample = false;
-        for depth in 0.. {
-            stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                if !lit_by_light_sample {
-                    add(layer.emitted(), beta * scene.environment(ray.d));
-                }
+        loop {
+            let add = |k: usize, l: Color| {
+                ld += l;
+                ld_layers[k] += l;
+            };
+            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, stats: &mut RayStats| {
+                let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+                direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, stats)
+            };
+            let Some(v) = walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct)
+            else {
                 break;
             };
-            dist += hit.t;
-            let wo = -ray.d;
-            if hit.is_emitter() {
-                if hit.is_front(ray.d) && !lit_by_light_sample {
-                    add(layer.emitted(), beta * scene.emitted(&hit, wo));
-                }
-                // A reflecting emitter (one with a BSDF) also reflects.
-                if scene.bsdf(&hit, wo).is_black() {
-                    break;
-                }
-            }
-            // This surface is bounce depth + 1: lit only within the depth limit.
-            if depth >= config.max_depth {
-                break;
-            }
-            let bsdf = scene.bsdf(&hit, wo);
-            let last = depth + 1 >= config.max_depth;
-            let follow = |s: Option<crate::material::bsdf::BsdfSample>, beta: &mut Color| {
-                let s = s?;
-                *beta *= s.weight;
-                Some(s)
-            };
-            if bsdf.is_specular_only() {
-                if last {
-                    break;
-                }
-                let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
-                let Some(s) = follow(sample, &mut beta) else { break };
-                layer.bounce(true);
-                lit_by_light_sample = false;
-                ray = hit.spawn(s.wi, config.ray_bias);
-                continue;
-            }
-            let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-            let direct = direct_light(scene, &hit, &bsdf, wo, u_pick, u, config.ray_bias, false, stats);
-            add(layer.direct(), beta * direct);
-            if bsdf.is_glossy_only() && !last {
-                let sample = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
-                let Some(s) = follow(sample, &mut beta) else { break };
-                layer.bounce(s.flags.is_specular());
-                lit_by_light_sample = !s.flags.is_specular();
-                ray = hit.spawn(s.wi, config.ray_bias);
-                continue;
-            }
             let choice = sampler.next_1d();
-            let q = if bsdf.has_delta() && !last { bsdf.smooth_fraction(wo) } else { 1.0 };
+            let q = if v.bsdf.has_delta() && !v.last { v.bsdf.smooth_fraction(v.wo) } else { 1.0 };
             if choice >= q {
-                let sample = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
-                let Some(s) = follow(sample, &mut beta) else { break };
-                beta /= 1.0 - q;
-                layer.bounce(true);
-                lit_by_light_sample = false;
-                ray = hit.spawn(s.wi, config.ray_bias);
+                let sample = v.bsdf.sample_delta(v.wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
+                let Some(s) = sample else { break };
+                walk.follow_delta(&v.hit, &s, config.ray_bias);
+                walk.beta /= 1.0 - q;
                 continue;
             }
-            // This surface is bounce depth + 1, within the limit (checked above).
-            let photon_depth = trace::photon_depth_limit(config.max_depth, depth + 1).unwrap_or(0);
-            let point = Some(VisiblePoint { p: hit.p, wo, bsdf, beta: beta / q, dist, layer, photon_depth });
+            // This surface is within the depth limit (the walk checked).
+            let photon_depth = trace::photon_depth_limit(config.max_depth, v.bounce).unwrap_or(0);
+            let point = Some(VisiblePoint {
+                p: v.hit.p,
+                wo: v.wo,
+                bsdf: v.bsdf,
+                beta: walk.beta / q,
+                dist: walk.dist,
+                layer: walk.layer,
+                photon_depth,
+            });
             return CameraSample { ld, ld_layers, point };
         }
         CameraSample { ld, ld_layers, point: None }
