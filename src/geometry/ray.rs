@@ -3,16 +3,23 @@
 use crate::math::Vec3;
 use crate::math::float::offset_ray_origin;
 
+/// No participating medium: what every ray travels through until media land (the slot is
+/// there so that adding them is an addition, not a change of every ray).
+pub const NO_MEDIUM: u32 = u32::MAX;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub o: Vec3,
     pub d: Vec3,
+    /// The participating medium the ray travels through (an index into the scene's media), or
+    /// `NO_MEDIUM`.
+    pub medium: u32,
 }
 
 impl Ray {
     #[inline]
     pub fn new(o: Vec3, d: Vec3) -> Self {
-        Ray { o, d }
+        Ray { o, d, medium: NO_MEDIUM }
     }
 
     #[inline]
@@ -26,6 +33,6 @@ impl Ray {
     #[inline(always)]
     pub fn spawn(p: Vec3, p_error: Vec3, ng: Vec3, d: Vec3, bias: f32) -> Self {
         let o = offset_ray_origin(p, p_error, ng, d) + d * bias;
-        Ray { o, d }
+        Ray { o, d, medium: NO_MEDIUM }
     }
 }
