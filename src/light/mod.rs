@@ -557,6 +557,9 @@ impl Light {
 }
 
 #[cfg(test)]
+mod emission_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::Rng32;

@@ -1,6 +1,7 @@
 //! Chi-square goodness-of-fit test for direction samplers: it draws many directions from a sampler, bins them on a
 //! (theta, phi) grid over the sphere, integrates the sampler's claimed solid-angle density over the same cells, and
-//! checks that the counts agree with the density.
+//! checks that the counts agree with the density. `chi2_cells` runs the same comparison on cells the caller has
+//! binned and integrated itself, for samplers of other domains (points of a shape, of a disk).
 //!
 //! Sources: the overall test, the pooling of cells with small expected counts and the nested adaptive Simpson
 //! integration of the density follow pbrt-v4's `src/pbrt/bsdfs_test.cpp`; the Sidak correction for suites of tests
@@ -172,6 +173,96 @@ pub fn chi2_directions(
             config.significance, config.tests, pooled.statistic, config.samples
         );
         write_tables(&mut report, &grid, &observed, &expected);
+        return Err(report);
+    }
+    Ok(stats)
+}
+
+/// Checks counts of samples the caller has binned against the probabilities a density gives the same cells, with
+/// `chi2_directions`' pooling, tolerance of a few samples in cells of zero probability and Sidak correction: for
+/// samplers of other domains than the sphere of directions (a shape's parameter square, the plane of a disk), whose
+/// cells the caller lays out and integrates the density over.
+///
+/// `observed[i]` counts the samples that fell in cell i out of `config.samples` drawn (samples that failed or fell in
+/// no cell are missing mass, as in `chi2_directions`), `probability[i]` is the density's integral over cell i. The
+/// report of a failure lays the cells out in rows of `columns`. Of `config`, only `samples`, `min_expected`,
+/// `significance` and `tests` are read.
+pub fn chi2_cells(
+    name: &str,
+    observed: &[u64],
+    probability: &[f64],
+    columns: usize,
+    config: &Chi2Config,
+) -> Result<Chi2Stats, String> {
+    validate(name, config)?;
+    if observed.len() != probability.len() || observed.is_empty() || columns == 0 {
+        return Err(format!(
+            "chi2 test '{name}': {} observed counts for {} probabilities in rows of {columns}; \
+             they must be as many, at least one, in rows of at least one",
+            observed.len(),
+            probability.len()
+        ));
+    }
+    let alpha = sidak_alpha(config.significance, config.tests);
+    if let Some(i) = probability.iter().position(|p| !p.is_finite() || *p < 0.0) {
+        return Err(format!(
+            "chi2 test '{name}': the density integrates to {} over cell {i}; it must be finite and non-negative",
+            probability[i]
+        ));
+    }
+    let pdf_integral: f64 = probability.iter().sum();
+    if pdf_integral > 1.0 + 1e-3 {
+        return Err(format!(
+            "chi2 test '{name}': the density integrates to {pdf_integral:.6} over the cells, more than 1; \
+             it is not a normalized density"
+        ));
+    }
+    let binned: u64 = observed.iter().sum();
+    if binned > config.samples as u64 {
+        return Err(format!("chi2 test '{name}': {binned} samples binned out of {} drawn", config.samples));
+    }
+    let expected: Vec<f64> = probability.iter().map(|p| p * config.samples as f64).collect();
+
+    // As in `chi2_directions`: a handful of samples in cells of zero probability is rounding at the edge of the
+    // density's support, more is a sampler producing points of zero density.
+    let zero_cells: Vec<usize> = (0..expected.len()).filter(|&i| is_zero(expected[i]) && observed[i] > 0).collect();
+    let in_zero_cells: u64 = zero_cells.iter().map(|&i| observed[i]).sum();
+    let tolerated = 1 + config.samples as u64 / 1_000_000;
+    if in_zero_cells > tolerated {
+        let worst = zero_cells.iter().copied().max_by_key(|&i| (observed[i], std::cmp::Reverse(i))).unwrap_or(0);
+        let mut report = format!(
+            "chi2 test '{name}' failed: {in_zero_cells} samples (at most {tolerated} tolerated) fell in {} cell(s) \
+             where the density integrates to 0; the worst is cell {worst} (row {}, column {}) with {} samples\n",
+            zero_cells.len(),
+            worst / columns,
+            worst % columns,
+            observed[worst]
+        );
+        write_cell_tables(&mut report, columns, observed, &expected);
+        return Err(report);
+    }
+
+    let pooled = pool_and_sum(observed, &expected, config.min_expected);
+    if pooled.cells_used < 2 {
+        let mut report = format!(
+            "chi2 test '{name}': only {} cell(s) left after pooling cells with expected count below {}; \
+             use more samples or fewer cells\n",
+            pooled.cells_used, config.min_expected
+        );
+        write_cell_tables(&mut report, columns, observed, &expected);
+        return Err(report);
+    }
+    let dof = pooled.cells_used - 1;
+    let p_value = chi2_p_value(pooled.statistic, dof);
+    let stats =
+        Chi2Stats { statistic: pooled.statistic, dof, p_value, cells_pooled: pooled.cells_pooled, pdf_integral, alpha };
+    if p_value.is_nan() || p_value < alpha {
+        let mut report = format!(
+            "chi2 test '{name}' failed: p-value {p_value:.3e} < alpha {alpha:.3e} (significance {}, {} test(s))\n\
+             statistic {:.2}, dof {dof}, {} cells pooled, density integral {pdf_integral:.6}, {} samples\n",
+            config.significance, config.tests, pooled.statistic, pooled.cells_pooled, config.samples
+        );
+        write_cell_tables(&mut report, columns, observed, &expected);
         return Err(report);
     }
     Ok(stats)
@@ -435,18 +526,23 @@ fn write_tables(report: &mut String, grid: &Grid, observed: &[u64], expected: &[
             (row + 1) as f64 * dt
         );
     }
+    write_cell_tables(report, grid.phi_res, observed, expected);
+}
+
+/// Writes the observed, expected and residual tables of a failing test, in rows of `columns` cells.
+fn write_cell_tables(report: &mut String, columns: usize, observed: &[u64], expected: &[f64]) {
     let _ = writeln!(report, "observed counts:");
-    for row in observed.chunks(grid.phi_res) {
+    for row in observed.chunks(columns) {
         let line: Vec<String> = row.iter().map(|o| format!("{o:>7}")).collect();
         let _ = writeln!(report, "  {}", line.join(" "));
     }
     let _ = writeln!(report, "expected counts:");
-    for row in expected.chunks(grid.phi_res) {
+    for row in expected.chunks(columns) {
         let line: Vec<String> = row.iter().map(|e| format!("{e:>7.0}")).collect();
         let _ = writeln!(report, "  {}", line.join(" "));
     }
     let _ = writeln!(report, "residuals (observed - expected) / sqrt(expected) ('!' marks samples where pdf = 0):");
-    for (obs_row, exp_row) in observed.chunks(grid.phi_res).zip(expected.chunks(grid.phi_res)) {
+    for (obs_row, exp_row) in observed.chunks(columns).zip(expected.chunks(columns)) {
         let line: Vec<String> = obs_row
             .iter()
             .zip(exp_row)

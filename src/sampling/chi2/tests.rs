@@ -2,7 +2,7 @@ use super::*;
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI as PI_F32, TAU as TAU_F32};
 
 /// Number of tests below that are expected to pass, for the Sidak correction.
-const PASSING_TESTS: usize = 5;
+const PASSING_TESTS: usize = 7;
 
 fn config(samples: usize, seed: u64) -> Chi2Config {
     Chi2Config { samples, seed, tests: PASSING_TESTS, ..Chi2Config::default() }
@@ -223,4 +223,59 @@ fn cell_lookup_handles_poles_and_seam() {
     // Just below the +x axis, phi is close to 2 pi and belongs to the last column.
     assert_eq!(grid.cell_of(Vec3::new(1.0, -1e-7, -0.01).normalize()), 5 * 20 + 19);
     assert_eq!(grid.cell_of(Vec3::new(-0.01, 1.0, 0.01).normalize()), 4 * 20 + 5);
+}
+
+/// Points of [0, 1)^2 with density 4 x y (each coordinate the square root of a uniform number), binned on a
+/// 10 x 10 grid, row by row in y, with `keep` deciding which samples are binned at all.
+fn binned_4xy(samples: usize, seed: u64, keep: impl Fn(f32) -> bool) -> Vec<u64> {
+    let mut rng = Pcg32::new(seed);
+    let mut observed = vec![0u64; 100];
+    for _ in 0..samples {
+        let (x, y, u) = (rng.next_f32().sqrt(), rng.next_f32().sqrt(), rng.next_f32());
+        if keep(u) {
+            observed[((y * 10.0) as usize).min(9) * 10 + ((x * 10.0) as usize).min(9)] += 1;
+        }
+    }
+    observed
+}
+
+/// The integral of `scale` 4 x y over each cell of the 10 x 10 grid: (x1^2 - x0^2) (y1^2 - y0^2).
+fn probabilities_4xy(scale: f64) -> Vec<f64> {
+    let ring = |i: usize| ((i + 1) as f64 / 10.0).powi(2) - (i as f64 / 10.0).powi(2);
+    (0..100).map(|c| scale * ring(c % 10) * ring(c / 10)).collect()
+}
+
+#[test]
+fn binned_cells_following_their_density_pass() {
+    let stats = chi2_cells("4xy", &binned_4xy(200_000, 12, |_| true), &probabilities_4xy(1.0), 10, &config(200_000, 0))
+        .unwrap_or_else(|report| panic!("{report}"));
+    assert_eq!(stats.dof, 99, "{stats:?}");
+    assert!((stats.pdf_integral - 1.0).abs() < 1e-12, "{stats:?}");
+    // Samples that fail are missing mass: a third of them, against a density integrating to two thirds.
+    let observed = binned_4xy(300_000, 13, |u| u < 2.0 / 3.0);
+    let stats = chi2_cells("4xy, a third missing", &observed, &probabilities_4xy(2.0 / 3.0), 10, &config(300_000, 0))
+        .unwrap_or_else(|report| panic!("{report}"));
+    assert!((stats.pdf_integral - 2.0 / 3.0).abs() < 1e-12, "{stats:?}");
+}
+
+#[test]
+fn binned_cells_against_a_wrong_density_fail() {
+    // The samples against a uniform density, against 4 x y scaled by 0.97, and against 4 x y with cells of zero
+    // probability where samples fell.
+    let observed = binned_4xy(200_000, 14, |_| true);
+    let uniform = vec![0.01; 100];
+    let report = chi2_cells("4xy vs uniform", &observed, &uniform, 10, &config(200_000, 0)).expect_err("must fail");
+    assert!(report.contains("'4xy vs uniform' failed: p-value") && report.contains("residuals"), "{report}");
+    let low = probabilities_4xy(0.97);
+    let report = chi2_cells("4xy vs 0.97 4xy", &observed, &low, 10, &config(200_000, 0)).expect_err("must fail");
+    assert!(report.contains("failed: p-value"), "{report}");
+    let mut holes = probabilities_4xy(1.0);
+    holes[55] = 0.0;
+    let report = chi2_cells("holes", &observed, &holes, 10, &config(200_000, 0)).expect_err("must fail");
+    assert!(report.contains("cell 55 (row 5, column 5)"), "{report}");
+    let report =
+        chi2_cells("heavy", &observed, &probabilities_4xy(1.1), 10, &config(200_000, 0)).expect_err("must fail");
+    assert!(report.contains("1.100000"), "{report}");
+    assert!(chi2_cells("short", &observed[..99], &uniform, 10, &config(200_000, 0)).is_err());
+    assert!(chi2_cells("too many", &observed, &uniform, 10, &config(1_000, 0)).is_err());
 }
