@@ -44,6 +44,8 @@ integrator_kinds! {
     Photon,
     /// Stochastic progressive photon mapping: converges to the exact image, caustics included
     Sppm,
+    /// Light tracing (Mitsuba's ptracer): paths from the lights connected to the camera; caustics on diffuse surfaces, nothing seen in mirrors or glass
+    Light,
 }
 
 impl IntegratorKind {
@@ -54,6 +56,7 @@ impl IntegratorKind {
             IntegratorKind::Path => "path",
             IntegratorKind::Photon => "photon",
             IntegratorKind::Sppm => "sppm",
+            IntegratorKind::Light => "light",
         }
     }
 }
@@ -194,8 +197,8 @@ mod tests {
             let toml: Options = toml::from_str(&format!("integrator = \"{}\"", k.name())).unwrap();
             assert_eq!(toml.integrator, Some(k));
         }
-        let e = "light".parse::<IntegratorKind>().unwrap_err();
-        assert_eq!(e, "unknown integrator `light` (expected whitted, path, photon or sppm)");
+        let e = "vcm".parse::<IntegratorKind>().unwrap_err();
+        assert_eq!(e, "unknown integrator `vcm` (expected whitted, path, photon, sppm or light)");
     }
 
     #[test]

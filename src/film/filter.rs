@@ -216,6 +216,21 @@ impl FilterTable {
         FilterTable { filter, radius, step, value, cdf_abs, cdf, inv_value, edges, negative, full_weight }
     }
 
+    /// Half-width of the support, in pixels.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The weight a contribution landing at offset (`dx`, `dy`) from a pixel's centre has in
+    /// that pixel when contributions are splatted (light tracing): the filter normalised to
+    /// integrate to 1, as the pixel's camera samples are weighted by sampling it. The box filter
+    /// gives 1 inside the pixel.
+    #[inline]
+    pub fn splat_weight(&self, dx: f64, dy: f64) -> f64 {
+        let total = self.cdf[BINS];
+        self.eval(dx) * self.eval(dy) / (total * total)
+    }
+
     /// The filter's value as sampled (Mitsuba's step function) at offset `x` from the centre.
     pub fn eval(&self, x: f64) -> f64 {
         self.bin(x).map_or(0.0, |j| self.value[j])

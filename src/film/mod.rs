@@ -8,6 +8,7 @@
 pub mod filter;
 pub mod fixed;
 pub mod output;
+pub mod splat;
 
 use crate::math::Color;
 use fixed::{FixedRgb, add_rgb, mean, to_fixed_rgb};

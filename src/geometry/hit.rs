@@ -93,6 +93,12 @@ pub struct Hit {
 }
 
 impl Hit {
+    /// Where rays leaving the hit start from.
+    #[inline(always)]
+    pub fn origin(&self) -> crate::geometry::RayOrigin {
+        crate::geometry::RayOrigin { p: self.p, p_error: self.p_error, ng: self.ng }
+    }
+
     /// A ray leaving the hit point in direction `d`, off the surface (outside the point's error
     /// bound, on the side `d` leaves towards) and `bias` further along `d` (the seed report's
     /// ray bias: `IntegratorDesc::ray_bias`).

@@ -7,5 +7,5 @@ mod transform;
 
 pub use aabb::Aabb;
 pub use hit::{Hit, NO_LIGHT, SurfaceParam};
-pub use ray::Ray;
+pub use ray::{NO_MEDIUM, Ray, RayOrigin};
 pub use transform::Transform;

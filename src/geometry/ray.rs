@@ -36,3 +36,20 @@ impl Ray {
         Ray { o, d, medium: NO_MEDIUM }
     }
 }
+
+/// Where a ray starts off a surface: the point, its error bound and the geometric normal (a hit,
+/// a point sampled on a light, or a camera's lens point with no error).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayOrigin {
+    pub p: Vec3,
+    pub p_error: Vec3,
+    pub ng: Vec3,
+}
+
+impl RayOrigin {
+    /// A ray leaving the origin in direction `d` (see `Ray::spawn`).
+    #[inline(always)]
+    pub fn spawn(&self, d: Vec3, bias: f32) -> Ray {
+        Ray::spawn(self.p, self.p_error, self.ng, d, bias)
+    }
+}

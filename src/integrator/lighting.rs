@@ -5,7 +5,7 @@
 //! seed report's classic model and passes its own crossing rule (glass lets `1 - F` through);
 //! the physical integrators pass masks' transparent parts.
 
-use crate::geometry::Hit;
+use crate::geometry::{Hit, RayOrigin};
 use crate::light::{Light, LightPicker};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
@@ -31,7 +31,7 @@ pub const MAX_CROSSINGS: usize = 64;
 #[inline]
 pub fn transmittance(
     scene: &Scene,
-    from: &Hit,
+    from: RayOrigin,
     wi: Vec3,
     dist: f32,
     bias: f32,
@@ -91,7 +91,7 @@ pub fn mask_transparency(scene: &Scene, crossing: &Crossing, wi: Vec3) -> f32 {
 
 /// The transmittance a physical integrator's shadow ray sees: through masks' transparent parts.
 #[inline]
-pub fn visibility(scene: &Scene, from: &Hit, wi: Vec3, dist: f32, bias: f32, stats: &mut RayStats) -> f32 {
+pub fn visibility(scene: &Scene, from: RayOrigin, wi: Vec3, dist: f32, bias: f32, stats: &mut RayStats) -> f32 {
     transmittance(scene, from, wi, dist, bias, scene.materials.has_masks, stats, |_, c| mask_transparency(scene, c, wi))
 }
 
@@ -120,7 +120,7 @@ pub fn light_sample(
         return Color::ZERO;
     }
     let cos = ls.wi.dot(bsdf.normal()).abs();
-    let visible = visibility(scene, hit, ls.wi, ls.dist, bias, stats);
+    let visible = visibility(scene, hit.origin(), ls.wi, ls.dist, bias, stats);
     if !(visible > 0.0) {
         return Color::ZERO;
     }

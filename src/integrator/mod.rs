@@ -5,12 +5,14 @@
 
 pub mod camera_walk;
 pub mod layers;
+pub mod light;
 pub mod lighting;
 pub mod path;
 pub mod photon;
 pub mod sppm;
 pub mod whitted;
 
+pub use light::LightTracer;
 pub use path::PathTracer;
 pub use photon::PhotonIntegrator;
 pub use sppm::Sppm;
@@ -29,6 +31,7 @@ pub enum Integrator {
     Path(PathTracer),
     Photon(Box<PhotonIntegrator>),
     Sppm(Sppm),
+    Light(LightTracer),
 }
 
 /// The render was stopped (Ctrl-C) while an integrator was being made.
@@ -53,6 +56,9 @@ impl Integrator {
                 let pm = PhotonIntegrator::build_watched(scene, config, cancel, settings.progress).ok_or(Cancelled)?;
                 Integrator::Photon(Box::new(pm))
             }
+            IntegratorKind::Light => {
+                Integrator::Light(LightTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
+            }
             IntegratorKind::Sppm => {
                 Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, scene, settings.pixels()) })
             }
@@ -65,6 +71,7 @@ impl Integrator {
             Integrator::Path(_) => IntegratorKind::Path,
             Integrator::Photon(_) => IntegratorKind::Photon,
             Integrator::Sppm(_) => IntegratorKind::Sppm,
+            Integrator::Light(_) => IntegratorKind::Light,
         }
     }
 
@@ -90,6 +97,7 @@ impl Integrator {
             Integrator::Path(i) => render_rays_from(scene, i, settings, control, film),
             Integrator::Photon(i) => render_rays_from(scene, i.as_ref(), settings, control, film),
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
+            Integrator::Light(i) => i.render(scene, settings, control, film),
         }
     }
 }
@@ -107,6 +115,7 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
                 + photon::estimated_record_level_bytes(c.photons)
                 + photon::estimated_map_bytes(c.caustic_photons)
         }
+        IntegratorKind::Light => light::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
             sppm::estimated_bytes(settings.pixels(), c.photons_per_iter, settings.layers)

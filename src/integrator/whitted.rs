@@ -274,7 +274,7 @@ impl Whitted {
     /// lighter shadow rather than a caustic, which photon mapping renders).
     pub fn shadow_transmittance(&self, scene: &Scene, hit: &Hit, wi: Vec3, dist: f32, stats: &mut RayStats) -> f32 {
         let see_through = self.transparent_shadows && self.any_transmissive;
-        transmittance(scene, hit, wi, dist, self.ray_bias, see_through, stats, |material, crossing| {
+        transmittance(scene, hit.origin(), wi, dist, self.ray_bias, see_through, stats, |material, crossing| {
             crossing_transmittance(&self.classic[material as usize], wi, || crossing.ng())
         })
     }

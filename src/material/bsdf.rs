@@ -552,7 +552,7 @@ impl<'a> Bsdf<'a> {
     /// scaled by |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|), so photons on smooth-shaded meshes carry the
     /// power the path tracer sees. 1 where the two normals agree.
     #[inline]
-    fn shading_normal_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn shading_normal_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
         let ns = self.frame.z;
         if ns.dot(self.ng).abs() >= 1.0 - 1e-6 {
             return 1.0;

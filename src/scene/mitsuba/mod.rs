@@ -215,10 +215,15 @@ impl<'a> Cx<'a> {
                 let depth = self.integer(&p, "max_depth")?;
                 // Russian roulette only changes noise, not the expected image.
                 let _ = self.integer(&p, "rr_depth")?;
+                if p.kind == "ptracer" {
+                    // How the work is split into passes changes nothing in the image.
+                    let _ = self.integer(&p, "samples_per_pass")?;
+                }
                 if self.boolean(&p, "hide_emitters")? == Some(true) {
                     self.warn(el, "hide_emitters is not supported: emitters seen directly are rendered")?;
                 }
-                (IntegratorKind::Path, depth)
+                let kind = if p.kind == "ptracer" { IntegratorKind::Light } else { IntegratorKind::Path };
+                (kind, depth)
             }
             "direct" => {
                 for name in ["emitter_samples", "bsdf_samples"] {
