@@ -6,7 +6,7 @@
 use caustic::app::{LoadedScene, prepare};
 use caustic::film::Image;
 use caustic::film::output::read_exr;
-use caustic::math::{Color, Vec3, luminance};
+use caustic::math::{Color, Vec2, Vec3, luminance};
 use caustic::options::{IntegratorKind, Options, PhotonOptions};
 use caustic::scene::mitsuba::load_mitsuba_str;
 use caustic::scene::{LoadOptions, SceneError};
@@ -400,16 +400,43 @@ fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
 }
 
 #[test]
+fn misspelt_plugin_types_are_errors_naming_the_nearest_one() {
+    // Mitsuba 3 stops on a type it has no plugin for; so do we (not a warning and exit 0).
+    for (body, line, message) in [
+        (r#"<shape type="sphre"/>"#, 7, "unknown shape type `sphre` (did you mean `sphere`?)"),
+        (
+            r#"<shape type="sphere"><bsdf type="dielectrc"/></shape>"#,
+            7,
+            "unknown BSDF type `dielectrc` (did you mean `dielectric`?)",
+        ),
+        (r#"<emitter type="pont"/>"#, 7, "unknown emitter type `pont` (did you mean `point`?)"),
+        (
+            "<shape type=\"sphere\">\n    <bsdf type=\"diffuse\"><texture type=\"bitmp\" name=\"reflectance\"/></bsdf></shape>",
+            8,
+            "unknown texture type `bitmp` (did you mean `bitmap`?)",
+        ),
+    ] {
+        let e = xml_opts(&wrap(body), &root(), &LoadOptions::default(), &Options::default())
+            .err()
+            .unwrap_or_else(|| panic!("{body} loaded"));
+        assert!(e.to_string().starts_with(&format!("case.xml:{line}:")), "{e}");
+        assert_eq!(e.message(), message);
+    }
+    // A plugin Mitsuba has and we do not render stays a warning.
+    let (_, warnings) = xml(&wrap(r#"<shape type="sphere"><bsdf type="hair"/></shape>"#));
+    assert!(warnings.iter().any(|w| w.contains("BSDF `hair` is not supported")), "{warnings:?}");
+}
+
+#[test]
 fn constant_emitter_becomes_an_environment_light() {
     let (s, w) = xml(&wrap(r#"<emitter type="constant"><rgb name="radiance" value="0.1, 0.2, 0.3"/></emitter>"#));
     let env = s.scene.environment.expect("an environment light") as usize;
     assert!(matches!(s.scene.lights[env], caustic::light::Light::Environment(_)));
     assert_eq!(s.scene.environment(Vec3::new(0.3, -0.2, 0.9).normalize()), Color::new(0.1, 0.2, 0.3));
     assert!(w.is_empty());
-    // Photon mapping and SPPM light from it too: nothing to warn about.
-    for kind in [IntegratorKind::Photon, IntegratorKind::Sppm] {
-        assert!(caustic::integrator::limitations(kind, &s.scene).is_empty());
-    }
+    // Photon mapping, SPPM and the light tracer start light paths from it too.
+    let e = s.scene.lights[env].sample_le(Vec2::new(0.3, 0.7), Vec2::new(0.6, 0.2), s.scene.textures()).unwrap();
+    assert!(e.flux.max_element() > 0.0 && e.pdf_pos > 0.0 && e.pdf_dir > 0.0, "{e:?}");
     // A scene has one environment, as in Mitsuba.
     let two = wrap(r#"<emitter type="constant"/><emitter type="constant"/>"#);
     let e = xml_opts(&two, &root(), &LoadOptions::default(), &Options::default()).err().expect("two environments");

@@ -242,9 +242,6 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
-        for w in crate::integrator::limitations(loaded.integrator.kind, &loaded.scene) {
-            eprintln!("warning: {w}");
-        }
         let info = &loaded.info;
         for m in &info.meshes {
             let (lo, hi) = (m.bounds.min, m.bounds.max);
@@ -410,7 +407,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         write_image(&out.image, &output)?;
         if stats.nonfinite_samples > 0 {
-            eprintln!("warning: {} samples were NaN or infinite and were dropped", stats.nonfinite_samples);
+            eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
         }
         log(
             opts.quiet,

@@ -158,15 +158,6 @@ impl Film {
         self.tiles.first().is_some_and(|t| !t.layers.is_empty())
     }
 
-    /// The tile holding pixel (x, y) and the pixel's index in it.
-    #[inline]
-    pub fn locate(&self, x: u32, y: u32) -> (usize, usize) {
-        let tiles_x = self.width.div_ceil(TILE_SIZE);
-        let t = ((y / TILE_SIZE) * tiles_x + x / TILE_SIZE) as usize;
-        let k = ((y % TILE_SIZE) * self.tiles[t].width + x % TILE_SIZE) as usize;
-        (t, k)
-    }
-
     /// Adds another film's samples to this one (same size and layers; checked by the caller).
     pub fn add(&mut self, other: &Film) {
         for (a, b) in self.tiles.iter_mut().zip(&other.tiles) {

@@ -131,7 +131,7 @@ impl LightTracer {
     }
 
     /// Traces light path `index` and splats what it shows the camera; returns the number of
-    /// contributions dropped as not finite.
+    /// contributions left out as not finite (an infinite light path contributes nothing).
     fn trace(&self, scene: &Scene, seed: u64, index: u64, splats: &SplatFilm, stats: &mut RayStats) -> u64 {
         let mut rng = Rng32::new(hash_seed(&[seed, LIGHT_STREAM, index]));
         let mut bad = 0;

@@ -122,9 +122,3 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
         }
     }
 }
-
-/// What `kind` cannot render in `scene`, as warnings for the user (nothing today: every light
-/// emits photons, and every integrator sees the environment).
-pub fn limitations(_kind: IntegratorKind, _scene: &Scene) -> Vec<String> {
-    Vec::new()
-}

@@ -243,14 +243,20 @@ impl Light {
     /// True for lights no ray can hit (points, spots, directional).
     #[inline]
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Area { .. } | Light::Environment(_))
+        match self {
+            Light::Point { .. } | Light::Spot(_) | Light::Projector(_) | Light::Directional { .. } => true,
+            Light::Area { .. } | Light::Environment(_) => false,
+        }
     }
 
     /// True for lights at infinity (directional, environment), whose photons enter through a
     /// `PhotonDisk`.
     #[inline]
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Light::Directional { .. } | Light::Environment(_))
+        match self {
+            Light::Directional { .. } | Light::Environment(_) => true,
+            Light::Point { .. } | Light::Spot(_) | Light::Projector(_) | Light::Area { .. } => false,
+        }
     }
 
     /// Radiance an environment light sends along `-wi` (towards a ray leaving the scene in
@@ -280,15 +286,6 @@ impl Light {
                 None => Color::ZERO,
             },
             Light::Directional { .. } | Light::Area { .. } | Light::Environment(_) => Color::ZERO,
-        }
-    }
-
-    /// The texture a spot or projector casts, if any.
-    pub fn projection_texture(&self) -> Option<u32> {
-        match *self {
-            Light::Spot(s) => (s.texture != NO_TEXTURE).then_some(s.texture),
-            Light::Projector(p) => (p.texture != NO_TEXTURE).then_some(p.texture),
-            Light::Point { .. } | Light::Directional { .. } | Light::Area { .. } | Light::Environment(_) => None,
         }
     }
 

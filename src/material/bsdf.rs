@@ -196,12 +196,6 @@ impl<'a> Bsdf<'a> {
         self
     }
 
-    /// Probability of passing straight through (the transparency of a mask).
-    #[inline]
-    pub fn null_probability(&self) -> f32 {
-        1.0 - self.opacity
-    }
-
     /// The shading frame (z on the side of `wo`).
     #[inline]
     pub fn frame(&self) -> &Frame {
@@ -264,12 +258,6 @@ impl<'a> Bsdf<'a> {
     #[inline]
     pub fn flags(&self) -> LobeFlags {
         self.lobes.flags
-    }
-
-    /// True when the surface has a diffuse lobe.
-    #[inline]
-    pub fn has_diffuse(&self) -> bool {
-        self.lobes.flags.is_diffuse()
     }
 
     /// True when every lobe is a delta (mirror, glass) or there is none: nothing to shade with

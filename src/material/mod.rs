@@ -66,12 +66,6 @@ impl FloatParam {
     }
 }
 
-impl<T> Param<T> {
-    pub fn is_texture(&self) -> bool {
-        matches!(self, Param::Texture(_))
-    }
-}
-
 /// Roughness of a microfacet material: a distribution and its alphas along dp/du and dp/dv.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Roughness {

@@ -63,12 +63,6 @@ impl Frame {
     }
 }
 
-/// True when every component is finite (no NaN, no infinity).
-#[inline]
-pub fn is_finite3(v: Vec3) -> bool {
-    v.is_finite()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -74,7 +74,7 @@ impl<'a> Driver<'a> {
         self.control.cancel
     }
 
-    /// Adds a worker's counts: rays traced, samples dropped as NaN or infinite, work units done.
+    /// Adds a worker's counts: rays traced, samples that were NaN or infinite (counted as black), work units done.
     pub fn record(&self, stats: &RayStats, nonfinite: u64, units: u64) {
         self.rays.fetch_add(stats.rays, Ordering::Relaxed);
         self.shadow_rays.fetch_add(stats.shadow_rays, Ordering::Relaxed);

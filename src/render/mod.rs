@@ -168,7 +168,7 @@ pub struct RenderStats {
     /// Samples per pixel in the image (every pixel has at least this many).
     pub samples_per_pixel: u32,
     pub passes: u32,
-    /// Samples dropped because the integrator returned NaN or infinity.
+    /// Samples that were NaN or infinite, counted as black (the pixel keeps its sample count).
     pub nonfinite_samples: u64,
     /// The render was stopped by the cancel flag before reaching its sample count.
     pub interrupted: bool,

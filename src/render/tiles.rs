@@ -73,7 +73,7 @@ fn render_pass<I: RayIntegrator>(
 
 /// Renders the samples of every pixel of `tile` from the pixel's next index up to `range.end`
 /// (the pass's range, unless a resumed film left the pixel further on). Returns the number of
-/// non-finite samples dropped.
+/// non-finite samples (counted as black).
 fn render_tile<I: RayIntegrator>(
     scene: &Scene,
     integrator: &I,

@@ -2,7 +2,7 @@
 //! (pbrt-v4 sec. A.5; Shirley and Chiu 1997 for the concentric disk).
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 /// Concentric map of [0,1)^2 onto the unit disk: area-preserving, and it keeps strata compact.
 #[inline]
@@ -45,11 +45,6 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
     Vec3::new(d.x, d.y, z)
-}
-
-#[inline]
-pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    cos_theta.max(0.0) * FRAC_1_PI
 }
 
 /// Uniform direction on the unit sphere; density 1 / (4 pi).

@@ -283,9 +283,14 @@ impl SceneBuilder {
             return;
         }
         let (prims, meshes) = (&self.prims, &self.meshes);
-        let (center, radius) = match prims.get(first, meshes).shape {
-            Shape::Sphere(s) if prims.len() == first + 1 => (s.center, s.radius),
-            _ => (first..prims.len()).fold(Aabb::EMPTY, |b, i| b.union(prims.bounds(i, meshes))).bounding_sphere(),
+        // A sphere is its own bounding sphere; any other object (or several shapes) the sphere
+        // around its primitives' bounds.
+        let (center, radius) = if let Shape::Sphere(s) = prims.get(first, meshes).shape
+            && prims.len() == first + 1
+        {
+            (s.center, s.radius)
+        } else {
+            (first..prims.len()).fold(Aabb::EMPTY, |b, i| b.union(prims.bounds(i, meshes))).bounding_sphere()
         };
         self.objects.push(SceneObject { center, radius, material });
     }

@@ -99,13 +99,25 @@ impl CompactShape {
     pub fn for_each_crossing(&self, ray: &Ray, shear: &RayShear, t_max: f32, f: impl FnMut(PrimHit) -> bool) -> bool {
         match self {
             CompactShape::Sphere(s) => s.for_each_crossing(ray, t_max, f),
-            _ => self.intersect(ray, shear, t_max).is_none_or(f),
+            // One crossing at most (a cylinder's later one is not found: see above).
+            CompactShape::Triangle(_)
+            | CompactShape::Quad(_)
+            | CompactShape::Disk(_)
+            | CompactShape::Cylinder { .. }
+            | CompactShape::Plane(_) => self.intersect(ray, shear, t_max).is_none_or(f),
         }
     }
 
     /// False for shapes a ray can cross more than once that `for_each_crossing` does not walk.
     pub fn crossings_enumerable(&self) -> bool {
-        !matches!(self, CompactShape::Cylinder { .. })
+        match self {
+            CompactShape::Cylinder { .. } => false,
+            CompactShape::Sphere(_)
+            | CompactShape::Triangle(_)
+            | CompactShape::Quad(_)
+            | CompactShape::Disk(_)
+            | CompactShape::Plane(_) => true,
+        }
     }
 
     #[inline(always)]
@@ -184,7 +196,10 @@ impl Shape {
     /// holds.
     #[inline]
     pub fn is_bounded(&self) -> bool {
-        !matches!(self, Shape::Plane(_))
+        match self {
+            Shape::Plane(_) => false,
+            Shape::Sphere(_) | Shape::Triangle(_) | Shape::Quad(_) | Shape::Disk(_) | Shape::Cylinder(_) => true,
+        }
     }
 }
 

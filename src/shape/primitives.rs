@@ -134,7 +134,14 @@ impl Primitives {
                 (Triangle { p: *p, mesh: g.mesh, index: r.index }.surface(h, meshes), g.material, NO_LIGHT)
             }
             // (A mesh triangle's leaf is always a triangle; kept total rather than panicking.)
-            _ => {
+            (
+                _,
+                CompactShape::Sphere(_)
+                | CompactShape::Quad(_)
+                | CompactShape::Disk(_)
+                | CompactShape::Cylinder { .. }
+                | CompactShape::Plane(_),
+            ) => {
                 let p = self.get(i, meshes);
                 (p.shape.surface(ray, h, meshes), p.material, p.light)
             }

@@ -210,10 +210,6 @@ impl Texture {
         }
     }
 
-    pub fn is_constant(&self) -> bool {
-        matches!(self, Texture::Constant(_))
-    }
-
     /// Width and height of a bitmap's image; `None` for textures without a resolution.
     pub fn resolution(&self) -> Option<(u32, u32)> {
         match self {

@@ -4,6 +4,7 @@
 //! rough ones default to Beckmann with alpha 0.1, glass defaults to bk7 in air.
 
 use super::Build;
+use super::plugins::PluginKind;
 use super::props::{Cx, Props};
 use super::xml::El;
 use crate::material::microfacet::{Distribution, Microfacet};
@@ -230,7 +231,7 @@ impl<'a> Cx<'a> {
                 }
             }
             other => {
-                self.warn(el, format!("BSDF `{other}` is not supported: rendered as grey diffuse (reflectance 0.5)"))?;
+                self.unsupported(el, PluginKind::Bsdf, other, ": rendered as grey diffuse (reflectance 0.5)")?;
                 for u in &p.used {
                     u.set(true);
                 }

@@ -2,6 +2,7 @@
 //! the environment lights constant and envmap.
 
 use super::Build;
+use super::plugins::PluginKind;
 use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
@@ -147,7 +148,7 @@ impl<'a> Cx<'a> {
             }
             "area" => return Err(self.err(el, "an area emitter must be nested inside a <shape>")),
             other => {
-                self.warn(el, format!("emitter `{other}` is not supported and is skipped"))?;
+                self.unsupported(el, PluginKind::Emitter, other, " and is skipped")?;
                 for u in &p.used {
                     u.set(true);
                 }

@@ -16,6 +16,7 @@
 
 mod bsdf;
 mod emitters;
+mod plugins;
 mod props;
 mod sensor;
 mod shapes;
@@ -28,6 +29,7 @@ use super::builder::SceneBuilder;
 use super::desc::{IntegratorDesc, LoadOptions, SceneDescription};
 use super::footprint::{FileBudget, FileKind};
 use crate::options::IntegratorKind;
+use plugins::PluginKind;
 use props::Cx;
 use std::collections::HashMap;
 use std::path::Path;
@@ -143,6 +145,14 @@ impl<'a> Cx<'a> {
                 }
                 "medium" | "phase" | "volume" => {
                     let kind = self.attr(child, "type")?.map_or(String::new(), |t| t.0);
+                    let plugins = match child.tag.as_str() {
+                        "medium" => PluginKind::Medium,
+                        "phase" => PluginKind::Phase,
+                        _ => PluginKind::Volume,
+                    };
+                    if let Some(message) = plugins::unknown(plugins, &kind) {
+                        return Err(self.err(child, message));
+                    }
                     self.warn(
                         child,
                         format!("participating media are not supported: <{} type=\"{kind}\"> is ignored", child.tag),
@@ -236,7 +246,7 @@ impl<'a> Cx<'a> {
                 (IntegratorKind::Path, Some((2, el)))
             }
             other => {
-                self.warn(el, format!("integrator `{other}` is not supported; the path tracer is used"))?;
+                self.unsupported(el, PluginKind::Integrator, other, "; the path tracer is used")?;
                 for u in &p.used {
                     u.set(true);
                 }

@@ -111,6 +111,22 @@ impl<'a> Cx<'a> {
         SceneError::at(&s.name, &s.text, span, message)
     }
 
+    /// A plugin `name` of `kind` that we do not render: an error when Mitsuba 3 has no such
+    /// plugin either (a misspelling, named as the nearest known one), otherwise a warning
+    /// saying `instead` (what is rendered in its place), or an error with `--strict`.
+    pub(super) fn unsupported(
+        &mut self,
+        el: &El,
+        kind: super::plugins::PluginKind,
+        name: &str,
+        instead: &str,
+    ) -> Result<(), SceneError> {
+        if let Some(message) = super::plugins::unknown(kind, name) {
+            return Err(self.err(el, message));
+        }
+        self.warn(el, format!("{} `{name}` is not supported{instead}", kind.word()))
+    }
+
     /// Reports something we do not render: a warning, or an error with `--strict`.
     pub(super) fn warn(&mut self, el: &El, message: impl Into<String>) -> Result<(), SceneError> {
         let message = message.into();
@@ -486,6 +502,15 @@ impl<'a> Cx<'a> {
                 Ok(c)
             }
             "spectrum" => {
+                // A spectrum plugin (`<spectrum type="blackbody">`): only `uniform` has a grey.
+                if let Some((kind, _)) = self.attr(el, "type")? {
+                    let p = self.props(el)?;
+                    if kind == "uniform" {
+                        return Ok(Color::splat(self.float(&p, "value")?.unwrap_or(1.0)));
+                    }
+                    self.unsupported(el, super::plugins::PluginKind::Spectrum, &kind, ": it is taken as grey 0.5")?;
+                    return Ok(Color::splat(0.5));
+                }
                 if let Some((f, span)) = self.attr(el, "filename")? {
                     self.warn(el, format!("spectrum files are not supported (`{f}`): `{name}` is taken as grey 0.5"))?;
                     let _ = span;

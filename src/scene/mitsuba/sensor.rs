@@ -1,6 +1,7 @@
 //! The Mitsuba sensor (perspective, thinlens, orthographic) with its film (size, crop window,
 //! reconstruction filter) and sampler: camera, image and sample count.
 
+use super::plugins::PluginKind;
 use super::props::{Cx, Props};
 use super::xml::El;
 use crate::camera::{CameraDesc, FieldOfView, FovAxis, Placement};
@@ -33,10 +34,10 @@ impl<'a> Cx<'a> {
             "thinlens" => true,
             "orthographic" => return self.orthographic(el, &p),
             other => {
-                return Err(self.err(
-                    el,
-                    format!("sensor `{other}` is not supported; expected perspective, thinlens or orthographic"),
-                ));
+                let message = super::plugins::unknown(PluginKind::Sensor, other).unwrap_or_else(|| {
+                    format!("sensor `{other}` is not supported; expected perspective, thinlens or orthographic")
+                });
+                return Err(self.err(el, message));
             }
         };
         let (width, height, film) = self.film(&p)?;
@@ -176,7 +177,7 @@ impl<'a> Cx<'a> {
         let Some(&(fel, _)) = films.first() else { return Ok((width, height, film)) };
         let fp = self.props(fel)?;
         if fp.kind != "hdrfilm" && fp.kind != "specfilm" {
-            self.warn(fel, format!("film `{}` is treated as hdrfilm", fp.kind))?;
+            self.unsupported(fel, PluginKind::Film, &fp.kind, "; it is treated as hdrfilm")?;
         }
         for (name, v) in [("width", &mut width), ("height", &mut height)] {
             if let Some((x, xel)) = self.integer(&fp, name)? {
@@ -245,10 +246,7 @@ impl<'a> Cx<'a> {
                 Some((n, nel)) => return Err(self.err(nel, format!("lanczos lobes must be 1 to 64, found {n}"))),
             },
             other => {
-                self.warn(
-                    el,
-                    format!("reconstruction filter `{other}` is not supported; Mitsuba's default (gaussian) is used"),
-                )?;
+                self.unsupported(el, PluginKind::Filter, other, "; Mitsuba's default (gaussian) is used")?;
                 for u in &p.used {
                     u.set(true);
                 }
@@ -269,7 +267,7 @@ impl<'a> Cx<'a> {
             "independent" | "stratified" | "multijitter" | "orthogonal" => SamplerKind::Jittered,
             "ldsampler" => SamplerKind::Sobol,
             other => {
-                self.warn(sel, format!("sampler `{other}` is not supported; jittered sampling is used"))?;
+                self.unsupported(sel, PluginKind::Sampler, other, "; jittered sampling is used")?;
                 SamplerKind::Jittered
             }
         };

@@ -2,6 +2,7 @@
 //! with their nested area emitters and BSDFs; shape groups and their instances.
 
 use super::Build;
+use super::plugins::PluginKind;
 use super::props::Cx;
 use super::xml::El;
 use crate::geometry::Transform;
@@ -220,7 +221,7 @@ impl<'a> Cx<'a> {
                 }
             }
             other => {
-                self.warn(el, format!("shape `{other}` is not supported and is skipped"))?;
+                self.unsupported(el, PluginKind::Shape, other, " and is skipped")?;
                 for u in &p.used {
                     u.set(true);
                 }

@@ -2,6 +2,7 @@
 //! texture or a constant. Images are read once per file and decoding and shared.
 
 use super::Build;
+use super::plugins::PluginKind;
 use super::props::{Cx, Props};
 use super::xml::El;
 use crate::material::{ColorParam, FloatParam, Param};
@@ -66,7 +67,7 @@ impl<'a> Cx<'a> {
                 for u in &p.used {
                     u.set(true);
                 }
-                self.warn(el, format!("texture `{other}` is not supported: rendered as grey 0.5"))?;
+                self.unsupported(el, PluginKind::Texture, other, ": rendered as grey 0.5")?;
                 Texture::Constant(Color::splat(0.5))
             }
         };

@@ -628,7 +628,12 @@ proptest! {
                 let key = if runs { (i / 5) as u64 * 7919 } else { r };
                 let e = (key % 255) as u8 + 1;
                 // A mantissa of (1, 1, 1) would read as an old-style run; real writers never give one.
-                let m = [(key >> 8) as u8, (key >> 16) as u8 | 2, (key >> 24) as u8];
+                let mut m = [(key >> 8) as u8, (key >> 16) as u8 | 2, (key >> 24) as u8];
+                // Nor does a flat scanline start with (2, 2, <128): that is the new-style RLE
+                // marker, and Radiance's reader (like ours) takes it as one.
+                if m[0] == 2 && m[1] == 2 {
+                    m[0] = 3;
+                }
                 [m[0], m[1], m[2], e]
             })
             .collect();
