@@ -99,13 +99,22 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let mut closest = t_max;
         let mut best = None;
-        if let Some((i, h)) = self.bvh.intersect(ray, t_max) {
+        if let Some((i, h)) = self.bvh.intersect_tree(ray, t_max) {
             closest = h.t;
             best = Some((i, h));
         }
+        let mut instanced = None;
         if !self.instances.is_empty()
             && let Some(h) = self.instances.intersect(ray, closest)
         {
+            closest = h.t;
+            instanced = Some(h);
+        }
+        // Planes last, so the tree and the instances have pruned `closest` (see
+        // `Bvh::intersect_unbounded`).
+        if let Some(p) = self.bvh.intersect_unbounded(ray, closest) {
+            best = Some(p);
+        } else if let Some(h) = instanced {
             let (sp, material, light) = self.instances.surface(&h, &self.meshes);
             return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }

@@ -131,6 +131,26 @@ impl CompactShape {
             CompactShape::Plane([point, normal]) => intersect_plane(*point, *normal, ray, t_max),
         }
     }
+
+    /// `intersect` for the shapes a BVH keeps outside its tree (planes: `Shape::is_bounded`),
+    /// from a call site of their own: the general one's dispatch, switching between a leaf's
+    /// shapes and a plane on every ray, mispredicted (+11% on the Whitted benchmark).
+    #[inline(always)]
+    pub fn intersect_unbounded(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        if let CompactShape::Plane([point, normal]) = self {
+            intersect_plane(*point, *normal, ray, t_max)
+        } else {
+            self.intersect_other_unbounded(ray, t_max)
+        }
+    }
+
+    /// (No unbounded shape but the plane exists: out of line, so the plane's test stays small
+    /// enough to inline.)
+    #[cold]
+    #[inline(never)]
+    fn intersect_other_unbounded(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        self.intersect(ray, &RayShear::new(ray), t_max)
+    }
 }
 
 /// A shape with its material and, when it emits, its light: one element of the BVH. The light

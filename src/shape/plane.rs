@@ -11,6 +11,10 @@ pub struct Plane {
     pub point: Vec3,
     /// Unit normal.
     pub normal: Vec3,
+    /// The fixed tangent frame uv are measured along (in scene units), made once: building it
+    /// per hit cost 3% of the Whitted benchmark.
+    tangent: Vec3,
+    bitangent: Vec3,
 }
 
 /// The hit of `ray` in (0, t_max) with the plane through `point` with unit `normal`.
@@ -29,7 +33,8 @@ pub fn intersect_plane(point: Vec3, normal: Vec3, ray: &Ray, t_max: f32) -> Opti
 impl Plane {
     /// The plane through `point` with unit `normal`.
     pub fn new(point: Vec3, normal: Vec3) -> Self {
-        Plane { point, normal }
+        let frame = Frame::from_z(normal);
+        Plane { point, normal, tangent: frame.x, bitangent: frame.y }
     }
 
     #[inline]
@@ -37,12 +42,7 @@ impl Plane {
         intersect_plane(self.point, self.normal, ray, t_max)
     }
 
-    /// The fixed tangent frame uv are measured along (in scene units).
-    #[inline]
-    fn frame(&self) -> Frame {
-        Frame::from_z(self.normal)
-    }
-
+    #[inline(never)]
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
         let p = ray.at(h.t);
         // Project onto the plane: the remaining error is that of one dot product and subtraction.
@@ -50,8 +50,7 @@ impl Plane {
         let p_error = gamma(6) * (p.abs() + self.point.abs());
         // Coordinates in the plane, in scene units, along its tangent frame.
         let d = p - self.point;
-        let frame = self.frame();
-        let (dpdu, dpdv) = (frame.x, frame.y);
+        let (dpdu, dpdv) = (self.tangent, self.bitangent);
         let param = SurfaceParam::Known { uv: Vec2::new(d.dot(dpdu), d.dot(dpdv)), dpdu, dpdv };
         SurfacePoint { p, p_error, ng: self.normal, ns: self.normal, param }
     }
