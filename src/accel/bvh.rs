@@ -148,7 +148,7 @@ impl Bvh {
     /// `intersect` over the unbounded primitives (planes) only, from a loop of their own: one
     /// call site shared with the tree's leaves mispredicted its dispatch on every ray, and
     /// keeping the loop out of the traversal's function keeps that function as small as before
-    /// planes joined the BVH (both cost 4-8% on scenes of a few shapes over a floor).
+    /// planes joined the BVH (BENCHMARKS.md, architecture step 2).
     #[inline]
     pub fn intersect_unbounded(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
         if self.bounded == self.shapes.len() {

@@ -134,7 +134,8 @@ impl CompactShape {
 
     /// `intersect` for the shapes a BVH keeps outside its tree (planes: `Shape::is_bounded`),
     /// from a call site of their own: the general one's dispatch, switching between a leaf's
-    /// shapes and a plane on every ray, mispredicted (+11% on the Whitted benchmark).
+    /// shapes and a plane on every ray, mispredicted (ten times the indirect mispredicts on the
+    /// Whitted benchmark).
     #[inline(always)]
     pub fn intersect_unbounded(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         if let CompactShape::Plane([point, normal]) = self {

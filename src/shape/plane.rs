@@ -11,8 +11,8 @@ pub struct Plane {
     pub point: Vec3,
     /// Unit normal.
     pub normal: Vec3,
-    /// The fixed tangent frame uv are measured along (in scene units), made once: building it
-    /// per hit cost 3% of the Whitted benchmark.
+    /// The fixed tangent frame uv are measured along (in scene units), made once rather than
+    /// per hit.
     tangent: Vec3,
     bitangent: Vec3,
 }
@@ -42,6 +42,8 @@ impl Plane {
         intersect_plane(self.point, self.normal, ray, t_max)
     }
 
+    /// Out of line: inlined, it made `Primitives::surface` larger and slower for every other
+    /// shape's hits too (BENCHMARKS.md, architecture step 2).
     #[inline(never)]
     pub fn surface(&self, ray: &Ray, h: &PrimHit) -> SurfacePoint {
         let p = ray.at(h.t);
