@@ -24,4 +24,5 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shape;
+pub mod spectrum;
 pub mod texture;

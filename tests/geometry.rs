@@ -327,9 +327,12 @@ fn path_elements_add_search_folders() {
         let s = built(mitsuba_str(&format!("{paths}{shape}"), &root).unwrap());
         assert!((s.scene.bounds().max.z - z).abs() < 1e-6, "{paths}: {:?}", s.scene.bounds());
     }
-    // A file only in the scene's folder is still found; a missing folder is reported.
-    let d = mitsuba_str(&format!(r#"<path value="nowhere"/>{shape}"#), &root).unwrap();
-    assert!(d.warnings.iter().any(|w| w.contains("nowhere") && w.contains("does not exist")), "{:?}", d.warnings);
+    // A missing folder is an error, as in Mitsuba ("<path>: folder not found").
+    let Err(e) = mitsuba_str(&format!(r#"<path value="nowhere"/>{shape}"#), &root) else {
+        panic!("a <path> to a missing folder must be refused")
+    };
+    let e = e.to_string();
+    assert!(e.contains("nowhere") && e.contains("not found") && e.contains("test.xml:1:"), "{e}");
     // `<include>` files are searched in the `<path>` folders before them too.
     std::fs::write(root.join("b").join("inc.xml"), format!(r#"<scene version="3.0.0">{shape}</scene>"#)).unwrap();
     let s = built(mitsuba_str(r#"<path value="b"/><include filename="inc.xml"/>"#, &root).unwrap());

@@ -39,6 +39,8 @@ pub enum FileKind {
     Scene,
     /// A file the scene includes (Mitsuba's `<include>`; counted as nothing).
     Include,
+    /// A spectrum data file (Mitsuba's `.spd`; counted as nothing: it becomes one colour).
+    Spectrum,
     /// A mesh, read in this format (the loader's choice, not the file name's).
     Mesh(MeshFormat),
     /// An image: a bitmap texture or an environment map.
@@ -171,7 +173,7 @@ impl FileBudget {
         };
         let what = || format!("`{}`", path.display());
         match kind {
-            FileKind::Scene | FileKind::Include => {}
+            FileKind::Scene | FileKind::Include | FileKind::Spectrum => {}
             FileKind::Mesh(_) => ledger.charge(Part::Meshes, bytes, what)?,
             FileKind::Image => ledger.charge(Part::Textures, bytes, what)?,
         }
@@ -211,7 +213,7 @@ impl FileBudget {
 /// A file's estimated peak bytes as `kind`; 0 for what is not counted or cannot be measured.
 fn measure(path: &Path, kind: FileKind) -> u64 {
     match kind {
-        FileKind::Scene | FileKind::Include => 0,
+        FileKind::Scene | FileKind::Include | FileKind::Spectrum => 0,
         FileKind::Mesh(format) => mesh_bytes(path, format).unwrap_or(0),
         FileKind::Image => image_size(path).map_or(0, |(w, h)| w.saturating_mul(h).saturating_mul(BYTES_PER_TEXEL)),
     }

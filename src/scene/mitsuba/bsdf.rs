@@ -263,8 +263,8 @@ impl<'a> Cx<'a> {
     /// `eta` and `k` (0 and 1 when missing, as Mitsuba).
     fn complex_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color), SceneError> {
         let material = self.string(p, "material")?;
-        let eta = self.color(p, "eta")?;
-        let k = self.color(p, "k")?;
+        let eta = self.color_for(p, "eta", crate::spectrum::SpectrumUse::Unbounded)?;
+        let k = self.color_for(p, "k", crate::spectrum::SpectrumUse::Unbounded)?;
         match material {
             Some((name, at)) => {
                 if eta.is_some() || k.is_some() {

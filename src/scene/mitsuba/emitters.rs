@@ -10,6 +10,7 @@ use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Projector, Spot};
 use crate::math::{Color, Frame, Vec3};
 use crate::scene::environment::environment_map;
 use crate::scene::{FileKind, SceneError};
+use crate::spectrum::SpectrumUse;
 use crate::texture::image::load_image;
 
 impl<'a> Cx<'a> {
@@ -18,7 +19,7 @@ impl<'a> Cx<'a> {
         let p = self.props(el)?;
         match p.kind.as_str() {
             "point" => {
-                let intensity = self.color(&p, "intensity")?.unwrap_or(Color::ONE);
+                let intensity = self.color_for(&p, "intensity", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
                 let position = match (self.point(&p, "position")?, self.transform(&p, "to_world")?) {
                     (Some(_), Some(_)) => return Err(self.err(el, "give either `position` or `to_world`, not both")),
                     (Some(pos), None) => pos,
@@ -28,7 +29,7 @@ impl<'a> Cx<'a> {
                 b.geometry.add_light(Light::Point { position, intensity });
             }
             "spot" => {
-                let intensity = self.color(&p, "intensity")?.unwrap_or(Color::ONE);
+                let intensity = self.color_for(&p, "intensity", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
                 let cutoff = self.float(&p, "cutoff_angle")?.unwrap_or(20.0);
                 let beam = self.float(&p, "beam_width")?.unwrap_or(cutoff * 0.75);
@@ -59,7 +60,7 @@ impl<'a> Cx<'a> {
                         let texture = &b.geometry.textures()[t as usize];
                         (t, texture.resolution().unwrap_or((1, 1)), texture.mean())
                     }
-                    None => match self.color(&p, "irradiance")? {
+                    None => match self.color_for(&p, "irradiance", SpectrumUse::Emission)? {
                         // A constant irradiance: the texture's value becomes the intensity.
                         Some(c) => (NO_TEXTURE, (1, 1), c),
                         None => (NO_TEXTURE, (1, 1), Color::ONE),
@@ -108,7 +109,7 @@ impl<'a> Cx<'a> {
                 }));
             }
             "directional" => {
-                let irradiance = self.color(&p, "irradiance")?.unwrap_or(Color::ONE);
+                let irradiance = self.color_for(&p, "irradiance", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
                 let direction = match (self.point(&p, "direction")?, self.transform(&p, "to_world")?) {
                     (Some(_), Some(_)) => return Err(self.err(el, "give either `direction` or `to_world`, not both")),
                     (Some(d), None) => d,
@@ -122,7 +123,7 @@ impl<'a> Cx<'a> {
                 b.geometry.add_light(Light::Directional { direction, irradiance, disk: PhotonDisk::default() });
             }
             "constant" => {
-                let radiance = self.color(&p, "radiance")?.unwrap_or(Color::ONE);
+                let radiance = self.color_for(&p, "radiance", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
                 b.geometry.set_environment(Environment::constant(radiance)).map_err(|e| self.err(el, e))?;
             }
             "envmap" => {
@@ -140,7 +141,7 @@ impl<'a> Cx<'a> {
                     self.warn(el, "`mis_compensation` is not supported: the envmap is sampled by luminance alone")?;
                 }
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
-                let path = self.src(fel).base.join(&file);
+                let path = self.resolve_file(fel, &file)?;
                 self.files.open(&path, FileKind::Image)?;
                 let image = load_image(&path, false).map_err(|e| self.err(fel, e.to_string()))?;
                 let env = environment_map(&image, scale, &x).map_err(|e| self.err(el, e))?;

@@ -20,6 +20,7 @@ mod plugins;
 mod props;
 mod sensor;
 mod shapes;
+mod spectrum;
 mod texture;
 mod transform;
 mod xml;
@@ -33,7 +34,7 @@ use plugins::PluginKind;
 use props::Cx;
 use std::collections::HashMap;
 use std::path::Path;
-use xml::{El, Src};
+use xml::{El, Resolver, Src};
 
 /// Loads a Mitsuba 3 XML scene file, reporting it and every file it reads to `files` before
 /// reading it. Its warnings are in the description's `warnings`.
@@ -64,15 +65,16 @@ fn load_mitsuba_text(
     options: &LoadOptions,
     files: &FileBudget,
 ) -> Result<SceneDescription, SceneError> {
-    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), base: base.to_path_buf() }];
-    let root = xml::parse_source(&mut srcs, 0, 0, &mut Vec::new(), files)?;
+    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), resolver: Resolver::for_scene(base) }];
+    let root = xml::parse_source(&mut srcs, 0, 0, files)?;
+    let resolver = srcs[0].resolver.clone();
     let mut cx = Cx {
         srcs: &srcs,
         defines: HashMap::new(),
         ids: HashMap::new(),
         warnings: Vec::new(),
         strict: options.strict,
-        search_paths: Vec::new(),
+        resolver,
         files,
     };
     for (k, v) in &options.defines {
@@ -116,8 +118,8 @@ impl<'a> Cx<'a> {
         let mut integrator: Option<&'a El> = None;
         for child in &root.children {
             match child.tag.as_str() {
-                "default" => {}
-                "path" => self.search_path(child)?,
+                // Read with the XML: `<path>` folders are in the resolver already.
+                "default" | "path" => {}
                 "shape" => self.shape(child, &mut b)?,
                 "emitter" => self.emitter(child, &mut b)?,
                 "sensor" => {
@@ -244,6 +246,29 @@ impl<'a> Cx<'a> {
                 }
                 // Direct lighting is a path of two segments.
                 (IntegratorKind::Path, Some((2, el)))
+            }
+            // Wrappers that add channels to the film (moments for variance estimates, AOVs)
+            // around the integrators that make the image: the image is the first nested one's.
+            "moment" | "aov" => {
+                if p.kind == "aov" {
+                    let _ = self.string(&p, "aovs")?;
+                    self.warn(
+                        el,
+                        "the aov integrator's extra channels are not written; the image is its nested integrator's",
+                    )?;
+                }
+                let nested = self.object(&p, None, "integrator");
+                let Some(&(inner, _)) = nested.first() else {
+                    return Err(self.err(
+                        el,
+                        format!("a `{}` integrator needs a nested <integrator> that renders the image", p.kind),
+                    ));
+                };
+                if nested.len() > 1 {
+                    self.warn(el, format!("only the first of the {} nested integrators is rendered", nested.len()))?;
+                }
+                self.finish(&p)?;
+                return self.integrator(inner);
             }
             other => {
                 self.unsupported(el, PluginKind::Integrator, other, "; the path tracer is used")?;

@@ -6,6 +6,7 @@ use super::xml::{Attr, El, Src};
 use crate::geometry::Transform;
 use crate::math::{Color, Vec3};
 use crate::scene::SceneError;
+use crate::spectrum::SpectrumUse;
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -65,8 +66,8 @@ pub(super) struct Cx<'a> {
     pub ids: HashMap<String, &'a El>,
     pub warnings: Vec<String>,
     pub strict: bool,
-    /// Folders added by `<path value="..."/>`, in the order given (searched newest first).
-    pub search_paths: Vec<std::path::PathBuf>,
+    /// Where relative file names are looked up (the scene file's resolver after parsing).
+    pub resolver: super::xml::Resolver,
     /// The hook every file is reported to before it is read (shared with the scene builder).
     pub files: &'a crate::scene::FileBudget,
 }
@@ -133,10 +134,16 @@ impl<'a> Cx<'a> {
         if self.strict {
             return Err(self.err(el, format!("{message} (an error with --strict)")));
         }
+        self.note(el, message);
+        Ok(())
+    }
+
+    /// A warning about something rendered as Mitsuba renders it (never an error).
+    pub(super) fn note(&mut self, el: &El, message: impl Into<String>) {
+        let message = message.into();
         let s = self.src(el);
         let (line, column) = crate::scene::error::line_column(&s.text, el.span.start);
         self.warnings.push(format!("{}:{line}:{column}: {message}", s.name));
-        Ok(())
     }
 
     /// An attribute's value with `$name` parameters substituted.
@@ -179,39 +186,14 @@ impl<'a> Cx<'a> {
         Ok(out)
     }
 
-    /// A `<path value="..."/>`: a folder searched for the files named after it (meshes,
-    /// textures), before the folder of the scene file. A relative folder is taken from the
-    /// folder of the file the element is in, as Mitsuba does.
-    pub(super) fn search_path(&mut self, el: &El) -> Result<(), SceneError> {
-        let (value, span) = self.required_attr(el, "value")?;
-        if let Some(a) = el.attrs.iter().find(|a| a.name != "value") {
-            return Err(self.err_span(el, a.span.clone(), format!("<path> takes only `value`, found `{}`", a.name)));
-        }
-        if value.trim().is_empty() {
-            return Err(self.err_span(el, span, "<path> needs a folder in `value`"));
-        }
-        let dir = self.src(el).base.join(&value);
-        if !dir.is_dir() {
-            self.warn(el, format!("<path> folder `{}` does not exist", dir.display()))?;
-        }
-        self.search_paths.push(dir);
-        Ok(())
-    }
-
-    /// The file a relative name in element `el` refers to: the first folder of `<path>`
-    /// elements read so far (newest first) that holds it, else the folder of the file `el` is
-    /// in (which is where a missing file is reported).
-    pub(super) fn resolve_file(&self, el: &El, name: &str) -> std::path::PathBuf {
-        let rel = std::path::Path::new(name);
-        if rel.is_absolute() {
-            return rel.to_path_buf();
-        }
-        self.search_paths
-            .iter()
-            .rev()
-            .map(|dir| dir.join(rel))
-            .find(|p| p.is_file())
-            .unwrap_or_else(|| self.src(el).base.join(rel))
+    /// The file a relative name in element `el` refers to, looked up as Mitsuba builds objects:
+    /// in the scene file's `<path>` folders (newest first), then its folder. A name found
+    /// nowhere is an error naming the folders searched.
+    pub(super) fn resolve_file(&self, el: &El, name: &str) -> Result<std::path::PathBuf, SceneError> {
+        self.resolver
+            .resolve(name)
+            .filter(|p| p.is_file())
+            .ok_or_else(|| self.err(el, format!("file `{name}` not found (looked in {})", self.resolver.searched())))
     }
 
     /// Collects `<default>`s (command-line values win) and object ids of the whole tree.
@@ -468,10 +450,21 @@ impl<'a> Cx<'a> {
         self.vec3_of(el).map(Some)
     }
 
-    /// A colour: `<rgb>`, `<spectrum>`, `<float>`, or a texture (whose mean or grey is used).
+    /// A colour: `<rgb>`, `<spectrum>`, `<float>`, or a texture (whose mean or grey is used);
+    /// spectra are converted as reflectances.
     pub(super) fn color(&mut self, p: &Props<'a>, name: &str) -> Result<Option<Color>, SceneError> {
+        self.color_for(p, name, SpectrumUse::Reflectance)
+    }
+
+    /// `color`, with spectra converted for `usage`.
+    pub(super) fn color_for(
+        &mut self,
+        p: &Props<'a>,
+        name: &str,
+        usage: SpectrumUse,
+    ) -> Result<Option<Color>, SceneError> {
         if let Some(el) = self.prop(p, name) {
-            return self.color_of(el, name).map(Some);
+            return self.color_of_for(el, name, usage).map(Some);
         }
         if let Some(&(tex, at)) = self.object(p, Some(name), "texture").first() {
             return self.texture_mean(tex, at).map(Some);
@@ -480,6 +473,12 @@ impl<'a> Cx<'a> {
     }
 
     pub(super) fn color_of(&mut self, el: &'a El, name: &str) -> Result<Color, SceneError> {
+        self.color_of_for(el, name, SpectrumUse::Reflectance)
+    }
+
+    /// The colour of a property element, spectra converted for `usage` as Mitsuba's RGB
+    /// variants convert them.
+    pub(super) fn color_of_for(&mut self, el: &'a El, name: &str, usage: SpectrumUse) -> Result<Color, SceneError> {
         match el.tag.as_str() {
             "float" | "integer" => {
                 let (v, span) = self.value(el)?;
@@ -501,59 +500,7 @@ impl<'a> Cx<'a> {
                 };
                 Ok(c)
             }
-            "spectrum" => {
-                // A spectrum plugin (`<spectrum type="blackbody">`): only `uniform` has a grey.
-                if let Some((kind, _)) = self.attr(el, "type")? {
-                    let p = self.props(el)?;
-                    if kind == "uniform" {
-                        return Ok(Color::splat(self.float(&p, "value")?.unwrap_or(1.0)));
-                    }
-                    self.unsupported(el, super::plugins::PluginKind::Spectrum, &kind, ": it is taken as grey 0.5")?;
-                    return Ok(Color::splat(0.5));
-                }
-                if let Some((f, span)) = self.attr(el, "filename")? {
-                    self.warn(el, format!("spectrum files are not supported (`{f}`): `{name}` is taken as grey 0.5"))?;
-                    let _ = span;
-                    return Ok(Color::splat(0.5));
-                }
-                let (v, span) = self.value(el)?;
-                if !v.contains(':') {
-                    let xs = self.parse_list(el, &v, span.clone())?;
-                    return match xs.as_slice() {
-                        [s] => Ok(Color::splat(*s)),
-                        _ => Err(self.err_span(
-                            el,
-                            span,
-                            format!(
-                                "<spectrum> `{name}` needs one value or wavelength:value pairs, found {} values",
-                                xs.len()
-                            ),
-                        )),
-                    };
-                }
-                // Wavelength:value pairs: no colour-matching tables here, so use the mean value
-                // over the visible range as a grey.
-                let mut pairs = Vec::new();
-                for item in v.split(',').map(str::trim).filter(|t| !t.is_empty()) {
-                    let Some((l, x)) = item.split_once(':') else {
-                        return Err(self.err_span(el, span, format!("expected wavelength:value, found `{item}`")));
-                    };
-                    pairs.push((self.parse_f32(el, l, span.clone())?, self.parse_f32(el, x, span.clone())?));
-                }
-                let visible: Vec<f32> =
-                    pairs.iter().filter(|(l, _)| (380.0..=780.0).contains(l)).map(|p| p.1).collect();
-                let vals = if visible.is_empty() { pairs.iter().map(|p| p.1).collect() } else { visible };
-                let mean = vals.iter().sum::<f32>() / vals.len() as f32;
-                if vals.iter().any(|&x| (x - mean).abs() > 1e-6 * mean.abs().max(1.0)) {
-                    self.warn(
-                        el,
-                        format!(
-                            "wavelength-dependent spectrum `{name}` is approximated by its mean value {mean} (grey)"
-                        ),
-                    )?;
-                }
-                Ok(Color::splat(mean))
-            }
+            "spectrum" => self.spectrum_color(el, name, usage),
             _ => Err(self.wrong_type(el, name, "an <rgb>, <spectrum> or <float>")),
         }
     }
@@ -571,7 +518,7 @@ impl<'a> Cx<'a> {
             }
             "bitmap" => match self.string(&p, "filename")? {
                 Some((file, fel)) => {
-                    let path = self.src(fel).base.join(&file);
+                    let path = self.resolve_file(fel, &file)?;
                     let raw = self.boolean(&p, "raw")? == Some(true);
                     self.files.open(&path, crate::scene::FileKind::Image)?;
                     let image =

@@ -43,11 +43,12 @@ impl<'a> Cx<'a> {
                     "emitters inside a shapegroup are not supported (Mitsuba refuses them too: instancing of emitters)",
                 ));
             }
-            radiance = Some(match self.color_param(&ep, "radiance", b)? {
-                None => (Color::ONE, None),
-                Some(crate::material::Param::Const(c)) => (c, None),
-                Some(crate::material::Param::Texture(t)) => (Color::ONE, Some(t)),
-            });
+            radiance =
+                Some(match self.color_param_for(&ep, "radiance", b, crate::spectrum::SpectrumUse::Emission)? {
+                    None => (Color::ONE, None),
+                    Some(crate::material::Param::Const(c)) => (c, None),
+                    Some(crate::material::Param::Texture(t)) => (Color::ONE, Some(t)),
+                });
             self.finish(&ep)?;
         }
         // Material: a nested or referenced <bsdf>, or Mitsuba's default. A `null` BSDF is an
@@ -147,7 +148,7 @@ impl<'a> Cx<'a> {
                     let (file, fel) = self.string(&p, "filename")?.ok_or_else(|| {
                         self.err(el, format!("a `{kind}` shape needs <string name=\"filename\" value=\"...\"/>"))
                     })?;
-                    let path = self.resolve_file(fel, &file);
+                    let path = self.resolve_file(fel, &file)?;
                     name = file.clone();
                     let format = match kind.as_str() {
                         "obj" => MeshFormat::Obj,

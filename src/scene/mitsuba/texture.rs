@@ -14,15 +14,27 @@ use glam::{Affine2, Mat2};
 use std::sync::Arc;
 
 impl<'a> Cx<'a> {
-    /// A colour parameter: a constant (`<rgb>`, `<spectrum>`, `<float>`) or a nested texture.
+    /// A colour parameter: a constant (`<rgb>`, `<spectrum>`, `<float>`) or a nested texture;
+    /// spectra are converted as reflectances.
     pub(super) fn color_param(
         &mut self,
         p: &Props<'a>,
         name: &str,
         b: &mut Build,
     ) -> Result<Option<ColorParam>, SceneError> {
+        self.color_param_for(p, name, b, crate::spectrum::SpectrumUse::Reflectance)
+    }
+
+    /// `color_param` with spectra converted for `usage`.
+    pub(super) fn color_param_for(
+        &mut self,
+        p: &Props<'a>,
+        name: &str,
+        b: &mut Build,
+        usage: crate::spectrum::SpectrumUse,
+    ) -> Result<Option<ColorParam>, SceneError> {
         if let Some(el) = self.prop(p, name) {
-            return self.color_of(el, name).map(|c| Some(Param::Const(c)));
+            return self.color_of_for(el, name, usage).map(|c| Some(Param::Const(c)));
         }
         if let Some(&(tex, _)) = self.object(p, Some(name), "texture").first() {
             return self.texture(tex, b).map(|t| Some(Param::Texture(t)));
@@ -126,7 +138,7 @@ impl<'a> Cx<'a> {
             let _ = self.prop(p, name);
         }
         let to_uv = self.to_uv(p)?;
-        let path = self.resolve_file(fel, &file);
+        let path = self.resolve_file(fel, &file)?;
         let key = (path.clone(), raw);
         let image = match b.images.get(&key) {
             Some(img) => img.clone(),

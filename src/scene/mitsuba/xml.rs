@@ -1,5 +1,6 @@
 //! The owned XML tree of a Mitsuba scene: each element and attribute remembers the file and the
-//! byte range it came from, `<include>`s are expanded, and nesting is bounded.
+//! byte range it came from, `<include>`s are expanded, and nesting is bounded. Relative file
+//! names are looked up as Mitsuba 3's file resolver does (`Resolver`).
 
 use crate::scene::SceneError;
 use crate::scene::footprint::{FileBudget, FileKind};
@@ -16,7 +17,53 @@ pub(super) const MAX_NESTING: usize = 256;
 pub(super) struct Src {
     pub name: String,
     pub text: String,
-    pub base: PathBuf,
+    /// The folders relative names in this file are looked up in while it is parsed: its own
+    /// folder, its `<path>`s and those of the files that include it.
+    pub resolver: Resolver,
+}
+
+/// Mitsuba 3's file resolver: an ordered list of folders, the first that holds a relative name
+/// wins. Each file parses with a copy of its includer's list with its own folder put first,
+/// and a `<path>` puts its folder first from there on. Objects are built after parsing with
+/// the list of the scene file itself (its `<path>`s newest first, its folder, the working
+/// folder): so a mesh named in an included file is looked up from the scene's folder, and a
+/// `<path>` inside an included file serves only that file's own includes and spectrum files.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Resolver {
+    dirs: Vec<PathBuf>,
+}
+
+impl Resolver {
+    /// The resolver of a scene read from `dir` (its folder, then the working folder).
+    pub fn for_scene(dir: &Path) -> Resolver {
+        let mut dirs = vec![dir.to_path_buf()];
+        if let Ok(cwd) = std::env::current_dir()
+            && cwd != dir
+        {
+            dirs.push(cwd);
+        }
+        Resolver { dirs }
+    }
+
+    /// This resolver with `dir` searched first.
+    pub fn prepend(&mut self, dir: PathBuf) {
+        self.dirs.insert(0, dir);
+    }
+
+    /// The existing file or folder `name` refers to.
+    pub fn resolve(&self, name: &str) -> Option<PathBuf> {
+        let rel = Path::new(name);
+        if rel.is_absolute() {
+            return rel.exists().then(|| rel.to_path_buf());
+        }
+        self.dirs.iter().map(|d| d.join(rel)).find(|p| p.exists())
+    }
+
+    /// The folders searched, for messages.
+    pub fn searched(&self) -> String {
+        let names: Vec<String> = self.dirs.iter().map(|d| format!("`{}`", d.display())).collect();
+        names.join(", ")
+    }
 }
 
 /// An XML element with the places of its parts.
@@ -37,16 +84,10 @@ pub(super) struct Attr {
     pub span: Range<usize>,
 }
 
-/// Parses source `id` of `srcs`, expanding `<include>`s (each reported to `files` before it is
-/// read), and returns its `<scene>` element. `paths` gathers the `<path>` folders met so far in
-/// document order (an `<include>` is searched for in them, newest first, as Mitsuba does).
-pub(super) fn parse_source(
-    srcs: &mut Vec<Src>,
-    id: usize,
-    depth: usize,
-    paths: &mut Vec<PathBuf>,
-    files: &FileBudget,
-) -> Result<El, SceneError> {
+/// Parses source `id` of `srcs` (its resolver already holds its own folder first), expanding
+/// `<include>`s (each reported to `files` before it is read) and reading its `<path>`s into its
+/// resolver, and returns its `<scene>` element.
+pub(super) fn parse_source(srcs: &mut Vec<Src>, id: usize, depth: usize, files: &FileBudget) -> Result<El, SceneError> {
     let text = srcs[id].text.clone();
     let name = srcs[id].name.clone();
     let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
@@ -78,7 +119,9 @@ pub(super) fn parse_source(
             format!("the root element must be <scene version=\"3.0.0\">, found <{}>", el.tag),
         ));
     }
-    expand_includes(srcs, &mut el, depth, paths, files)?;
+    let mut resolver = srcs[id].resolver.clone();
+    expand_includes(srcs, &mut el, depth, &mut resolver, files, true)?;
+    srcs[id].resolver = resolver;
     Ok(el)
 }
 
@@ -114,29 +157,33 @@ fn convert<'d, 'i>(node: roxmltree::Node<'d, 'i>, src: usize, depth: usize) -> R
 }
 
 /// Replaces every `<include filename="..."/>` below `el` by the children of the included scene,
-/// found in the `<path>` folders met before it (newest first), else next to the file naming it.
+/// and puts the folder of every `<path>` (children of the root only, as in Mitsuba) first in
+/// `resolver`; both are looked up through `resolver` as it stands where they appear.
 fn expand_includes(
     srcs: &mut Vec<Src>,
     el: &mut El,
     depth: usize,
-    paths: &mut Vec<PathBuf>,
+    resolver: &mut Resolver,
     files: &FileBudget,
+    is_root: bool,
 ) -> Result<(), SceneError> {
     let children = std::mem::take(&mut el.children);
     for mut child in children {
-        if child.tag == "path"
-            && let Some(v) = child.attrs.iter().find(|a| a.name == "value")
-        {
-            // Checked (and a missing folder warned about) when the scene is read.
-            paths.push(srcs[child.src].base.join(&v.value));
-        }
-        if child.tag != "include" {
-            expand_includes(srcs, &mut child, depth, paths, files)?;
+        let src = &srcs[child.src];
+        let at = |span: Range<usize>, msg: String| SceneError::at(&src.name, &src.text, span, msg);
+        if child.tag == "path" {
+            if !is_root {
+                return Err(at(child.span.clone(), "<path> must be a child of <scene>".into()));
+            }
+            resolver.prepend(search_folder(src, &child, resolver)?);
             el.children.push(child);
             continue;
         }
-        let src = &srcs[child.src];
-        let at = |span: Range<usize>, msg: String| SceneError::at(&src.name, &src.text, span, msg);
+        if child.tag != "include" {
+            expand_includes(srcs, &mut child, depth, resolver, files, false)?;
+            el.children.push(child);
+            continue;
+        }
         let Some(file) = child.attrs.iter().find(|a| a.name == "filename") else {
             return Err(at(child.span.clone(), "<include> needs a `filename` attribute".into()));
         };
@@ -149,17 +196,45 @@ fn expand_includes(
                 format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (a cycle?)"),
             ));
         }
-        let rel = Path::new(&file.value);
-        let path =
-            paths.iter().rev().map(|dir| dir.join(rel)).find(|p| p.is_file()).unwrap_or_else(|| src.base.join(rel));
+        let Some(path) = resolver.resolve(&file.value).filter(|p| p.is_file()) else {
+            return Err(at(
+                file.span.clone(),
+                format!("cannot find included file `{}` (looked in {})", file.value, resolver.searched()),
+            ));
+        };
         files.open(&path, FileKind::Include)?;
         let text = std::fs::read_to_string(&path)
             .map_err(|e| at(file.span.clone(), format!("cannot read included file `{}`: {e}", path.display())))?;
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        srcs.push(Src { name: path.display().to_string(), text, base });
+        let mut own = resolver.clone();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            own.prepend(dir.to_path_buf());
+        }
+        srcs.push(Src { name: path.display().to_string(), text, resolver: own });
         let id = srcs.len() - 1;
-        let included = parse_source(srcs, id, depth + 1, paths, files)?;
+        let included = parse_source(srcs, id, depth + 1, files)?;
         el.children.extend(included.children);
     }
     Ok(())
+}
+
+/// The folder of a `<path value="..."/>`: an absolute folder, or a relative one found through
+/// `resolver`; a folder that does not exist is an error, as in Mitsuba.
+fn search_folder(src: &Src, el: &El, resolver: &Resolver) -> Result<PathBuf, SceneError> {
+    let at = |span: Range<usize>, msg: String| SceneError::at(&src.name, &src.text, span, msg);
+    if let Some(a) = el.attrs.iter().find(|a| a.name != "value") {
+        return Err(at(a.span.clone(), format!("<path> takes only `value`, found `{}`", a.name)));
+    }
+    let Some(v) = el.attrs.iter().find(|a| a.name == "value") else {
+        return Err(at(el.span.clone(), "<path> needs a folder in `value`".into()));
+    };
+    if v.value.trim().is_empty() {
+        return Err(at(v.span.clone(), "<path> needs a folder in `value`".into()));
+    }
+    match resolver.resolve(&v.value).filter(|p| p.is_dir()) {
+        Some(dir) => Ok(dir),
+        None => Err(at(
+            v.span.clone(),
+            format!("<path> folder `{}` not found (looked in {})", v.value, resolver.searched()),
+        )),
+    }
 }
