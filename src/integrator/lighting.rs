@@ -144,7 +144,7 @@ pub fn direct_light(
     mis: bool,
     stats: &mut RayStats,
 ) -> Color {
-    let Some((li, p_pick)) = scene.light_picker.pick(u_pick) else { return Color::ZERO };
+    let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
     light_sample(scene, &scene.lights[li], p_pick, hit, bsdf, wo, u, bias, mis, stats)
 }
 

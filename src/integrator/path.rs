@@ -43,7 +43,7 @@ impl RayIntegrator for PathTracer {
                     let w = if specular_bounce {
                         1.0
                     } else {
-                        let light_pdf = scene.light_picker.prob(env as usize)
+                        let light_pdf = scene.direct_picker.prob(env as usize)
                             * scene.lights[env as usize].pdf_li(prev_p, prev_p, ray.d, ray.d);
                         power_heuristic(prev_pdf, light_pdf)
                     };
@@ -60,7 +60,7 @@ impl RayIntegrator for PathTracer {
                 } else {
                     let light = &scene.lights[hit.light as usize];
                     let light_pdf =
-                        scene.light_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
+                        scene.direct_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
                     layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
                 }
             }

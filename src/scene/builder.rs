@@ -336,6 +336,7 @@ impl SceneBuilder {
             meshes: self.meshes,
             materials,
             light_picker: LightPicker::new(&self.lights),
+            direct_picker: LightPicker::for_direct_light(&self.lights),
             lights: self.lights,
             camera,
             environment,

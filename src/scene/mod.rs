@@ -63,8 +63,11 @@ pub struct Scene {
     /// Materials, their names and the textures they read.
     pub materials: Materials,
     pub lights: Vec<Light>,
-    /// Chooses a light in proportion to power (next-event estimation, photon emission).
+    /// Chooses a light in proportion to power (photon and light-path emission).
     pub light_picker: LightPicker,
+    /// Chooses the light a shading point samples (next-event estimation; see
+    /// `LightPicker::for_direct_light`).
+    pub direct_picker: LightPicker,
     pub camera: Camera,
     /// Index in `lights` of the environment (map or constant) rays that leave the scene see.
     pub environment: Option<u32>,

@@ -16,6 +16,8 @@ pub struct References {
     pub dir: PathBuf,
     /// Mitsuba's noise per case: the RMS per-pixel standard deviation of its image.
     noise: HashMap<String, f64>,
+    /// The samples per pixel of each reference.
+    spp: HashMap<String, f64>,
 }
 
 impl References {
@@ -26,12 +28,20 @@ impl References {
         // The reference table's header names its columns; tables further down (results) lack
         // the `noise` column and are skipped.
         let mut noise = HashMap::new();
+        let mut spp = HashMap::new();
         let mut column = None;
+        let mut spp_column = None;
         for line in text.lines().filter(|l| l.starts_with('|')) {
             let cells: Vec<&str> = line.split('|').map(str::trim).collect();
             if cells.get(1) == Some(&"case") {
                 column = cells.iter().position(|c| *c == "noise");
+                spp_column = cells.iter().position(|c| *c == "spp");
                 continue;
+            }
+            if let (Some(k), true) = (spp_column, line.starts_with("| `"))
+                && let Some(v) = cells.get(k).and_then(|c| c.parse::<f64>().ok())
+            {
+                spp.insert(cells[1].trim_matches('`').to_string(), v);
             }
             if let (Some(k), true) = (column, line.starts_with("| `"))
                 && let Some(v) = cells.get(k).and_then(|c| c.parse::<f64>().ok())
@@ -39,7 +49,13 @@ impl References {
                 noise.insert(cells[1].trim_matches('`').to_string(), v);
             }
         }
-        References { dir, noise }
+        References { dir, noise, spp }
+    }
+
+    /// Mitsuba's noise for `case` had it been rendered at `spp` samples per pixel (noise falls
+    /// as one over the square root of the sample count).
+    pub fn noise_at(&self, case: &str, spp: u32) -> f64 {
+        self.noise[case] * (self.spp[case] / spp as f64).sqrt()
     }
 
     pub fn load(&self, case: &str, res: u32, spp: u32, o: &Options) -> LoadedScene {

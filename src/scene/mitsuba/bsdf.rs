@@ -48,12 +48,26 @@ impl<'a> Cx<'a> {
         Ok(i)
     }
 
-    pub(super) fn default_material(&self, b: &mut Build) -> u32 {
-        if let Some(i) = b.default_material {
+    /// The BSDF Mitsuba gives a shape without one: diffuse 0.5, or black diffuse when the
+    /// shape emits (so an area light without a BSDF reflects nothing).
+    pub(super) fn default_material(&self, b: &mut Build, emits: bool) -> u32 {
+        if let Some(i) = if emits { b.default_emitter_material } else { b.default_material } {
             return i;
         }
-        let i = b.geometry.add_material("(default diffuse)", default_diffuse());
-        b.default_material = Some(i);
+        let (name, m) = if emits {
+            (
+                "(default black diffuse of an emitter)",
+                Material::one_sided(Plain::Diffuse { reflectance: Param::Const(Color::ZERO) }),
+            )
+        } else {
+            ("(default diffuse)", default_diffuse())
+        };
+        let i = b.geometry.add_material(name, m);
+        if emits {
+            b.default_emitter_material = Some(i)
+        } else {
+            b.default_material = Some(i)
+        }
         i
     }
 

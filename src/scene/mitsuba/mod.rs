@@ -98,6 +98,8 @@ struct Build {
     /// Images read so far, by file and decoding (`raw`), shared between textures.
     images: HashMap<(std::path::PathBuf, bool), std::sync::Arc<crate::texture::image::TexImage>>,
     default_material: Option<u32>,
+    /// Black diffuse, the default BSDF of an emitting shape.
+    default_emitter_material: Option<u32>,
     /// Group index of each `shapegroup` element already built (by address).
     group_cache: HashMap<usize, u32>,
 }
@@ -112,6 +114,7 @@ impl<'a> Cx<'a> {
             texture_cache: HashMap::new(),
             images: HashMap::new(),
             default_material: None,
+            default_emitter_material: None,
             group_cache: HashMap::new(),
         };
         let mut sensor: Option<&'a El> = None;

@@ -65,7 +65,7 @@ impl<'a> Cx<'a> {
         let material = match bsdf_el {
             _ if is_null => None,
             Some(bel) => Some(self.material(bel, b)?),
-            None => Some(self.default_material(b)),
+            None => Some(self.default_material(b, radiance.is_some())),
         };
         // Other nested objects (media etc.) are reported by `finish`.
 
