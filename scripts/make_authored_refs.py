@@ -61,6 +61,51 @@ def render(case):
 
 refs.render = render
 
+def make_meshes():
+    """common/meshes/blob_attributes.ply: an icosphere of 320 triangles (binary, little-endian)
+    with a float colour per vertex (`r g b`: Mitsuba's vertex_color, 0.5 + 0.5 n) and a float
+    per face (`weight_0`: Mitsuba's face_weight, a smooth function of the face's centre)."""
+    import numpy as np
+    path = refs.DIR / "common" / "meshes" / "blob_attributes.ply"
+    if path.exists():
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
+         (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
+         (8, 6, 7), (9, 8, 1)]
+    for _ in range(2):
+        mid, nf = {}, []
+        def m(a, b):
+            k = (min(a, b), max(a, b))
+            if k not in mid:
+                p = v[a] + v[b]
+                v.append(p / np.linalg.norm(p))
+                mid[k] = len(v) - 1
+            return mid[k]
+        for a, b, c in f:
+            ab, bc, ca = m(a, b), m(b, c), m(c, a)
+            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = nf
+    pos = np.array(v, np.float32)
+    col = (0.5 + 0.5 * pos).astype(np.float32)
+    centres = pos[np.array(f)].mean(axis=1)
+    weight = (0.5 + 0.5 * np.sin(4 * centres[:, 0] + 2 * centres[:, 2])).astype(np.float32)
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(pos)}\n"
+              "property float x\nproperty float y\nproperty float z\n"
+              "property float r\nproperty float g\nproperty float b\n"
+              f"element face {len(f)}\nproperty list uchar int vertex_indices\nproperty float weight_0\nend_header\n")
+    with open(path, "wb") as out:
+        out.write(header.encode())
+        out.write(np.hstack([pos, col]).astype("<f4").tobytes())
+        for tri, w in zip(f, weight):
+            out.write(bytes([3]) + np.array(tri, "<i4").tobytes() + np.array([w], "<f4").tobytes())
+
+
 if __name__ == "__main__":
     make_textures()
+    make_meshes()
     refs.main()

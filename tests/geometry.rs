@@ -319,6 +319,7 @@ fn path_elements_add_search_folders() {
             normals: None,
             uvs: None,
             indices: vec![[0, 1, 2]],
+            attributes: Vec::new(),
         };
         std::fs::write(d.join("m.obj"), obj_text(&mesh)).unwrap();
     }

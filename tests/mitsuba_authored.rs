@@ -68,6 +68,13 @@ fn textured_spot_beside_an_environment_is_as_smooth_as_in_mitsuba() {
     assert!(ours < 2.0 * theirs, "noise {ours:.4} against Mitsuba's {theirs:.4} at {spp} spp");
 }
 
+/// A PLY mesh's colour per vertex as a diffuse reflectance and its weight per face blending two
+/// BSDFs, through `mesh_attribute` textures (before: grey 0.5 with a warning).
+#[test]
+fn mesh_attributes_colour_and_blend_as_in_mitsuba() {
+    REFS.check_all(&[("mesh_attributes", 64)], 64);
+}
+
 /// Wrong spectra and missing files are errors naming the file, line and cause.
 #[test]
 fn bad_spectra_and_missing_files_are_clear_errors() {
@@ -76,6 +83,22 @@ fn bad_spectra_and_missing_files_are_clear_errors() {
     let scene = |body: &str| {
         format!(r#"<scene version="3.0.0"><shape type="sphere"><bsdf type="diffuse">{body}</bsdf></shape></scene>"#)
     };
+    let mesh =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/authored/common/meshes/blob_attributes.ply");
+    let path = dir.join("mesh.xml");
+    std::fs::write(
+        &path,
+        format!(
+            r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="{}"/><bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" value="vertex_normal"/></texture></bsdf></shape></scene>"#,
+            mesh.display()
+        ),
+    )
+    .unwrap();
+    let e = load_mitsuba(&path, &LoadOptions::default(), &caustic::scene::FileBudget::unlimited())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("has no attribute `vertex_normal` (it has: vertex_color, face_weight)"), "{e}");
     for (body, want) in [
         (r#"<spectrum name="reflectance" value="500:0.5, 400:0.2"/>"#, "wavelengths must increase"),
         (r#"<spectrum name="reflectance" value="500:0.5, 600"/>"#, "wavelength:value pairs"),

@@ -17,8 +17,8 @@ pub mod set;
 pub use classic::{Classic, ClassicKind};
 pub use set::Materials;
 
-use crate::math::{Color, Vec2};
-use crate::texture::Texture;
+use crate::math::Color;
+use crate::texture::{TexPoint, Texture};
 use bsdf::Lobes;
 use bxdf::{
     Bxdf, CoatingTable, Conductor, Dielectric, FresnelMirror, Lambert, PlasticDiffuse, RoughCoating, RoughConductor,
@@ -39,10 +39,10 @@ pub type FloatParam = Param<f32>;
 
 impl ColorParam {
     #[inline]
-    pub fn at(&self, uv: Vec2, textures: &[Texture]) -> Color {
+    pub fn at(&self, at: TexPoint<'_>, textures: &[Texture]) -> Color {
         match *self {
             Param::Const(c) => c,
-            Param::Texture(t) => textures[t as usize].eval(uv),
+            Param::Texture(t) => textures[t as usize].eval_at(at),
         }
     }
 
@@ -58,10 +58,10 @@ impl ColorParam {
 impl FloatParam {
     /// The value at `uv`; a texture read as a scalar (`Texture::eval_1`).
     #[inline]
-    pub fn at(&self, uv: Vec2, textures: &[Texture]) -> f32 {
+    pub fn at(&self, at: TexPoint<'_>, textures: &[Texture]) -> f32 {
         match *self {
             Param::Const(v) => v,
-            Param::Texture(t) => textures[t as usize].eval_1(uv),
+            Param::Texture(t) => textures[t as usize].eval_1_at(at),
         }
     }
 }
@@ -76,8 +76,8 @@ pub struct Roughness {
 
 impl Roughness {
     #[inline]
-    fn at(&self, uv: Vec2, textures: &[Texture]) -> Microfacet {
-        Microfacet::new(self.distribution, self.alpha_u.at(uv, textures), self.alpha_v.at(uv, textures))
+    fn at(&self, at: TexPoint<'_>, textures: &[Texture]) -> Microfacet {
+        Microfacet::new(self.distribution, self.alpha_u.at(at, textures), self.alpha_v.at(at, textures))
     }
 }
 
@@ -296,45 +296,45 @@ impl Plain {
 
     /// The lobes at texture coordinates `uv`, seen from the outward side (`front`) or the
     /// inside (which matters only for glass: the index is inverted).
-    pub fn lobes(&self, front: bool, uv: Vec2, textures: &[Texture]) -> Lobes {
+    pub fn lobes(&self, front: bool, at: TexPoint<'_>, textures: &[Texture]) -> Lobes {
         let mut lobes = Lobes::default();
         let side = |eta: f32| if front { eta } else { 1.0 / eta };
         match *self {
             Plain::Classic(c) => {
                 let c = match c.color_texture {
-                    Some(t) => Classic { color: textures[t as usize].eval(uv), ..c },
+                    Some(t) => Classic { color: textures[t as usize].eval_at(at), ..c },
                     None => c,
                 };
                 return c.lobes(front);
             }
-            Plain::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(uv, textures) })),
+            Plain::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(at, textures) })),
             Plain::Conductor { eta, k, specular } => {
-                lobes.add(Bxdf::Conductor(Conductor { eta, k, scale: specular.at(uv, textures) }))
+                lobes.add(Bxdf::Conductor(Conductor { eta, k, scale: specular.at(at, textures) }))
             }
             Plain::RoughConductor { roughness, eta, k, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
-                mf: roughness.at(uv, textures),
+                mf: roughness.at(at, textures),
                 eta,
                 k,
-                scale: specular.at(uv, textures),
+                scale: specular.at(at, textures),
             })),
             Plain::Dielectric { eta, reflectance, transmittance } => lobes.add(Bxdf::Dielectric(Dielectric {
                 eta: side(eta),
-                r: reflectance.at(uv, textures),
-                t: transmittance.at(uv, textures),
+                r: reflectance.at(at, textures),
+                t: transmittance.at(at, textures),
             })),
             Plain::RoughDielectric { roughness, eta, reflectance, transmittance } => {
                 lobes.add(Bxdf::RoughDielectric(RoughDielectric {
-                    mf: roughness.at(uv, textures),
+                    mf: roughness.at(at, textures),
                     eta: side(eta),
-                    r: reflectance.at(uv, textures),
-                    t: transmittance.at(uv, textures),
+                    r: reflectance.at(at, textures),
+                    t: transmittance.at(at, textures),
                 }))
             }
             Plain::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean } => {
-                let d = diffuse.at(uv, textures);
+                let d = diffuse.at(at, textures);
                 let fdr = fresnel_diffuse_reflectance(1.0 / eta);
                 let d = base_through_coating(d, fdr, nonlinear) / (eta * eta);
-                let scale = specular.at(uv, textures);
+                let scale = specular.at(at, textures);
                 lobes.add(Bxdf::FresnelMirror(FresnelMirror { eta, scale }));
                 lobes.add(Bxdf::PlasticDiffuse(PlasticDiffuse {
                     d,
@@ -343,9 +343,9 @@ impl Plain {
                 }));
             }
             Plain::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean, table } => {
-                let d = diffuse.at(uv, textures);
+                let d = diffuse.at(at, textures);
                 let d = base_through_coating(d, table.internal_reflectance, nonlinear) / (eta * eta);
-                let scale = specular.at(uv, textures);
+                let scale = specular.at(at, textures);
                 lobes.add(Bxdf::RoughCoating(RoughCoating { mf: microfacet, eta, scale, table }));
                 lobes.add(Bxdf::RoughPlasticDiffuse(RoughPlasticDiffuse {
                     d,

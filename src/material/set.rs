@@ -6,7 +6,7 @@ use super::bsdf::{Bsdf, LobeSet, Lobes, MAX_LOBES, front_side};
 use super::{Classic, Material, Model, Plain, Wrapper};
 use crate::geometry::Hit;
 use crate::math::{Frame, Vec2, Vec3};
-use crate::texture::Texture;
+use crate::texture::{MeshPoint, TexPoint, Texture};
 
 /// Wrappers nest at most this deep (a mask of a bump map of a two-sided material is 3).
 pub const MAX_NESTING: usize = 8;
@@ -21,6 +21,9 @@ pub struct Materials {
     cached: Vec<Option<[Lobes; 2]>>,
     /// Some material is a mask: shadow rays must look through transparent parts.
     pub has_masks: bool,
+    /// Per material: it (or a material it wraps) reads a mesh attribute texture, so its BSDF
+    /// needs the hit's triangle and barycentrics.
+    reads_attributes: Vec<bool>,
 }
 
 impl Materials {
@@ -43,8 +46,20 @@ impl Materials {
             {
                 return Err(format!("bump map `{name}` needs a bitmap texture for its heights"));
             }
+            // Shadow rays and normal maps read textures by (u, v) alone.
+            let attribute = |t: u32| matches!(textures[t as usize], Texture::MeshAttribute { .. });
+            match m.model {
+                Model::Wrapper(Wrapper::Mask { opacity: super::Param::Texture(t), .. }) if attribute(t) => {
+                    return Err(format!("mask `{name}`: a mesh attribute cannot be its opacity"));
+                }
+                Model::Wrapper(Wrapper::NormalMap { normals, .. }) if attribute(normals) => {
+                    return Err(format!("normal map `{name}` needs a bitmap texture, not a mesh attribute"));
+                }
+                _ => {}
+            }
         }
-        let mut set = Materials { list, names, textures, cached: Vec::new(), has_masks: false };
+        let mut set =
+            Materials { list, names, textures, cached: Vec::new(), has_masks: false, reads_attributes: Vec::new() };
         for i in 0..set.list.len() {
             if let Model::Wrapper(Wrapper::Blend { first, second, .. }) = set.list[i].model {
                 let n = set.plain_lobe_count(first) + set.plain_lobe_count(second);
@@ -66,12 +81,30 @@ impl Materials {
             .iter()
             .map(|m| match m.model {
                 Model::Plain(p) if !p.is_textured() => {
-                    Some([p.lobes(true, Vec2::ZERO, &set.textures), p.lobes(false, Vec2::ZERO, &set.textures)])
+                    let at = TexPoint::uv(Vec2::ZERO);
+                    Some([p.lobes(true, at, &set.textures), p.lobes(false, at, &set.textures)])
                 }
                 Model::Plain(_) | Model::Wrapper(_) => None,
             })
             .collect();
+        // Materials refer only to earlier ones, so one pass in order sees every child first.
+        for i in 0..set.list.len() {
+            let model = &set.list[i].model;
+            let own = model
+                .params()
+                .iter()
+                .filter_map(|p| p.texture())
+                .any(|t| matches!(set.textures[t as usize], Texture::MeshAttribute { .. }));
+            let reads = own || model.children().any(|c| set.reads_attributes[c as usize]);
+            set.reads_attributes.push(reads);
+        }
         Ok(set)
+    }
+
+    /// True when material `m`'s BSDF reads mesh attributes (`bsdf` then needs its `mesh`).
+    #[inline]
+    pub fn reads_mesh_attributes(&self, m: u32) -> bool {
+        self.reads_attributes.get(m as usize).copied().unwrap_or(false)
     }
 
     fn depth(&self, m: u32) -> usize {
@@ -105,7 +138,7 @@ impl Materials {
     /// Lobes a plain material (or the plain material a chain of wrappers ends in) has.
     fn plain_lobes_of(&self, m: u32) -> Lobes {
         match self.walk(m, true, |_| {}).0 {
-            WalkEnd::Plain(p) => self.plain(p).lobes(true, Vec2::ZERO, &self.textures),
+            WalkEnd::Plain(p) => self.plain(p).lobes(true, TexPoint::uv(Vec2::ZERO), &self.textures),
             WalkEnd::Blend(_) | WalkEnd::Black => Lobes::default(),
         }
     }
@@ -140,12 +173,12 @@ impl Materials {
     /// The lobes of plain material `m` at `uv` on side `front` (`as_front`: a two-sided wrapper
     /// decided the side already).
     #[inline]
-    fn lobes(&self, m: u32, uv: Vec2, front: bool, as_front: bool) -> LobeSet<'_> {
+    fn lobes(&self, m: u32, at: TexPoint<'_>, front: bool, as_front: bool) -> LobeSet<'_> {
         let Some(outward) = self.outward(m, front, as_front) else { return LobeSet::Owned(Lobes::default()) };
         if let Some(c) = &self.cached[m as usize] {
             return LobeSet::Shared(&c[usize::from(!outward)]);
         }
-        LobeSet::Owned(self.plain(m).lobes(outward, uv, &self.textures))
+        LobeSet::Owned(self.plain(m).lobes(outward, at, &self.textures))
     }
 
     /// Which lobes plain material `m` shows on side `front` (`as_front` as in `lobes`): its
@@ -158,9 +191,10 @@ impl Materials {
         (front || as_front || material.two_sided || glass).then_some(front || !glass)
     }
 
-    /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
+    /// The BSDF at hit `h` seen from direction `wo` (towards the viewer); `mesh` is where the
+    /// hit is on a mesh, for materials that read mesh attributes (`reads_mesh_attributes`).
     #[inline]
-    pub fn bsdf(&self, h: &Hit, wo: Vec3) -> Bsdf<'_> {
+    pub fn bsdf(&self, h: &Hit, wo: Vec3, mesh: Option<MeshPoint<'_>>) -> Bsdf<'_> {
         let front = front_side(wo, h.ng);
         let m = h.material;
         // The common case: a plain untextured material, whose lobes were made once. The BSDF
@@ -175,20 +209,20 @@ impl Materials {
         }
         // Then a plain textured one.
         if let Model::Plain(_) = self.list[m as usize].model {
-            let lobes = self.lobes(m, h.uv(), front, false);
+            let lobes = self.lobes(m, TexPoint { uv: h.uv(), mesh }, front, false);
             return Bsdf::with_lobes(frame_for(h, &lobes), h.ng, front, lobes);
         }
-        self.wrapped_bsdf(h, wo, front)
+        self.wrapped_bsdf(h, wo, front, TexPoint { uv: h.uv(), mesh })
     }
 
     /// `bsdf` through wrappers.
-    fn wrapped_bsdf(&self, h: &Hit, wo: Vec3, front: bool) -> Bsdf<'_> {
-        let uv = h.uv();
+    fn wrapped_bsdf(&self, h: &Hit, wo: Vec3, front: bool, at: TexPoint<'_>) -> Bsdf<'_> {
+        let uv = at.uv;
         let mut opacity = 1.0f32;
         // The perturbed shading frame, outward, when a bump or normal map applies.
         let mut perturbed: Option<Frame> = None;
         let (end, as_front) = self.walk(h.material, front, |w| match *w {
-            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(uv, &self.textures).clamp(0.0, 1.0),
+            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(at, &self.textures).clamp(0.0, 1.0),
             Wrapper::BumpMap { height, scale, .. } => {
                 let base = perturbed.unwrap_or_else(|| h.shading_frame());
                 perturbed = Some(self.bump_frame(h, &base, height, scale, wo));
@@ -202,8 +236,8 @@ impl Materials {
         });
         let mut lobes = Lobes::default();
         match end {
-            WalkEnd::Plain(m) => lobes = *self.lobes(m, uv, front, as_front),
-            WalkEnd::Blend(m) => self.add_blend_lobes(m, uv, front, as_front, 1.0, &mut lobes, 0),
+            WalkEnd::Plain(m) => lobes = *self.lobes(m, at, front, as_front),
+            WalkEnd::Blend(m) => self.add_blend_lobes(m, at, front, as_front, 1.0, &mut lobes, 0),
             WalkEnd::Black => {}
         }
         let frame = match perturbed {
@@ -223,7 +257,7 @@ impl Materials {
     fn add_blend_lobes(
         &self,
         m: u32,
-        uv: Vec2,
+        at: TexPoint<'_>,
         front: bool,
         as_front: bool,
         scale: f32,
@@ -234,17 +268,17 @@ impl Materials {
             return;
         }
         if let Model::Wrapper(Wrapper::Blend { weight, first, second }) = self.list[m as usize].model {
-            let w = weight.at(uv, &self.textures).clamp(0.0, 1.0);
-            self.add_blend_lobes(first, uv, front, as_front, scale * (1.0 - w), out, depth + 1);
-            self.add_blend_lobes(second, uv, front, as_front, scale * w, out, depth + 1);
+            let w = weight.at(at, &self.textures).clamp(0.0, 1.0);
+            self.add_blend_lobes(first, at, front, as_front, scale * (1.0 - w), out, depth + 1);
+            self.add_blend_lobes(second, at, front, as_front, scale * w, out, depth + 1);
             return;
         }
         // A blend's part resolves to its plain material: its wrappers are not applied inside a
         // blend (the loaders warn or refuse), a two-sided one giving its front.
         match self.walk(m, true, |_| {}).0 {
             // A blend behind wrappers: its wrappers are dropped, its parts still count.
-            WalkEnd::Blend(end) => self.add_blend_lobes(end, uv, front, as_front, scale, out, depth + 1),
-            WalkEnd::Plain(end) => out.add_scaled(&self.lobes(end, uv, front, as_front), scale),
+            WalkEnd::Blend(end) => self.add_blend_lobes(end, at, front, as_front, scale, out, depth + 1),
+            WalkEnd::Plain(end) => out.add_scaled(&self.lobes(end, at, front, as_front), scale),
             WalkEnd::Black => {}
         }
     }
@@ -274,7 +308,7 @@ impl Materials {
     pub fn transparency(&self, h: &Hit, toward_front: bool) -> f32 {
         let mut opacity = 1.0f32;
         self.walk(h.material, toward_front, |w| match *w {
-            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(h.uv(), &self.textures).clamp(0.0, 1.0),
+            Wrapper::Mask { opacity: o, .. } => opacity *= o.at(TexPoint::uv(h.uv()), &self.textures).clamp(0.0, 1.0),
             Wrapper::TwoSided { .. } | Wrapper::BumpMap { .. } | Wrapper::NormalMap { .. } | Wrapper::Blend { .. } => {}
         });
         1.0 - opacity

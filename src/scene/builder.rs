@@ -92,6 +92,26 @@ impl SceneBuilder {
         &self.materials[index as usize]
     }
 
+    /// The names of the mesh attributes material `m` reads (through the materials it wraps too).
+    pub fn mesh_attributes_read(&self, m: u32) -> Vec<String> {
+        let model = &self.materials[m as usize].model;
+        let mut names: Vec<String> = model
+            .params()
+            .iter()
+            .filter_map(|p| p.texture())
+            .filter_map(|t| match &self.textures[t as usize] {
+                Texture::MeshAttribute { name, .. } => Some(name.clone()),
+                _ => None,
+            })
+            .collect();
+        for c in model.children() {
+            names.extend(self.mesh_attributes_read(c));
+        }
+        names.sort();
+        names.dedup();
+        names
+    }
+
     pub fn material_count(&self) -> usize {
         self.materials.len()
     }

@@ -264,7 +264,28 @@ impl Scene {
     /// The BSDF at hit `h` seen from direction `wo` (towards the viewer).
     #[inline(always)]
     pub fn bsdf(&self, h: &Hit, wo: crate::math::Vec3) -> Bsdf<'_> {
-        self.materials.bsdf(h, wo)
+        let mesh = if self.materials.reads_mesh_attributes(h.material) { self.mesh_point(h) } else { None };
+        self.materials.bsdf(h, wo, mesh)
+    }
+
+    /// Where hit `h` is on a mesh triangle (the mesh, the triangle's index in it, the
+    /// barycentrics of the hit point), for mesh attribute textures; `None` off meshes. Only
+    /// top-level primitives are looked up: the loaders refuse mesh attributes in shape groups.
+    #[cold]
+    fn mesh_point(&self, h: &Hit) -> Option<crate::texture::MeshPoint<'_>> {
+        if h.prim as usize >= self.bvh.len() {
+            return None;
+        }
+        let crate::shape::Shape::Triangle(t) = self.bvh.prims().get(h.prim as usize, &self.meshes).shape else {
+            return None;
+        };
+        let mesh = self.meshes.get(t.mesh as usize)?;
+        let (e1, e2, d) = (t.p[1] - t.p[0], t.p[2] - t.p[0], h.p - t.p[0]);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (d1, d2) = (d.dot(e1), d.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        let (b1, b2) = if det > 0.0 { ((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det) } else { (0.0, 0.0) };
+        Some(crate::texture::MeshPoint { mesh, triangle: t.index, b: [1.0 - b1 - b2, b1, b2] })
     }
 }
 

@@ -4,6 +4,8 @@
 //!   transform; texel (i, j) is centred at ((i + 0.5) / W, (j + 0.5) / H) and row 0 is the top of
 //!   the image, so v = 0 is the top; wrap modes act on integer texel indices.
 //! - `checkerboard`: two colours in squares of 0.5 in uv.
+//! - `mesh_attribute`: a value stored on a mesh's vertices (interpolated) or faces, read at the
+//!   triangle a ray hit (`TexPoint::mesh`).
 //! - constants.
 //!
 //! Colour parameters read `eval`; scalar parameters (roughness, weights, opacity) read `eval_1`,
@@ -64,7 +66,41 @@ pub struct Bitmap {
 pub enum Texture {
     Constant(Color),
     Bitmap(Bitmap),
-    Checkerboard { color0: Color, color1: Color, to_uv: Affine2 },
+    Checkerboard {
+        color0: Color,
+        color1: Color,
+        to_uv: Affine2,
+    },
+    /// A mesh attribute by name, times `scale`; zero off a mesh or on a mesh without it (the
+    /// loaders refuse both).
+    MeshAttribute {
+        name: String,
+        scale: f32,
+    },
+}
+
+/// Where a texture is read: the surface coordinates, and on a mesh triangle what mesh
+/// attributes need.
+#[derive(Clone, Copy, Debug)]
+pub struct TexPoint<'a> {
+    pub uv: Vec2,
+    pub mesh: Option<MeshPoint<'a>>,
+}
+
+/// A point on a mesh triangle: the mesh, the triangle's index in it and the barycentrics.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshPoint<'a> {
+    pub mesh: &'a crate::shape::TriangleMesh,
+    pub triangle: u32,
+    pub b: [f32; 3],
+}
+
+impl TexPoint<'_> {
+    /// A point off any mesh (or where mesh attributes are not read).
+    #[inline]
+    pub fn uv(uv: Vec2) -> TexPoint<'static> {
+        TexPoint { uv, mesh: None }
+    }
 }
 
 impl Bitmap {
@@ -147,6 +183,16 @@ fn scalar_of(c: Color, channels: u32) -> f32 {
     if channels >= 3 { luminance(c) } else { c.r() }
 }
 
+/// The attribute `name` of the mesh at `p`, zero off a mesh or where the mesh lacks it.
+#[inline]
+fn attribute_at(name: &str, p: TexPoint<'_>) -> Color {
+    let Some(m) = p.mesh else { return Color::ZERO };
+    match m.mesh.attributes.iter().find(|a| a.name == name) {
+        Some(a) => a.eval(&m.mesh.indices, m.triangle as usize, m.b),
+        None => Color::ZERO,
+    }
+}
+
 /// Which colour of a checkerboard covers `uv`: squares of 0.5, the lower half of each unit
 /// square's u and v ranges (0.5 itself included) in `color0`'s pattern.
 #[inline]
@@ -157,36 +203,50 @@ fn checker_is_color0(to_uv: &Affine2, uv: Vec2) -> bool {
 }
 
 impl Texture {
-    /// The colour at surface coordinates `uv`.
+    /// The colour at surface coordinates `uv` (a mesh attribute reads zero: it needs `eval_at`).
     #[inline]
     pub fn eval(&self, uv: Vec2) -> Color {
+        self.eval_at(TexPoint::uv(uv))
+    }
+
+    /// The colour at `p`.
+    #[inline]
+    pub fn eval_at(&self, p: TexPoint<'_>) -> Color {
         match self {
             Texture::Constant(c) => *c,
-            Texture::Bitmap(b) => b.eval(uv),
+            Texture::Bitmap(b) => b.eval(p.uv),
             Texture::Checkerboard { color0, color1, to_uv } => {
-                if checker_is_color0(to_uv, uv) {
+                if checker_is_color0(to_uv, p.uv) {
                     *color0
                 } else {
                     *color1
                 }
             }
+            Texture::MeshAttribute { name, scale } => attribute_at(name, p) * *scale,
         }
     }
 
     /// The scalar at `uv`, as Mitsuba's `eval_1` reads a texture given for a scalar parameter.
     #[inline]
     pub fn eval_1(&self, uv: Vec2) -> f32 {
+        self.eval_1_at(TexPoint::uv(uv))
+    }
+
+    /// `eval_1` at `p`: a mesh attribute's first value (Mitsuba reads one-value attributes here).
+    #[inline]
+    pub fn eval_1_at(&self, p: TexPoint<'_>) -> f32 {
         match self {
             Texture::Constant(c) => c.mean(),
-            Texture::Bitmap(b) => scalar_of(b.eval(uv), b.image.channels),
+            Texture::Bitmap(b) => scalar_of(b.eval(p.uv), b.image.channels),
             // Mitsuba 3's eval_1 of a checkerboard has the colours the other way round.
             Texture::Checkerboard { color0, color1, to_uv } => {
-                if checker_is_color0(to_uv, uv) {
+                if checker_is_color0(to_uv, p.uv) {
                     color1.mean()
                 } else {
                     color0.mean()
                 }
             }
+            Texture::MeshAttribute { name, scale } => attribute_at(name, p).r() * *scale,
         }
     }
 
@@ -207,6 +267,8 @@ impl Texture {
                 Color::from_dvec3(sum / n as f64)
             }
             Texture::Checkerboard { color0, color1, .. } => (*color0 + *color1) * 0.5,
+            // Unknown until a surface is named; grey for the uses of a mean (sampling weights).
+            Texture::MeshAttribute { scale, .. } => Color::splat(0.5 * *scale),
         }
     }
 

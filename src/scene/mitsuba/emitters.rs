@@ -14,6 +14,16 @@ use crate::spectrum::SpectrumUse;
 use crate::texture::image::load_image;
 
 impl<'a> Cx<'a> {
+    /// A texture a light casts, read by direction: anything but a mesh attribute, which needs
+    /// a surface.
+    fn surface_free_texture(&mut self, tex: &'a El, b: &mut Build) -> Result<u32, SceneError> {
+        let t = self.texture(tex, b)?;
+        if let crate::texture::Texture::MeshAttribute { name, .. } = &b.geometry.textures()[t as usize] {
+            return Err(self.err(tex, format!("mesh attribute `{name}` cannot be cast by a light")));
+        }
+        Ok(t)
+    }
+
     /// Reads a top-level emitter.
     pub(super) fn emitter(&mut self, el: &'a El, b: &mut Build) -> Result<(), SceneError> {
         let p = self.props(el)?;
@@ -37,7 +47,7 @@ impl<'a> Cx<'a> {
                     return Err(self.err(el, format!("spot needs 0 <= beam_width <= cutoff_angle <= 90 degrees (got beam_width {beam}, cutoff_angle {cutoff})")));
                 }
                 let texture = match self.object(&p, Some("texture"), "texture").first() {
-                    Some(&(tex, _)) => self.texture(tex, b)?,
+                    Some(&(tex, _)) => self.surface_free_texture(tex, b)?,
                     None => NO_TEXTURE,
                 };
                 let frame = self.light_frame(el, &x)?;
@@ -56,7 +66,7 @@ impl<'a> Cx<'a> {
                 let scale = self.float(&p, "scale")?.unwrap_or(1.0);
                 let (texture, size, mean) = match self.object(&p, Some("irradiance"), "texture").first() {
                     Some(&(tex, _)) => {
-                        let t = self.texture(tex, b)?;
+                        let t = self.surface_free_texture(tex, b)?;
                         let texture = &b.geometry.textures()[t as usize];
                         (t, texture.resolution().unwrap_or((1, 1)), texture.mean())
                     }

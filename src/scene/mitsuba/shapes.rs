@@ -47,7 +47,15 @@ impl<'a> Cx<'a> {
                 Some(match self.color_param_for(&ep, "radiance", b, crate::spectrum::SpectrumUse::Emission)? {
                     None => (Color::ONE, None),
                     Some(crate::material::Param::Const(c)) => (c, None),
-                    Some(crate::material::Param::Texture(t)) => (Color::ONE, Some(t)),
+                    Some(crate::material::Param::Texture(t)) => {
+                        if let crate::texture::Texture::MeshAttribute { name, .. } = &b.geometry.textures()[t as usize]
+                        {
+                            return Err(
+                                self.err(at, format!("mesh attribute `{name}` cannot be emitted radiance here"))
+                            );
+                        }
+                        (Color::ONE, Some(t))
+                    }
                 });
             self.finish(&ep)?;
         }
@@ -245,15 +253,38 @@ impl<'a> Cx<'a> {
             }
             return self.finish(&p);
         };
+        let attributes = b.geometry.mesh_attributes_read(material);
+        if !attributes.is_empty() {
+            let names = attributes.join("`, `");
+            if radiance.is_some() {
+                return Err(self.err(el, format!("an emitting shape's BSDF cannot read mesh attributes (`{names}`)")));
+            }
+            if b.geometry.in_group() {
+                return Err(self.err(el, format!("mesh attributes (`{names}`) are not supported inside a shapegroup")));
+            }
+            let Some((mesh, mesh_name)) = &mesh_out else {
+                return Err(self.err(
+                    el,
+                    format!("a `{kind}` shape has no mesh attributes: `{names}` needs a PLY mesh that has them"),
+                ));
+            };
+            for want in &attributes {
+                if !mesh.attributes.iter().any(|a| &a.name == want) {
+                    let have: Vec<&str> = mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+                    let have = if have.is_empty() { "none".to_string() } else { have.join(", ") };
+                    return Err(self.err(el, format!("mesh `{mesh_name}` has no attribute `{want}` (it has: {have})")));
+                }
+            }
+        }
         let m = *b.geometry.material(material);
         if let Some((radiance, texture)) = radiance {
             // The emitter's surface keeps its BSDF (Mitsuba lights reflect too); a black one is
             // exactly our plain emitter material.
             let reflects = match m.model {
                 crate::material::Model::Wrapper(_) => true,
-                crate::material::Model::Plain(p) => {
-                    !p.lobes(true, crate::math::Vec2::ZERO, b.geometry.textures()).is_empty()
-                }
+                crate::material::Model::Plain(p) => !p
+                    .lobes(true, crate::texture::TexPoint::uv(crate::math::Vec2::ZERO), b.geometry.textures())
+                    .is_empty(),
             };
             b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
             if let Some(mesh) = &emitting_mesh {

@@ -75,6 +75,18 @@ impl<'a> Cx<'a> {
                 let to_uv = self.to_uv(&p)?;
                 Texture::Checkerboard { color0: c0, color1: c1, to_uv }
             }
+            // Values stored on a mesh's vertices or faces (PLY properties), read where a ray
+            // hits the mesh; the shapes that use it are checked to have it.
+            "mesh_attribute" => {
+                let Some((name, _)) = self.string(&p, "name")? else {
+                    return Err(self.err(el, "a mesh_attribute texture needs <string name=\"name\" value=\"vertex_color\"/> (or another attribute)"));
+                };
+                if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+                    return Err(self.err(el, format!("mesh attribute `{name}` must start with `vertex_` or `face_`")));
+                }
+                let scale = self.float(&p, "scale")?.unwrap_or(1.0);
+                Texture::MeshAttribute { name, scale }
+            }
             other => {
                 for u in &p.used {
                     u.set(true);

@@ -23,6 +23,47 @@ pub struct TriangleMesh {
     /// image texture; OBJ files are flipped on reading, PLY files are not).
     pub uvs: Option<Vec<Vec2>>,
     pub indices: Vec<[u32; 3]>,
+    /// Named per-vertex or per-face values the file gave (PLY colours and other properties),
+    /// read by `mesh_attribute` textures.
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// A mesh attribute as Mitsuba names it: `vertex_color`, `face_color`, `vertex_<name>` or
+/// `face_<name>`, with 1 to 4 values per vertex (interpolated across each triangle) or per
+/// triangle (a polygon's value repeated on each of its triangles).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    pub name: String,
+    pub per_face: bool,
+    /// Values per vertex or face, 1 to 4.
+    pub channels: usize,
+    /// `channels` values per vertex or triangle, in order.
+    pub values: Vec<f32>,
+}
+
+impl MeshAttribute {
+    /// The value on triangle `tri` (of `indices`) at barycentrics `b`, as a colour: one channel
+    /// is a grey, two give (x, y, 0), a fourth (alpha) is dropped.
+    #[inline]
+    pub fn eval(&self, indices: &[[u32; 3]], tri: usize, b: [f32; 3]) -> crate::math::Color {
+        let c = self.channels;
+        let at = |i: usize| -> [f32; 3] {
+            let v = &self.values[i * c..i * c + c];
+            match c {
+                1 => [v[0]; 3],
+                2 => [v[0], v[1], 0.0],
+                _ => [v[0], v[1], v[2]],
+            }
+        };
+        let v = if self.per_face {
+            at(tri)
+        } else {
+            let t = indices[tri];
+            let (a, p, q) = (at(t[0] as usize), at(t[1] as usize), at(t[2] as usize));
+            [0, 1, 2].map(|k| a[k] * b[0] + p[k] * b[1] + q[k] * b[2])
+        };
+        crate::math::Color::new(v[0], v[1], v[2])
+    }
 }
 
 /// Why a mesh could not be loaded, naming the file, its format and the cause; the scene loader
@@ -151,7 +192,7 @@ impl TriangleMesh {
                 indices.push([v(i, j), v(i1, j1), v(i, j1)]);
             }
         }
-        TriangleMesh { positions, normals: Some(normals), uvs: None, indices }
+        TriangleMesh { positions, normals: Some(normals), uvs: None, indices, attributes: Vec::new() }
     }
 
     /// Bytes held by the mesh's arrays.
@@ -160,6 +201,7 @@ impl TriangleMesh {
             + self.normals.as_ref().map_or(0, |n| n.capacity() * size_of::<Vec3>())
             + self.uvs.as_ref().map_or(0, |u| u.capacity() * size_of::<Vec2>())
             + self.indices.capacity() * size_of::<[u32; 3]>()
+            + self.attributes.iter().map(|a| a.values.capacity() * size_of::<f32>()).sum::<usize>()
     }
 
     /// Gives back spare capacity (a mesh is read once and kept for the whole render).

@@ -264,6 +264,7 @@ impl Reader {
                 normals: fit(self.all_vn, self.normals, n),
                 positions: self.positions,
                 indices: self.tris,
+                attributes: Vec::new(),
             };
             mesh.shrink_to_fit();
             return Ok(mesh);
@@ -277,6 +278,7 @@ impl Reader {
             normals: self.all_vn.then(|| Vec::with_capacity(n)),
             indices: Vec::with_capacity(self.tris.len()),
             positions: Vec::with_capacity(n),
+            attributes: Vec::new(),
         };
         for (k, p) in self.tris.iter().enumerate() {
             let t = tri_vt.as_ref().map_or(*p, |l| l[k]);

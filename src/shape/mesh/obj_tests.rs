@@ -34,6 +34,7 @@ fn tobj_mesh(text: &str) -> Option<TriangleMesh> {
         uvs: (m.texcoords.len() == 2 * n)
             .then(|| m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect()),
         indices: m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        attributes: Vec::new(),
     })
 }
 

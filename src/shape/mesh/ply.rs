@@ -7,7 +7,7 @@
 //! 5 M triangles; see BENCHMARKS.md, "Big meshes"). Element counts are checked against the
 //! file's size before anything is reserved, so a lying header cannot ask for a huge allocation.
 
-use super::{MeshError, TriangleMesh};
+use super::{MeshAttribute, MeshError, TriangleMesh};
 use crate::math::{Vec2, Vec3};
 use std::io::Read;
 use std::path::Path;
@@ -331,6 +331,88 @@ impl VertexLayout {
     }
 }
 
+/// Names a property never becomes an attribute under: geometry, and the colour channels
+/// (grouped on their own).
+const RESERVED: &[&str] = &[
+    "x",
+    "y",
+    "z",
+    "nx",
+    "ny",
+    "nz",
+    "u",
+    "v",
+    "texture_u",
+    "texture_v",
+    "s",
+    "t",
+    "r",
+    "g",
+    "b",
+    "a",
+    "red",
+    "green",
+    "blue",
+    "alpha",
+];
+
+/// Scalar properties of an element grouped into mesh attributes as Mitsuba's PLY reader groups
+/// them: `r g b [a]` (or `red green blue [alpha]`) become `<kind>color`; other properties named
+/// `<prefix>_<c>`, where consecutive ones with one prefix run through a suffix sequence
+/// (`x y z w`, `r g b a`, `0 1 2 3` or `1 2 3 4`), become `<kind><prefix>` with 1 to 3 values
+/// (`<kind><prefix>_color` for the `r g b` sequence). Properties that fit no rule are skipped,
+/// as Mitsuba skips them (with a warning there). `kind` is `vertex_` or `face_`.
+fn attribute_groups(e: &Element, kind: &str) -> Vec<(String, Vec<usize>)> {
+    let mut groups = Vec::new();
+    let colour = ["r", "g", "b", "a"].map(|n| e.find(n));
+    let long = ["red", "green", "blue", "alpha"].map(|n| e.find(n));
+    for c in [colour, long] {
+        if let [Some(r), Some(g), Some(b), a] = c {
+            let mut props = vec![r, g, b];
+            props.extend(a);
+            groups.push((format!("{kind}color"), props));
+            break;
+        }
+    }
+    const SEQUENCES: [[char; 4]; 4] =
+        [['x', 'y', 'z', 'w'], ['r', 'g', 'b', 'a'], ['0', '1', '2', '3'], ['1', '2', '3', '4']];
+    let mut seen: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < e.props.len() {
+        let p = &e.props[i];
+        let split = p.name.rsplit_once('_').filter(|(_, post)| post.chars().count() == 1);
+        let (Some((prefix, post)), None) = (split, p.list) else {
+            i += 1;
+            continue;
+        };
+        if RESERVED.contains(&p.name.as_str()) || seen.iter().any(|s| s == prefix) {
+            i += 1;
+            continue;
+        }
+        let first = post.chars().next().unwrap_or(' ');
+        let Some(seq) = SEQUENCES.iter().position(|s| s[0] == first) else {
+            i += 1;
+            continue;
+        };
+        // The run of properties continuing the sequence under the same prefix.
+        let mut props = vec![i];
+        while props.len() < 4
+            && let Some(q) = e.props.get(i + props.len())
+            && q.list.is_none()
+            && q.name.rsplit_once('_') == Some((prefix, &SEQUENCES[seq][props.len()].to_string()))
+        {
+            props.push(i + props.len());
+        }
+        i += props.len();
+        seen.push(prefix.to_string());
+        if props.len() <= 3 {
+            let suffix = if seq == 1 { "_color" } else { "" };
+            groups.push((format!("{kind}{prefix}{suffix}"), props));
+        }
+    }
+    groups
+}
+
 fn parse_body<R: Read>(h: &Header, body: u64, src: &mut Source<R>) -> Result<TriangleMesh, BodyError> {
     let bad = |m: String| HeaderError::Bad(m);
     let ascii = h.format == Format::Ascii;
@@ -352,13 +434,24 @@ fn parse_body<R: Read>(h: &Header, body: u64, src: &mut Source<R>) -> Result<Tri
         .iter()
         .position(|p| p.list.is_some() && (p.name == "vertex_indices" || p.name == "vertex_index"))
         .ok_or_else(|| bad("the face element has no vertex_indices list".into()))?;
+    let vertex_groups = attribute_groups(&h.elements[vertex], "vertex_");
+    let face_groups = attribute_groups(&h.elements[face], "face_");
     let mut mesh = TriangleMesh::default();
     for (k, e) in h.elements.iter().enumerate() {
         let cut = |i: u64| bad(format!("the file ends in element `{}` {i} of {} (is it cut short?)", e.name, e.count));
         if k == vertex {
-            read_vertices(e, &layout, h.format, src, &mut mesh, cut)?;
+            read_vertices(e, &layout, &vertex_groups, h.format, src, &mut mesh, cut)?;
         } else if k == face {
-            read_faces(e, list, h.format, body, src, &mut mesh.indices, cut)?;
+            let mut values = vec![Vec::new(); face_groups.len()];
+            read_faces(e, list, &face_groups, &mut values, h.format, body, src, &mut mesh.indices, cut)?;
+            for ((name, props), values) in face_groups.iter().zip(values) {
+                mesh.attributes.push(MeshAttribute {
+                    name: name.clone(),
+                    per_face: true,
+                    channels: props.len(),
+                    values,
+                });
+            }
         } else {
             skip(e, h.format, src, cut)?;
         }
@@ -379,6 +472,7 @@ fn parse_body<R: Read>(h: &Header, body: u64, src: &mut Source<R>) -> Result<Tri
 fn read_vertices<R: Read>(
     e: &Element,
     layout: &VertexLayout,
+    groups: &[(String, Vec<usize>)],
     format: Format,
     src: &mut Source<R>,
     mesh: &mut TriangleMesh,
@@ -401,6 +495,7 @@ fn read_vertices<R: Read>(
         .collect();
     let fixed = e.fixed_size();
     let mut values = vec![0f64; e.props.len()];
+    let mut attributes: Vec<Vec<f32>> = groups.iter().map(|(_, props)| Vec::with_capacity(n * props.len())).collect();
     for i in 0..e.count {
         match (format, fixed) {
             (Format::Binary { big }, Some(size)) => {
@@ -410,6 +505,9 @@ fn read_vertices<R: Read>(
                         v[s] = e.props[p].ty.decode_f32(&rec[offsets[p]..], big);
                     }
                 }
+                for ((_, props), out) in groups.iter().zip(&mut attributes) {
+                    out.extend(props.iter().map(|&p| e.props[p].ty.decode_f32(&rec[offsets[p]..], big)));
+                }
             }
             _ => {
                 read_record(e, format, src, &mut values, &cut, i)?;
@@ -417,6 +515,9 @@ fn read_vertices<R: Read>(
                     if let Some(p) = *slot {
                         v[s] = values[p] as f32;
                     }
+                }
+                for ((_, props), out) in groups.iter().zip(&mut attributes) {
+                    out.extend(props.iter().map(|&p| values[p] as f32));
                 }
             }
         }
@@ -435,6 +536,9 @@ fn read_vertices<R: Read>(
     }
     mesh.normals = layout.normals.then_some(normals);
     mesh.uvs = layout.uvs.then_some(uvs);
+    for ((name, props), values) in groups.iter().zip(attributes) {
+        mesh.attributes.push(MeshAttribute { name: name.clone(), per_face: false, channels: props.len(), values });
+    }
     Ok(())
 }
 
@@ -501,9 +605,14 @@ fn list_count<R: Read>(
     Ok(Some(n as u64))
 }
 
+/// Reads the faces into triangles, and the properties of each attribute group of the face
+/// element into `values` (a polygon's values once per triangle it is fanned into).
+#[allow(clippy::too_many_arguments)]
 fn read_faces<R: Read>(
     e: &Element,
     list: usize,
+    groups: &[(String, Vec<usize>)],
+    values: &mut [Vec<f32>],
     format: Format,
     body: u64,
     src: &mut Source<R>,
@@ -555,11 +664,13 @@ fn read_faces<R: Read>(
         return Ok(());
     }
     let mut idx: Vec<u32> = Vec::new();
+    let mut record = vec![0f32; e.props.len()];
     for i in 0..e.count {
+        let before = out.len();
         for (k, p) in e.props.iter().enumerate() {
             match p.list {
                 None => {
-                    scalar(p.ty, format, src)?.ok_or_else(|| cut(i))?;
+                    record[k] = scalar(p.ty, format, src)?.ok_or_else(|| cut(i))? as f32;
                 }
                 Some(c) => {
                     let n = list_count(c, format, src, e, i)?.ok_or_else(|| cut(i))?;
@@ -575,6 +686,11 @@ fn read_faces<R: Read>(
                         fan(&idx, out);
                     }
                 }
+            }
+        }
+        for _ in before..out.len() {
+            for ((_, props), v) in groups.iter().zip(values.iter_mut()) {
+                v.extend(props.iter().map(|&p| record[p]));
             }
         }
     }

@@ -285,3 +285,64 @@ fn bundled_meshes_and_file_errors() {
     let e = load_ply(&dir.join("icosphere.obj")).unwrap_err().to_string();
     assert!(e.contains("icosphere.obj") && e.contains("does not start with `ply`"), "{e}");
 }
+
+/// Extra properties become attributes as Mitsuba 3.9.1 names them (checked with its reader):
+/// `red green blue` -> `vertex_color`, `<p>_x <p>_y <p>_z` -> `vertex_<p>`, `<p>_r <p>_g <p>_b`
+/// -> `face_<p>_color`, `<p>_0` -> `face_<p>`; a property without a one-letter suffix is skipped;
+/// a polygon's values repeat on each of its triangles.
+#[test]
+fn attributes_are_named_and_grouped_as_mitsuba_names_them() {
+    for format in 0..3 {
+        let fmt = ["ascii", "binary_little_endian", "binary_big_endian"][format];
+        let header = format!(
+            "ply\nformat {fmt} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float quality\n\
+             property float n_x\nproperty float n_y\nproperty float n_z\n\
+             element face 2\nproperty list uchar int vertex_indices\nproperty float weight_0\n\
+             property float c_r\nproperty float c_g\nproperty float c_b\nend_header\n"
+        );
+        let mut out = header.into_bytes();
+        for i in 0..4 {
+            let p = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]][i];
+            for v in [p[0], p[1], 0.0] {
+                put(&mut out, "float", v, format);
+            }
+            for c in [10.0 * i as f64, 20.0, 30.0] {
+                put(&mut out, "uchar", c, format);
+            }
+            for v in [0.5, i as f64, 0.0, 1.0] {
+                put(&mut out, "float", v, format);
+            }
+            if format == 0 {
+                out.push(b'\n');
+            }
+        }
+        for (f, n) in [(vec![0u32, 1, 2, 3], 0.25), (vec![0, 2, 3], 0.75)] {
+            put(&mut out, "uchar", f.len() as f64, format);
+            for i in f {
+                put(&mut out, "int", i as f64, format);
+            }
+            for v in [n, 0.1, 0.2, 0.3] {
+                put(&mut out, "float", v, format);
+            }
+            if format == 0 {
+                out.push(b'\n');
+            }
+        }
+        let m = parse_ply(&out).unwrap_or_else(|e| panic!("{fmt}: {e}"));
+        let names: Vec<(&str, bool, usize)> =
+            m.attributes.iter().map(|a| (a.name.as_str(), a.per_face, a.channels)).collect();
+        assert_eq!(
+            names,
+            [("vertex_color", false, 3), ("vertex_n", false, 3), ("face_weight", true, 1), ("face_c_color", true, 3)],
+            "{fmt}"
+        );
+        assert_eq!(m.attributes[0].values[3..6], [10.0, 20.0, 30.0], "{fmt}: raw values, as Mitsuba keeps them");
+        // The quad is two triangles, each with its weight; the triangle after them has its own.
+        assert_eq!(m.indices.len(), 3);
+        assert_eq!(m.attributes[2].values, [0.25, 0.25, 0.75], "{fmt}");
+        // Interpolated at the centre of the first triangle (vertices 0, 1, 2).
+        let c = m.attributes[1].eval(&m.indices, 0, [1.0 / 3.0; 3]);
+        assert!((c.r() - 1.0).abs() < 1e-6 && c.g() == 0.0 && c.b() == 1.0, "{fmt}: {c}");
+    }
+}

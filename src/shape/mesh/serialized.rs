@@ -264,6 +264,7 @@ pub fn parse_serialized(bytes: &[u8], shape_index: u32) -> Result<Serialized, St
         normals: normals.map(|n| n.into_iter().map(Vec3::from).collect()),
         uvs: uvs.map(|u| u.into_iter().map(Vec2::from).collect()),
         indices,
+        attributes: Vec::new(),
     };
     Ok(Serialized {
         mesh,
