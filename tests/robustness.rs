@@ -1257,6 +1257,34 @@ proptest! {
     }
 }
 
+fn authored_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/authored")
+}
+
+/// The scenes written as Mitsuba's authors write them: includes, `<path>`, spectra and `.spd`
+/// files, black bodies, mesh attributes, wrapped integrators.
+fn authored_examples() -> Vec<String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(authored_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+        .collect();
+    files.sort();
+    files.iter().map(|f| std::fs::read_to_string(f).unwrap()).collect()
+}
+
+proptest! {
+    // 500 cases: the authored Mitsuba scenes with 1-4 edits.
+    #![proptest_config(config(500))]
+    #[test]
+    fn mitsuba_authored_mutated_never_panics(
+        base in prop::sample::select(authored_examples()),
+        muts in prop::collection::vec(xml_mutation(), 1..5),
+    ) {
+        load_mitsuba_and_check(&mutate(&base, &muts), &authored_dir())?;
+    }
+}
+
 proptest! {
     // 500 cases: arbitrary bytes (as lossy UTF-8).
     #![proptest_config(config(500))]

@@ -116,7 +116,7 @@ impl Lobes {
     }
 
     #[inline]
-    fn as_slice(&self) -> &[Bxdf] {
+    pub(crate) fn as_slice(&self) -> &[Bxdf] {
         &self.lobes[..self.count as usize]
     }
 }
@@ -556,3 +556,6 @@ mod tests;
 
 #[cfg(test)]
 mod microfacet_tests;
+
+#[cfg(test)]
+mod principled_tests;

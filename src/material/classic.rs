@@ -197,5 +197,19 @@ pub fn classic_view(materials: &Materials, m: u32) -> Classic {
             let n = exponent(microfacet.alpha_u);
             Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0 - f0, ks: f0, exponent: n, ..base }
         }
+        // Mostly transmitting: glass; otherwise the base colour with a highlight of the
+        // metallic and dielectric reflectance at normal incidence.
+        Plain::Principled(p) => {
+            let (metallic, trans) = (alpha_of(&p.metallic), alpha_of(&p.spec_trans));
+            if (1.0 - metallic) * trans > 0.5 {
+                return Classic { kind: ClassicKind::Dielectric, ior: p.eta, kd: 0.0, ..base };
+            }
+            let (color, color_texture) = const_or_mean(&p.base_color);
+            let f0 = (1.0 - metallic) * fresnel_dielectric(1.0, p.eta) + metallic * color.mean();
+            let roughness = alpha_of(&p.roughness);
+            let n = exponent((roughness * roughness).max(0.001));
+            let kd = (1.0 - metallic) * (1.0 - trans);
+            Classic { kind: ClassicKind::Diffuse, color, color_texture, kd, ks: f0, exponent: n, ..base }
+        }
     }
 }

@@ -21,8 +21,8 @@ use crate::math::Color;
 use crate::texture::{TexPoint, Texture};
 use bsdf::Lobes;
 use bxdf::{
-    Bxdf, CoatingTable, Conductor, Dielectric, FresnelMirror, Lambert, PlasticDiffuse, RoughCoating, RoughConductor,
-    RoughDielectric, RoughPlasticDiffuse,
+    Bxdf, CoatingTable, Conductor, Dielectric, FresnelMirror, Lambert, PlasticDiffuse, PrincipledClearcoat,
+    PrincipledDiffuse, PrincipledSpecular, RoughCoating, RoughConductor, RoughDielectric, RoughPlasticDiffuse, tint_of,
 };
 use fresnel::fresnel_diffuse_reflectance;
 use microfacet::{Distribution, Microfacet};
@@ -130,6 +130,154 @@ pub enum Plain {
         diffuse_mean: f32,
         table: &'static CoatingTable,
     },
+    /// Mitsuba 3's Disney-style `principled` BSDF.
+    Principled(Principled),
+}
+
+/// The parameters of Mitsuba 3's `principled` BSDF (its lobes are in `bxdf::principled`);
+/// every one but `eta` may be a texture, the scalars read with `eval_1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Principled {
+    pub base_color: ColorParam,
+    pub roughness: FloatParam,
+    pub anisotropic: FloatParam,
+    pub metallic: FloatParam,
+    pub spec_trans: FloatParam,
+    pub spec_tint: FloatParam,
+    pub sheen: FloatParam,
+    pub sheen_tint: FloatParam,
+    pub clearcoat: FloatParam,
+    pub clearcoat_gloss: FloatParam,
+    pub flatness: FloatParam,
+    /// Relative index, inside over outside (Mitsuba's `eta`, or from `specular`).
+    pub eta: f32,
+}
+
+impl Principled {
+    /// Mitsuba's defaults: base colour 0.5, roughness 0.5, every weight 0, eta 1.5 (specular
+    /// 0.5).
+    pub fn new() -> Principled {
+        let zero = Param::Const(0.0);
+        Principled {
+            base_color: Param::Const(Color::splat(0.5)),
+            roughness: Param::Const(0.5),
+            anisotropic: zero,
+            metallic: zero,
+            spec_trans: zero,
+            spec_tint: zero,
+            sheen: zero,
+            sheen_tint: zero,
+            clearcoat: zero,
+            clearcoat_gloss: zero,
+            flatness: zero,
+            eta: 1.5,
+        }
+    }
+
+    /// The index of refraction Mitsuba derives from `specular`: the one whose normal-incidence
+    /// reflectance is 0.08 specular.
+    pub fn eta_of_specular(specular: f32) -> f32 {
+        2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+    }
+
+    fn params(&self) -> Vec<AnyParam> {
+        use AnyParam::{Color as C, Float as F};
+        vec![
+            C(self.base_color),
+            F(self.roughness),
+            F(self.anisotropic),
+            F(self.metallic),
+            F(self.spec_trans),
+            F(self.spec_tint),
+            F(self.sheen),
+            F(self.sheen_tint),
+            F(self.clearcoat),
+            F(self.clearcoat_gloss),
+            F(self.flatness),
+        ]
+    }
+
+    /// Transmits light (a textured or positive `spec_trans`): both sides are seen.
+    fn transmits(&self) -> bool {
+        !matches!(self.spec_trans, Param::Const(t) if t <= 0.0)
+    }
+
+    /// The lobes at `at`, seen from outside (`front`) or inside.
+    fn lobes(&self, front: bool, at: TexPoint<'_>, textures: &[Texture], lobes: &mut Lobes) {
+        let base = self.base_color.at(at, textures);
+        let roughness = self.roughness.at(at, textures);
+        let metallic = self.metallic.at(at, textures);
+        let spec_trans = self.spec_trans.at(at, textures);
+        let brdf = (1.0 - metallic) * (1.0 - spec_trans);
+        let trans = (1.0 - metallic) * spec_trans;
+        // Mitsuba's roughness mapping: alpha = roughness^2, stretched by anisotropy.
+        let r2 = roughness * roughness;
+        let anisotropic = self.anisotropic.at(at, textures);
+        let (ax, ay) = if anisotropic == 0.0 {
+            (r2.max(0.001), r2.max(0.001))
+        } else {
+            let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+            ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+        };
+        let mf = Microfacet::new(Distribution::Ggx, ax, ay);
+        if !front {
+            if trans > 0.0 {
+                let inside = PrincipledSpecular {
+                    mf,
+                    eta: 1.0 / self.eta,
+                    base,
+                    metallic,
+                    spec_tint: 0.0,
+                    trans,
+                    inside: true,
+                    scale: 1.0,
+                };
+                lobes.add(Bxdf::PrincipledSpecular(inside));
+            }
+            return;
+        }
+        if brdf > 0.0 {
+            let sheen = self.sheen.at(at, textures) * (1.0 - metallic);
+            let sheen = if sheen > 0.0 {
+                let t = self.sheen_tint.at(at, textures);
+                (Color::ONE + (tint_of(base) - Color::ONE) * t) * sheen
+            } else {
+                Color::ZERO
+            };
+            lobes.add(Bxdf::PrincipledDiffuse(PrincipledDiffuse {
+                color: base * brdf,
+                weight: brdf,
+                roughness,
+                flatness: self.flatness.at(at, textures),
+                sheen,
+            }));
+        }
+        lobes.add(Bxdf::PrincipledSpecular(PrincipledSpecular {
+            mf,
+            eta: self.eta,
+            base,
+            metallic,
+            spec_tint: self.spec_tint.at(at, textures),
+            trans,
+            inside: false,
+            scale: 1.0,
+        }));
+        let clearcoat = self.clearcoat.at(at, textures);
+        if clearcoat > 0.0 {
+            let gloss = self.clearcoat_gloss.at(at, textures);
+            lobes.add(Bxdf::PrincipledClearcoat(PrincipledClearcoat {
+                weight: 0.25 * clearcoat,
+                alpha: 0.1 + (0.001 - 0.1) * gloss,
+                eta: self.eta,
+            }));
+        }
+    }
+}
+
+impl Default for Principled {
+    fn default() -> Self {
+        Principled::new()
+    }
 }
 
 /// A model that changes another material (`inner`, `front`, `back`, `first`, `second`: indices of
@@ -286,6 +434,7 @@ impl Plain {
             Plain::Plastic { diffuse, specular, .. } | Plain::RoughPlastic { diffuse, specular, .. } => {
                 vec![C(*diffuse), C(*specular)]
             }
+            Plain::Principled(p) => p.params(),
         }
     }
 
@@ -353,6 +502,7 @@ impl Plain {
                     d_mean: diffuse_mean.max(1e-4 * scale.mean()),
                 }));
             }
+            Plain::Principled(p) => p.lobes(front, at, textures, &mut lobes),
         }
         lobes
     }
@@ -363,6 +513,7 @@ impl Plain {
         match self {
             Plain::Classic(c) => c.transmits(),
             Plain::Dielectric { .. } | Plain::RoughDielectric { .. } => true,
+            Plain::Principled(p) => p.transmits(),
             Plain::Diffuse { .. }
             | Plain::Conductor { .. }
             | Plain::RoughConductor { .. }
@@ -384,7 +535,8 @@ impl Plain {
             Plain::Diffuse { .. }
             | Plain::RoughConductor { .. }
             | Plain::RoughDielectric { .. }
-            | Plain::RoughPlastic { .. } => false,
+            | Plain::RoughPlastic { .. }
+            | Plain::Principled(_) => false,
         }
     }
 }

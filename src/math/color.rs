@@ -114,6 +114,12 @@ impl Color {
         Color(self.0.max(other.0))
     }
 
+    /// The square root of each channel (negative channels give 0).
+    #[inline(always)]
+    pub fn sqrt(self) -> Self {
+        Color(self.0.max(glam::Vec3::ZERO).map(f32::sqrt))
+    }
+
     /// True when every channel is within `max_abs_diff` of `other`'s.
     #[inline(always)]
     pub fn abs_diff_eq(self, other: Color, max_abs_diff: f32) -> bool {

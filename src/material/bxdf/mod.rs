@@ -22,6 +22,7 @@ mod lambert;
 mod mirror;
 mod phong;
 mod plastic_diffuse;
+mod principled;
 mod rough_coating;
 mod rough_conductor;
 mod rough_dielectric;
@@ -36,6 +37,7 @@ pub use lambert::Lambert;
 pub use mirror::Mirror;
 pub use phong::{Phong, sample_phong};
 pub use plastic_diffuse::PlasticDiffuse;
+pub use principled::{PrincipledClearcoat, PrincipledDiffuse, PrincipledSpecular, tint_of};
 pub use rough_coating::RoughCoating;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
@@ -281,6 +283,9 @@ bxdfs!(
     PlasticDiffuse,
     RoughCoating,
     RoughPlasticDiffuse,
+    PrincipledDiffuse,
+    PrincipledSpecular,
+    PrincipledClearcoat,
 );
 
 /// Mirror direction of `w` about the local normal (seed eq. 3 with I = -w).

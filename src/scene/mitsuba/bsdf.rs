@@ -175,6 +175,7 @@ impl<'a> Cx<'a> {
                     one(Material::rough_plastic(mf, diffuse, specular, eta, nonlinear, textures))
                 }
             }
+            "principled" => one(Plain::Principled(self.principled(&p, el, b)?)),
             "twosided" => {
                 let inner = self.nested(&p, b, depth)?;
                 let check = |this: &mut Self, m: u32| -> Result<(), SceneError> {
@@ -264,6 +265,63 @@ impl<'a> Cx<'a> {
             }
         }
         Ok(())
+    }
+
+    /// Mitsuba's `principled`: every parameter a number or a texture (scalars read with
+    /// `eval_1`), `eta` or `specular` (not both) for the index.
+    fn principled(
+        &mut self,
+        p: &super::props::Props<'a>,
+        el: &'a El,
+        b: &mut Build,
+    ) -> Result<crate::material::Principled, SceneError> {
+        let mut m = crate::material::Principled::new();
+        if let Some(c) = self.color_param(p, "base_color", b)? {
+            m.base_color = c;
+        }
+        let scalars: [(&str, &mut crate::material::FloatParam); 10] = [
+            ("roughness", &mut m.roughness),
+            ("anisotropic", &mut m.anisotropic),
+            ("metallic", &mut m.metallic),
+            ("spec_trans", &mut m.spec_trans),
+            ("spec_tint", &mut m.spec_tint),
+            ("sheen", &mut m.sheen),
+            ("sheen_tint", &mut m.sheen_tint),
+            ("clearcoat", &mut m.clearcoat),
+            ("clearcoat_gloss", &mut m.clearcoat_gloss),
+            ("flatness", &mut m.flatness),
+        ];
+        for (name, slot) in scalars {
+            if let Some(v) = self.float_param(p, name, b)? {
+                *slot = v;
+            }
+        }
+        // Sampling rates change the noise only.
+        for name in ["main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"] {
+            let _ = self.float(p, name)?;
+        }
+        let transmits = !matches!(m.spec_trans, Param::Const(t) if t == 0.0);
+        m.eta = match (self.float(p, "eta")?, self.float(p, "specular")?) {
+            (Some(_), Some(_)) => return Err(self.err(el, "principled takes `eta` or `specular`, not both")),
+            (Some(eta), None) => {
+                if !(eta > 0.0) {
+                    return Err(self.err(el, format!("principled `eta` must be positive, found {eta}")));
+                }
+                // An index of 1 refracts nothing, which transmission cannot work with.
+                if transmits && eta == 1.0 { 1.001 } else { eta }
+            }
+            (None, specular) => {
+                let mut s = specular.unwrap_or(0.5);
+                if !(0.0..12.5).contains(&s) {
+                    return Err(self.err(el, format!("principled `specular` must be in [0, 12.5), found {s}")));
+                }
+                if transmits && s == 0.0 {
+                    s = 1e-3;
+                }
+                crate::material::Principled::eta_of_specular(s)
+            }
+        };
+        Ok(m)
     }
 
     /// int_ior / ext_ior (numbers or Mitsuba's named materials).

@@ -146,6 +146,9 @@ impl<'a> Cx<'a> {
     /// The spectrum's colour, with Mitsuba's warning when it is out of gamut and clamped.
     fn spectrum_to_color(&mut self, el: &El, s: &SampledSpectrum, usage: SpectrumUse) -> Result<Color, SceneError> {
         let (c, clamped) = s.to_srgb(usage);
+        if !c.is_finite() {
+            return Err(self.err(el, format!("the spectrum's values are too large for a colour (it gives {c})")));
+        }
         if clamped {
             // What Mitsuba does too, so not an error with --strict.
             self.note(el, format!("the spectrum is outside the sRGB gamut here and is clamped to {c}"));
