@@ -30,8 +30,17 @@ CASES = {
 }
 
 
-def bsdf_of(params):
-    d = {"type": "principled"}
+THIN_CASES = {
+    "thin_defaults": {},
+    "thin_leaf": {"base_color": [0.3, 0.7, 0.2], "roughness": 0.4, "spec_trans": 0.3, "diff_trans": 0.8,
+                  "sheen": 0.4, "sheen_tint": 0.5, "flatness": 0.3, "eta": 1.4},
+    "thin_glassy": {"base_color": [0.9, 0.85, 0.8], "roughness": 0.15, "spec_trans": 0.85, "spec_tint": 0.4,
+                    "anisotropic": 0.5, "eta": 1.33},
+}
+
+
+def bsdf_of(params, kind="principled"):
+    d = {"type": kind}
     for k, v in params.items():
         d[k] = {"type": "rgb", "value": v} if isinstance(v, list) else v
     return mi.load_dict(d)
@@ -45,9 +54,10 @@ def main():
     rng = np.random.default_rng(5)
     rows = ["case,params,wi_x,wi_y,wi_z,wo_x,wo_y,wo_z,r,g,b"]
     ctx = mi.BSDFContext()
-    for name, params in CASES.items():
-        bsdf = bsdf_of(params)
-        transmits = params.get("spec_trans", 0) > 0
+    all_cases = [(n, p, "principled") for n, p in CASES.items()] + [(n, p, "principledthin") for n, p in THIN_CASES.items()]
+    for name, params, kind in all_cases:
+        bsdf = bsdf_of(params, kind)
+        transmits = params.get("spec_trans", 0) > 0 or kind == "principledthin"
         n = 0
         while n < 60:
             wi = unit(rng.normal(size=3))

@@ -78,6 +78,16 @@ alpha = 0.2"#,
 color = "checks"
 kd = 1"#,
     ),
+    (
+        "principled",
+        r#"type = "principled"
+color = [0.7, 0.4, 0.3]
+roughness = 0.35
+metallic = 0.2
+spec_trans = 0.3
+sheen = 0.4
+clearcoat = 0.5"#,
+    ),
 ];
 
 /// (name, TOML of the lights, whether the floor is an infinite plane)

@@ -211,5 +211,10 @@ pub fn classic_view(materials: &Materials, m: u32) -> Classic {
             let kd = (1.0 - metallic) * (1.0 - trans);
             Classic { kind: ClassicKind::Diffuse, color, color_texture, kd, ks: f0, exponent: n, ..base }
         }
+        Plain::PrincipledThin(p) => {
+            let (color, color_texture) = const_or_mean(&p.base_color);
+            let trans = alpha_of(&p.spec_trans);
+            Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0 - trans, ..base }
+        }
     }
 }

@@ -21,8 +21,9 @@ use crate::math::Color;
 use crate::texture::{TexPoint, Texture};
 use bsdf::Lobes;
 use bxdf::{
-    Bxdf, CoatingTable, Conductor, Dielectric, FresnelMirror, Lambert, PlasticDiffuse, PrincipledClearcoat,
-    PrincipledDiffuse, PrincipledSpecular, RoughCoating, RoughConductor, RoughDielectric, RoughPlasticDiffuse, tint_of,
+    Bxdf, CoatingTable, Conductor, Dielectric, DiffuseTransmission, FresnelMirror, Lambert, PlasticDiffuse,
+    PrincipledClearcoat, PrincipledDiffuse, PrincipledSpecular, RoughCoating, RoughConductor, RoughDielectric,
+    RoughPlasticDiffuse, ThinSpecular, tint_of,
 };
 use fresnel::fresnel_diffuse_reflectance;
 use microfacet::{Distribution, Microfacet};
@@ -132,6 +133,113 @@ pub enum Plain {
     },
     /// Mitsuba 3's Disney-style `principled` BSDF.
     Principled(Principled),
+    /// Mitsuba 3's `principledthin`: the same for a thin sheet (leaves, paper, cloth).
+    PrincipledThin(PrincipledThin),
+}
+
+/// The parameters of Mitsuba 3's `principledthin` BSDF; as `Principled`, every one may be a
+/// texture. `diff_trans` runs from 0 to 2, as in Mitsuba.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrincipledThin {
+    pub base_color: ColorParam,
+    pub roughness: FloatParam,
+    pub anisotropic: FloatParam,
+    pub spec_trans: FloatParam,
+    pub spec_tint: FloatParam,
+    pub sheen: FloatParam,
+    pub sheen_tint: FloatParam,
+    pub flatness: FloatParam,
+    pub diff_trans: FloatParam,
+    pub eta: FloatParam,
+}
+
+impl Default for PrincipledThin {
+    fn default() -> Self {
+        let zero = Param::Const(0.0);
+        PrincipledThin {
+            base_color: Param::Const(Color::splat(0.5)),
+            roughness: Param::Const(0.5),
+            anisotropic: zero,
+            spec_trans: zero,
+            spec_tint: zero,
+            sheen: zero,
+            sheen_tint: zero,
+            flatness: zero,
+            diff_trans: zero,
+            eta: Param::Const(1.5),
+        }
+    }
+}
+
+/// Mitsuba's roughness mapping for the principled models: alpha = roughness^2 (at least
+/// 0.001), stretched along the tangent by `anisotropic`.
+fn principled_alphas(roughness: f32, anisotropic: f32) -> Microfacet {
+    let r2 = roughness * roughness;
+    let (ax, ay) = if anisotropic == 0.0 {
+        (r2.max(0.001), r2.max(0.001))
+    } else {
+        let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+        ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+    };
+    Microfacet::new(Distribution::Ggx, ax, ay)
+}
+
+impl PrincipledThin {
+    fn params(&self) -> Vec<AnyParam> {
+        use AnyParam::{Color as C, Float as F};
+        vec![
+            C(self.base_color),
+            F(self.roughness),
+            F(self.anisotropic),
+            F(self.spec_trans),
+            F(self.spec_tint),
+            F(self.sheen),
+            F(self.sheen_tint),
+            F(self.flatness),
+            F(self.diff_trans),
+            F(self.eta),
+        ]
+    }
+
+    /// The lobes at `at` (the same from both sides: the sheet is symmetric).
+    fn lobes(&self, at: TexPoint<'_>, textures: &[Texture], lobes: &mut Lobes) {
+        let base = self.base_color.at(at, textures);
+        let roughness = self.roughness.at(at, textures);
+        let anisotropic = self.anisotropic.at(at, textures);
+        let spec_trans = self.spec_trans.at(at, textures);
+        let diff_trans = 0.5 * self.diff_trans.at(at, textures);
+        let eta = self.eta.at(at, textures);
+        let reflect = (1.0 - spec_trans) * (1.0 - diff_trans);
+        if spec_trans < 1.0 && diff_trans < 1.0 && reflect > 0.0 {
+            let sheen = self.sheen.at(at, textures);
+            let sheen = if sheen > 0.0 {
+                let t = self.sheen_tint.at(at, textures);
+                (Color::ONE + (tint_of(base) - Color::ONE) * t) * (sheen * reflect)
+            } else {
+                Color::ZERO
+            };
+            lobes.add(Bxdf::PrincipledDiffuse(PrincipledDiffuse {
+                color: base * reflect,
+                weight: reflect,
+                roughness,
+                flatness: self.flatness.at(at, textures),
+                sheen,
+            }));
+        }
+        if spec_trans < 1.0 && diff_trans > 0.0 {
+            lobes.add(Bxdf::DiffuseTransmission(DiffuseTransmission { t: base * ((1.0 - spec_trans) * diff_trans) }));
+        }
+        if spec_trans > 0.0 {
+            lobes.add(Bxdf::ThinSpecular(ThinSpecular {
+                mf: principled_alphas(roughness, anisotropic),
+                mf_through: principled_alphas((0.65 * eta - 0.35) * roughness, anisotropic),
+                eta,
+                base,
+                spec_tint: self.spec_tint.at(at, textures),
+                weight: spec_trans,
+            }));
+        }
+    }
 }
 
 /// The parameters of Mitsuba 3's `principled` BSDF (its lobes are in `bxdf::principled`);
@@ -210,16 +318,7 @@ impl Principled {
         let spec_trans = self.spec_trans.at(at, textures);
         let brdf = (1.0 - metallic) * (1.0 - spec_trans);
         let trans = (1.0 - metallic) * spec_trans;
-        // Mitsuba's roughness mapping: alpha = roughness^2, stretched by anisotropy.
-        let r2 = roughness * roughness;
-        let anisotropic = self.anisotropic.at(at, textures);
-        let (ax, ay) = if anisotropic == 0.0 {
-            (r2.max(0.001), r2.max(0.001))
-        } else {
-            let aspect = (1.0 - 0.9 * anisotropic).sqrt();
-            ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
-        };
-        let mf = Microfacet::new(Distribution::Ggx, ax, ay);
+        let mf = principled_alphas(roughness, self.anisotropic.at(at, textures));
         if !front {
             if trans > 0.0 {
                 let inside = PrincipledSpecular {
@@ -435,6 +534,7 @@ impl Plain {
                 vec![C(*diffuse), C(*specular)]
             }
             Plain::Principled(p) => p.params(),
+            Plain::PrincipledThin(p) => p.params(),
         }
     }
 
@@ -503,6 +603,7 @@ impl Plain {
                 }));
             }
             Plain::Principled(p) => p.lobes(front, at, textures, &mut lobes),
+            Plain::PrincipledThin(p) => p.lobes(at, textures, &mut lobes),
         }
         lobes
     }
@@ -514,6 +615,8 @@ impl Plain {
             Plain::Classic(c) => c.transmits(),
             Plain::Dielectric { .. } | Plain::RoughDielectric { .. } => true,
             Plain::Principled(p) => p.transmits(),
+            // A thin sheet transmits without refracting: the same lobes from both sides.
+            Plain::PrincipledThin(_) => false,
             Plain::Diffuse { .. }
             | Plain::Conductor { .. }
             | Plain::RoughConductor { .. }
@@ -536,7 +639,8 @@ impl Plain {
             | Plain::RoughConductor { .. }
             | Plain::RoughDielectric { .. }
             | Plain::RoughPlastic { .. }
-            | Plain::Principled(_) => false,
+            | Plain::Principled(_)
+            | Plain::PrincipledThin(_) => false,
         }
     }
 }

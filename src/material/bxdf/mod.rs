@@ -37,7 +37,9 @@ pub use lambert::Lambert;
 pub use mirror::Mirror;
 pub use phong::{Phong, sample_phong};
 pub use plastic_diffuse::PlasticDiffuse;
-pub use principled::{PrincipledClearcoat, PrincipledDiffuse, PrincipledSpecular, tint_of};
+pub use principled::{
+    DiffuseTransmission, PrincipledClearcoat, PrincipledDiffuse, PrincipledSpecular, ThinSpecular, tint_of,
+};
 pub use rough_coating::RoughCoating;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
@@ -286,6 +288,8 @@ bxdfs!(
     PrincipledDiffuse,
     PrincipledSpecular,
     PrincipledClearcoat,
+    DiffuseTransmission,
+    ThinSpecular,
 );
 
 /// Mirror direction of `w` about the local normal (seed eq. 3 with I = -w).

@@ -431,3 +431,188 @@ impl Lobe for PrincipledClearcoat {
         })
     }
 }
+
+/// Lambertian transmission (the thin principled BSDF's `diff_trans`): `t / pi` on the far side,
+/// sampled by the cosine there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiffuseTransmission {
+    pub t: Color,
+}
+
+impl Lobe for DiffuseTransmission {
+    #[inline]
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::TRANSMISSION | LobeFlags::DIFFUSE
+    }
+
+    #[inline]
+    fn is_isotropic(&self) -> bool {
+        true
+    }
+
+    #[inline]
+    fn sampling_weight(&self) -> f32 {
+        super::colour_weight(self.t)
+    }
+
+    #[inline]
+    fn mean_albedo(&self) -> f32 {
+        self.t.mean()
+    }
+
+    #[inline]
+    fn lambert_albedo(&self) -> Option<Color> {
+        None
+    }
+
+    #[inline]
+    fn scaled(self, w: f32) -> Self {
+        DiffuseTransmission { t: self.t * w }
+    }
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> Color {
+        if wo.z > 0.0 && wi.z < 0.0 { self.t * FRAC_1_PI } else { Color::ZERO }
+    }
+
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> f32 {
+        if wo.z > 0.0 && wi.z < 0.0 { -wi.z * FRAC_1_PI } else { 0.0 }
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3, _uc: f32, u: Vec2, _mode: Transport) -> Option<BxdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let w = cosine_hemisphere(u);
+        let wi = Vec3::new(w.x, w.y, -w.z);
+        let pdf = w.z * FRAC_1_PI;
+        let flags = LobeFlags::TRANSMISSION | LobeFlags::DIFFUSE;
+        (pdf > 0.0).then_some(BxdfSample { wi, weight: self.t, pdf, flags })
+    }
+}
+
+/// The thin principled BSDF's specular part: GGX reflection with the thin Fresnel term and,
+/// through the sheet, the mirror image of a reflection off facets of a roughness scaled by the
+/// index (Burley 2015), tinted by the base colour; half the samples each, as Mitsuba.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinSpecular {
+    pub mf: Microfacet,
+    /// The facets seen through the sheet.
+    pub mf_through: Microfacet,
+    pub eta: f32,
+    pub base: Color,
+    pub spec_tint: f32,
+    /// spec_trans (times a blend's share).
+    pub weight: f32,
+}
+
+impl ThinSpecular {
+    /// The half vector of `wo` and `wi` mirrored to the viewer's side.
+    #[inline]
+    fn half(wo: Vec3, wi: Vec3) -> Vec3 {
+        (wo + Vec3::new(wi.x, wi.y, wi.z.abs())).normalize_or_zero()
+    }
+}
+
+impl Lobe for ThinSpecular {
+    #[inline]
+    fn flags(&self) -> LobeFlags {
+        LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
+    }
+
+    #[inline]
+    fn is_isotropic(&self) -> bool {
+        self.mf.is_isotropic() && self.mf_through.is_isotropic()
+    }
+
+    #[inline]
+    fn sampling_weight(&self) -> f32 {
+        self.weight
+    }
+
+    #[inline]
+    fn mean_albedo(&self) -> f32 {
+        (self.weight * (r0_of(self.eta) + (1.0 - r0_of(self.eta)) * self.base.mean())).clamp(1e-3, 1.0)
+    }
+
+    #[inline]
+    fn lambert_albedo(&self) -> Option<Color> {
+        None
+    }
+
+    #[inline]
+    fn scaled(self, w: f32) -> Self {
+        ThinSpecular { weight: self.weight * w, ..self }
+    }
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> Color {
+        if wo.z <= 0.0 || wi.z == 0.0 {
+            return Color::ZERO;
+        }
+        let h = Self::half(wo, wi);
+        let (oh, ih) = (wo.dot(h), wi.dot(h));
+        let fd = fresnel_dielectric(oh, self.eta);
+        if wi.z > 0.0 {
+            if !(oh > 0.0 && ih > 0.0) {
+                return Color::ZERO;
+            }
+            let mut fresnel = Color::splat(fd);
+            if self.spec_tint > 0.0 {
+                let schlick_part = schlick(tint_of(self.base) * r0_of(self.eta), oh, self.eta);
+                fresnel = fresnel + (schlick_part - fresnel) * self.spec_tint;
+            }
+            let dg = self.mf.d(h) * self.mf.g(wo, wi, h);
+            return fresnel * (self.weight * dg / (4.0 * wo.z * wi.z));
+        }
+        // Through the sheet: the facet must face the viewer and turn away from `wi`.
+        if !(oh > 0.0 && ih < 0.0) {
+            return Color::ZERO;
+        }
+        let dg = self.mf_through.d(h) * self.mf_through.g(wo, wi, h);
+        self.base * (self.weight * (1.0 - fd) * dg / (4.0 * wo.z * wi.z.abs()))
+    }
+
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, _mode: Transport) -> f32 {
+        if wo.z <= 0.0 || wi.z == 0.0 {
+            return 0.0;
+        }
+        let h = Self::half(wo, wi);
+        let (oh, ih) = (wo.dot(h), wi.dot(h));
+        let mirrored = Vec3::new(wi.x, wi.y, wi.z.abs());
+        let jacobian = 1.0 / (4.0 * mirrored.dot(h).abs());
+        if wi.z > 0.0 {
+            if !(oh > 0.0 && ih > 0.0) {
+                return 0.0;
+            }
+            0.5 * self.mf.pdf_visible(wo, h) * jacobian
+        } else {
+            if !(oh > 0.0 && ih < 0.0) {
+                return 0.0;
+            }
+            0.5 * self.mf_through.pdf_visible(wo, h) * jacobian
+        }
+    }
+
+    /// `uc` chooses reflection or transmission (half each), `u` the facet.
+    #[inline]
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BxdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let (wi, flags) = if uc < 0.5 {
+            (reflect_about(wo, self.mf.sample_visible(wo, u)), LobeFlags::GLOSSY_REFLECTION)
+        } else {
+            let r = reflect_about(wo, self.mf_through.sample_visible(wo, u));
+            (Vec3::new(r.x, r.y, -r.z), LobeFlags::GLOSSY_TRANSMISSION)
+        };
+        if (flags == LobeFlags::GLOSSY_REFLECTION) != (wi.z > 0.0) {
+            return None;
+        }
+        let pdf = self.pdf(wo, wi, mode);
+        (pdf > 0.0).then(|| BxdfSample { wi, weight: self.f(wo, wi, mode) * (wi.z.abs() / pdf), pdf, flags })
+    }
+}

@@ -176,6 +176,8 @@ impl<'a> Cx<'a> {
                 }
             }
             "principled" => one(Plain::Principled(self.principled(&p, el, b)?)),
+            // A sheet: the same from both sides.
+            "principledthin" => Material::two_sided(Plain::PrincipledThin(self.principled_thin(&p, b)?)),
             "twosided" => {
                 let inner = self.nested(&p, b, depth)?;
                 let check = |this: &mut Self, m: u32| -> Result<(), SceneError> {
@@ -321,6 +323,44 @@ impl<'a> Cx<'a> {
                 crate::material::Principled::eta_of_specular(s)
             }
         };
+        Ok(m)
+    }
+
+    /// Mitsuba's `principledthin`: every parameter a number or a texture, `eta` included.
+    fn principled_thin(
+        &mut self,
+        p: &super::props::Props<'a>,
+        b: &mut Build,
+    ) -> Result<crate::material::PrincipledThin, SceneError> {
+        let mut m = crate::material::PrincipledThin::default();
+        if let Some(c) = self.color_param(p, "base_color", b)? {
+            m.base_color = c;
+        }
+        let scalars: [(&str, &mut crate::material::FloatParam); 9] = [
+            ("roughness", &mut m.roughness),
+            ("anisotropic", &mut m.anisotropic),
+            ("spec_trans", &mut m.spec_trans),
+            ("spec_tint", &mut m.spec_tint),
+            ("sheen", &mut m.sheen),
+            ("sheen_tint", &mut m.sheen_tint),
+            ("flatness", &mut m.flatness),
+            ("diff_trans", &mut m.diff_trans),
+            ("eta", &mut m.eta),
+        ];
+        for (name, slot) in scalars {
+            if let Some(v) = self.float_param(p, name, b)? {
+                *slot = v;
+            }
+        }
+        // Sampling rates change the noise only.
+        for name in [
+            "specular_reflectance_sampling_rate",
+            "specular_transmittance_sampling_rate",
+            "diffuse_transmittance_sampling_rate",
+            "diffuse_reflectance_sampling_rate",
+        ] {
+            let _ = self.float(p, name)?;
+        }
         Ok(m)
     }
 

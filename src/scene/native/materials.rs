@@ -6,7 +6,8 @@ use super::Cx;
 use super::schema::{self, MaterialDesc, TextureDesc};
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{
-    Classic, ClassicKind, ColorParam, FloatParam, Material, Param, Plain, Roughness, Wrapper, conductors,
+    Classic, ClassicKind, ColorParam, FloatParam, Material, Param, Plain, Principled, PrincipledThin, Roughness,
+    Wrapper, conductors,
 };
 use crate::math::{Color, Vec2};
 use crate::scene::SceneError;
@@ -374,6 +375,49 @@ impl<'a> Cx<'a> {
                 let front = self.named(names, &d.front, "front", &p.span)?;
                 let back = self.named(names, &d.back, "back", &p.span)?;
                 Material::two_sided(Wrapper::TwoSided { front, back })
+            }
+            "principled" => {
+                let mut m = Principled::new();
+                m.base_color = self.color_param(&d.color, Color::splat(0.5), textures)?;
+                m.roughness = self.float_param(&d.roughness, 0.5, textures)?;
+                let weights = [
+                    (&d.anisotropic, &mut m.anisotropic),
+                    (&d.metallic, &mut m.metallic),
+                    (&d.spec_trans, &mut m.spec_trans),
+                    (&d.spec_tint, &mut m.spec_tint),
+                    (&d.sheen, &mut m.sheen),
+                    (&d.sheen_tint, &mut m.sheen_tint),
+                    (&d.clearcoat, &mut m.clearcoat),
+                    (&d.clearcoat_gloss, &mut m.clearcoat_gloss),
+                    (&d.flatness, &mut m.flatness),
+                ];
+                for (v, slot) in weights {
+                    *slot = self.float_param(v, 0.0, textures)?;
+                }
+                m.eta = d.ior.map_or(1.5, |v| v.0);
+                if (m.eta - 1.0).abs() < 1e-7 && !matches!(m.spec_trans, Param::Const(t) if t == 0.0) {
+                    m.eta = 1.001;
+                }
+                Material::one_sided(Plain::Principled(m))
+            }
+            "principledthin" => {
+                let mut m = PrincipledThin::default();
+                m.base_color = self.color_param(&d.color, Color::splat(0.5), textures)?;
+                m.roughness = self.float_param(&d.roughness, 0.5, textures)?;
+                let weights = [
+                    (&d.anisotropic, &mut m.anisotropic),
+                    (&d.spec_trans, &mut m.spec_trans),
+                    (&d.spec_tint, &mut m.spec_tint),
+                    (&d.sheen, &mut m.sheen),
+                    (&d.sheen_tint, &mut m.sheen_tint),
+                    (&d.flatness, &mut m.flatness),
+                    (&d.diff_trans, &mut m.diff_trans),
+                ];
+                for (v, slot) in weights {
+                    *slot = self.float_param(v, 0.0, textures)?;
+                }
+                m.eta = Param::Const(d.ior.map_or(1.5, |v| v.0));
+                Material::two_sided(Plain::PrincipledThin(m))
             }
             other => return Err(self.at(p.span.clone(), format!("unknown material type `{other}`"))),
         })

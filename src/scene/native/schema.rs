@@ -26,6 +26,38 @@ pub const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("mask", &["material", "opacity"]),
     ("blend", &["first", "second", "weight"]),
     ("twosided", &["front", "back"]),
+    (
+        "principled",
+        &[
+            "color",
+            "roughness",
+            "anisotropic",
+            "metallic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "clearcoat",
+            "clearcoat_gloss",
+            "flatness",
+            "ior",
+        ],
+    ),
+    (
+        "principledthin",
+        &[
+            "color",
+            "roughness",
+            "anisotropic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "flatness",
+            "diff_trans",
+            "ior",
+        ],
+    ),
 ];
 
 pub const TEXTURE_KINDS: &[(&str, &[&str])] = &[
@@ -185,6 +217,18 @@ pub struct MaterialDesc {
     pub weight: Option<Spanned<NumberOrTexture>>,
     pub front: Option<Spanned<String>>,
     pub back: Option<Spanned<String>>,
+    // The principled material's weights (Mitsuba's names).
+    pub roughness: Option<Spanned<NumberOrTexture>>,
+    pub anisotropic: Option<Spanned<NumberOrTexture>>,
+    pub metallic: Option<Spanned<NumberOrTexture>>,
+    pub spec_trans: Option<Spanned<NumberOrTexture>>,
+    pub spec_tint: Option<Spanned<NumberOrTexture>>,
+    pub sheen: Option<Spanned<NumberOrTexture>>,
+    pub sheen_tint: Option<Spanned<NumberOrTexture>>,
+    pub clearcoat: Option<Spanned<NumberOrTexture>>,
+    pub clearcoat_gloss: Option<Spanned<NumberOrTexture>>,
+    pub flatness: Option<Spanned<NumberOrTexture>>,
+    pub diff_trans: Option<Spanned<NumberOrTexture>>,
 }
 
 #[derive(Deserialize)]
