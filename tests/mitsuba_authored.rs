@@ -140,6 +140,15 @@ material = "p"
     assert_eq!(find(&a).expect("toml principled"), find(&b).expect("xml principled"));
 }
 
+/// Everything at once, as the acceptance scene: include chain, `<path>` to a shared
+/// folder, `moment` around a `path` integrator with max_depth 2, a spectral area light, an
+/// envmap found through `<path>`, a PLY mesh coloured by its vertex colours and a textured
+/// principled sphere.
+#[test]
+fn a_scene_with_all_of_it_renders_as_in_mitsuba() {
+    REFS.check_all(&[("combined", 128)], 64);
+}
+
 /// Wrong spectra and missing files are errors naming the file, line and cause.
 #[test]
 fn bad_spectra_and_missing_files_are_clear_errors() {
