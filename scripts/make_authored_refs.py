@@ -105,7 +105,25 @@ def make_meshes():
             out.write(bytes([3]) + np.array(tri, "<i4").tobytes() + np.array([w], "<f4").tobytes())
 
 
+def make_volumes():
+    """common/volumes/torus.vol: the signed distance to a torus (radii 0.28 and 0.12, axis z)
+    sampled on a 40^3 grid over [0, 1]^3, in Mitsuba's .vol format (version 3, float32)."""
+    import numpy as np
+    path = refs.DIR / "common" / "volumes" / "torus.vol"
+    if path.exists():
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    n = 40
+    x = np.linspace(0, 1, n, dtype=np.float64) - 0.5
+    z, y, xx = np.meshgrid(x, x, x, indexing="ij")
+    q = np.sqrt(xx ** 2 + y ** 2) - 0.28
+    sdf = (np.sqrt(q ** 2 + z ** 2) - 0.12).astype("<f4")
+    header = b"VOL" + bytes([3]) + np.array([1, n, n, n, 1], "<i4").tobytes() + np.array([0, 0, 0, 1, 1, 1], "<f4").tobytes()
+    path.write_bytes(header + sdf.tobytes())
+
+
 if __name__ == "__main__":
     make_textures()
     make_meshes()
+    make_volumes()
     refs.main()

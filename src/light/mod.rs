@@ -71,7 +71,12 @@ impl EmissionTexture {
                 let t = &self.vertex_uv;
                 t[0] * (1.0 - uv.x - uv.y) + t[1] * uv.x + t[2] * uv.y
             }
-            Shape::Sphere(_) | Shape::Quad(_) | Shape::Disk(_) | Shape::Cylinder(_) | Shape::Plane(_) => uv,
+            Shape::Sphere(_)
+            | Shape::Quad(_)
+            | Shape::Disk(_)
+            | Shape::Cylinder(_)
+            | Shape::Plane(_)
+            | Shape::SdfVoxel(_) => uv,
         }
     }
 }

@@ -41,6 +41,8 @@ pub enum FileKind {
     Include,
     /// A spectrum data file (Mitsuba's `.spd`; counted as nothing: it becomes one colour).
     Spectrum,
+    /// A grid of values (Mitsuba's `.vol`, an SDF grid): counted by its size.
+    Volume,
     /// A mesh, read in this format (the loader's choice, not the file name's).
     Mesh(MeshFormat),
     /// An image: a bitmap texture or an environment map.
@@ -176,6 +178,7 @@ impl FileBudget {
             FileKind::Scene | FileKind::Include | FileKind::Spectrum => {}
             FileKind::Mesh(_) => ledger.charge(Part::Meshes, bytes, what)?,
             FileKind::Image => ledger.charge(Part::Textures, bytes, what)?,
+            FileKind::Volume => ledger.charge(Part::Meshes, bytes, what)?,
         }
         if !listed {
             let i = ledger.footprint.files.len();
@@ -216,6 +219,8 @@ fn measure(path: &Path, kind: FileKind) -> u64 {
         FileKind::Scene | FileKind::Include | FileKind::Spectrum => 0,
         FileKind::Mesh(format) => mesh_bytes(path, format).unwrap_or(0),
         FileKind::Image => image_size(path).map_or(0, |(w, h)| w.saturating_mul(h).saturating_mul(BYTES_PER_TEXEL)),
+        // At most one 40-byte voxel (and its BVH share) per 4-byte value: an upper bound.
+        FileKind::Volume => std::fs::metadata(path).map_or(0, |m| m.len().saturating_mul(16)),
     }
 }
 

@@ -8,6 +8,7 @@ mod plane;
 mod primitives;
 mod quad;
 mod sampling;
+pub mod sdf;
 mod sphere;
 mod triangle;
 
@@ -71,6 +72,8 @@ pub enum Shape {
     Disk(Disk),
     Cylinder(Cylinder),
     Plane(Plane),
+    /// One voxel of a signed distance grid, in the grid's index space (see `sdf`).
+    SdfVoxel(sdf::SdfVoxel),
 }
 
 /// Only what intersection needs, 40 bytes: the BVH keeps these in leaf order so a leaf of four
@@ -90,6 +93,7 @@ pub enum CompactShape {
     },
     /// A point on the plane and its unit normal.
     Plane([Vec3; 2]),
+    SdfVoxel(sdf::SdfVoxel),
 }
 
 impl CompactShape {
@@ -100,18 +104,20 @@ impl CompactShape {
         match self {
             CompactShape::Sphere(s) => s.for_each_crossing(ray, t_max, f),
             // One crossing at most (a cylinder's later one is not found: see above).
+            // One crossing at most of a voxel's surface is found too: the first root.
             CompactShape::Triangle(_)
             | CompactShape::Quad(_)
             | CompactShape::Disk(_)
             | CompactShape::Cylinder { .. }
-            | CompactShape::Plane(_) => self.intersect(ray, shear, t_max).is_none_or(f),
+            | CompactShape::Plane(_)
+            | CompactShape::SdfVoxel(_) => self.intersect(ray, shear, t_max).is_none_or(f),
         }
     }
 
     /// False for shapes a ray can cross more than once that `for_each_crossing` does not walk.
     pub fn crossings_enumerable(&self) -> bool {
         match self {
-            CompactShape::Cylinder { .. } => false,
+            CompactShape::Cylinder { .. } | CompactShape::SdfVoxel(_) => false,
             CompactShape::Sphere(_)
             | CompactShape::Triangle(_)
             | CompactShape::Quad(_)
@@ -129,6 +135,7 @@ impl CompactShape {
             CompactShape::Disk([c, a, b]) => intersect_disk(*c, *a, *b, ray, t_max),
             CompactShape::Cylinder { p0, axis, radius } => intersect_cylinder(*p0, *axis, *radius, ray, t_max),
             CompactShape::Plane([point, normal]) => intersect_plane(*point, *normal, ray, t_max),
+            CompactShape::SdfVoxel(v) => v.intersect(ray, t_max),
         }
     }
 
@@ -173,6 +180,7 @@ impl Shape {
             Shape::Disk(d) => CompactShape::Disk([d.center, d.a, d.b]),
             Shape::Cylinder(c) => CompactShape::Cylinder { p0: c.p0, axis: c.axis, radius: c.radius },
             Shape::Plane(p) => CompactShape::Plane([p.point, p.normal]),
+            Shape::SdfVoxel(v) => CompactShape::SdfVoxel(*v),
         }
     }
 
@@ -185,6 +193,7 @@ impl Shape {
             Shape::Disk(d) => d.bounds(),
             Shape::Cylinder(c) => c.bounds(),
             Shape::Plane(_) => Aabb::INFINITE,
+            Shape::SdfVoxel(v) => v.bounds(),
         }
     }
 
@@ -197,6 +206,7 @@ impl Shape {
             Shape::Disk(d) => d.intersect(ray, t_max),
             Shape::Cylinder(c) => c.intersect(ray, t_max),
             Shape::Plane(p) => p.intersect(ray, t_max),
+            Shape::SdfVoxel(v) => v.intersect(ray, t_max),
         }
     }
 
@@ -210,6 +220,7 @@ impl Shape {
             Shape::Disk(d) => d.surface(h),
             Shape::Cylinder(c) => c.surface(ray, h),
             Shape::Plane(p) => p.surface(ray, h),
+            Shape::SdfVoxel(v) => v.surface(ray, h),
         }
     }
 
@@ -219,7 +230,12 @@ impl Shape {
     pub fn is_bounded(&self) -> bool {
         match self {
             Shape::Plane(_) => false,
-            Shape::Sphere(_) | Shape::Triangle(_) | Shape::Quad(_) | Shape::Disk(_) | Shape::Cylinder(_) => true,
+            Shape::Sphere(_)
+            | Shape::Triangle(_)
+            | Shape::Quad(_)
+            | Shape::Disk(_)
+            | Shape::Cylinder(_)
+            | Shape::SdfVoxel(_) => true,
         }
     }
 }

@@ -140,7 +140,8 @@ impl Primitives {
                 | CompactShape::Quad(_)
                 | CompactShape::Disk(_)
                 | CompactShape::Cylinder { .. }
-                | CompactShape::Plane(_),
+                | CompactShape::Plane(_)
+                | CompactShape::SdfVoxel(_),
             ) => {
                 let p = self.get(i, meshes);
                 (p.shape.surface(ray, h, meshes), p.material, p.light)

@@ -19,6 +19,8 @@ impl Shape {
             Shape::Disk(d) => d.area(),
             Shape::Cylinder(c) => c.area(),
             Shape::Plane(_) => f32::INFINITY,
+            // Never an emitter (the loaders refuse it): no area to sample.
+            Shape::SdfVoxel(_) => 0.0,
         }
     }
 
@@ -51,7 +53,7 @@ impl Shape {
             }
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
-            Shape::Plane(_) => return None,
+            Shape::Plane(_) | Shape::SdfVoxel(_) => return None,
         })
     }
 
@@ -61,7 +63,12 @@ impl Shape {
     #[inline]
     pub fn sample_towards(&self, p: Vec3, u: Vec2) -> Option<(SurfaceSample, f32)> {
         match self {
-            Shape::Quad(_) | Shape::Triangle(_) | Shape::Disk(_) | Shape::Cylinder(_) | Shape::Plane(_) => {
+            Shape::Quad(_)
+            | Shape::Triangle(_)
+            | Shape::Disk(_)
+            | Shape::Cylinder(_)
+            | Shape::Plane(_)
+            | Shape::SdfVoxel(_) => {
                 let s = self.sample_area(u)?;
                 let v = s.p - p;
                 let d2 = v.length_squared();
@@ -100,9 +107,14 @@ impl Shape {
     #[inline]
     pub fn pdf_towards(&self, p: Vec3, q: Vec3, n: Vec3, wi: Vec3) -> f32 {
         match self {
-            Shape::Quad(_) | Shape::Triangle(_) | Shape::Disk(_) | Shape::Cylinder(_) | Shape::Plane(_) => {
+            Shape::Quad(_)
+            | Shape::Triangle(_)
+            | Shape::Disk(_)
+            | Shape::Cylinder(_)
+            | Shape::Plane(_)
+            | Shape::SdfVoxel(_) => {
                 let cos = n.dot(-wi);
-                if cos <= 0.0 {
+                if !(cos > 0.0 && self.area() > 0.0) {
                     return 0.0;
                 }
                 (q - p).length_squared() / (cos * self.area())

@@ -85,7 +85,48 @@ impl<'a> Cx<'a> {
         // Shapes that cannot emit yet.
         let mut plain_out: Vec<Shape> = Vec::new();
         let mut mesh_out = None;
+        // A signed distance grid: its voxels and the transform from its index space.
+        let mut sdf_out = None;
         match kind.as_str() {
+            "sdfgrid" => {
+                if radiance.is_some() {
+                    return Err(self.err(el, "an sdfgrid cannot be an area emitter (nor can it in Mitsuba)"));
+                }
+                if b.geometry.in_group() {
+                    return Err(self.err(
+                        el,
+                        "an sdfgrid inside a shapegroup is not supported: instance the sdfgrid's group instead",
+                    ));
+                }
+                let (file, fel) = self
+                    .string(&p, "filename")?
+                    .ok_or_else(|| self.err(el, "an sdfgrid needs <string name=\"filename\" value=\"...vol\"/> (a `grid` tensor is Python-only)"))?;
+                let path = self.resolve_file(fel, &file)?;
+                self.files.open(&path, FileKind::Volume)?;
+                let bytes = std::fs::read(&path)
+                    .map_err(|e| self.err(fel, format!("cannot read `{}`: {e}", path.display())))?;
+                let grid = crate::shape::sdf::parse_vol(&bytes)
+                    .map_err(|e| self.err(fel, format!("SDF grid `{}`: {e}", path.display())))?;
+                match self.string(&p, "normals")? {
+                    None => self.warn(el, "sdfgrid `smooth` normals (Mitsuba's default) are approximated by the analytic ones here: give <string name=\"normals\" value=\"analytic\"/> to match Mitsuba exactly")?,
+                    Some((n, _)) if n == "analytic" => {}
+                    Some((n, nel)) if n == "smooth" => self.warn(nel, "sdfgrid `smooth` normals are approximated by the analytic ones here")?,
+                    Some((n, nel)) => return Err(self.err(nel, format!("sdfgrid `normals` must be `analytic` or `smooth`, found `{n}`"))),
+                }
+                let voxels: Vec<Shape> = grid.voxels().map(Shape::SdfVoxel).collect();
+                if voxels.is_empty() {
+                    return Err(self.err(
+                        el,
+                        format!("SDF grid `{file}` has no voxel the surface passes through (no value changes sign)"),
+                    ));
+                }
+                let index_to_object = Transform::scale(Vec3::new(
+                    1.0 / (grid.nx - 1) as f32,
+                    1.0 / (grid.ny - 1) as f32,
+                    1.0 / (grid.nz - 1) as f32,
+                ));
+                sdf_out = Some((voxels, index_to_object.then(to_world)));
+            }
             "rectangle" => {
                 let (c, e1, e2) = (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0));
                 let q =
@@ -253,6 +294,14 @@ impl<'a> Cx<'a> {
             }
             return self.finish(&p);
         };
+        // A grid's voxels, in a group of their own placed by the grid's transform.
+        if let Some((voxels, to_world)) = sdf_out {
+            let group = b.geometry.begin_group().map_err(|e| self.err(el, e))?;
+            b.geometry.add_object(voxels, material);
+            b.geometry.end_group();
+            b.geometry.add_instance(group, &to_world).map_err(|e| e.placed(|m| self.err(el, m)))?;
+            return self.finish(&p);
+        }
         let attributes = b.geometry.mesh_attributes_read(material);
         if !attributes.is_empty() {
             let names = attributes.join("`, `");

@@ -401,9 +401,12 @@ impl<'a> Cx<'a> {
                 Material::one_sided(Plain::Principled(m))
             }
             "principledthin" => {
-                let mut m = PrincipledThin::default();
-                m.base_color = self.color_param(&d.color, Color::splat(0.5), textures)?;
-                m.roughness = self.float_param(&d.roughness, 0.5, textures)?;
+                let mut m = PrincipledThin {
+                    base_color: self.color_param(&d.color, Color::splat(0.5), textures)?,
+                    roughness: self.float_param(&d.roughness, 0.5, textures)?,
+                    eta: Param::Const(d.ior.map_or(1.5, |v| v.0)),
+                    ..PrincipledThin::default()
+                };
                 let weights = [
                     (&d.anisotropic, &mut m.anisotropic),
                     (&d.spec_trans, &mut m.spec_trans),
@@ -416,7 +419,6 @@ impl<'a> Cx<'a> {
                 for (v, slot) in weights {
                     *slot = self.float_param(v, 0.0, textures)?;
                 }
-                m.eta = Param::Const(d.ior.map_or(1.5, |v| v.0));
                 Material::two_sided(Plain::PrincipledThin(m))
             }
             other => return Err(self.at(p.span.clone(), format!("unknown material type `{other}`"))),
