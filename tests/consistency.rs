@@ -88,6 +88,15 @@ spec_trans = 0.3
 sheen = 0.4
 clearcoat = 0.5"#,
     ),
+    (
+        "principledthin",
+        r#"type = "principledthin"
+color = [0.3, 0.6, 0.3]
+roughness = 0.4
+spec_trans = 0.3
+diff_trans = 0.8
+sheen = 0.3"#,
+    ),
 ];
 
 /// (name, TOML of the lights, whether the floor is an infinite plane)

@@ -227,7 +227,8 @@ impl PrincipledThin {
             }));
         }
         if spec_trans < 1.0 && diff_trans > 0.0 {
-            lobes.add(Bxdf::DiffuseTransmission(DiffuseTransmission { t: base * ((1.0 - spec_trans) * diff_trans) }));
+            let weight = (1.0 - spec_trans) * diff_trans;
+            lobes.add(Bxdf::DiffuseTransmission(DiffuseTransmission { t: base * weight, weight }));
         }
         if spec_trans > 0.0 {
             lobes.add(Bxdf::ThinSpecular(ThinSpecular {

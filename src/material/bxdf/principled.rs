@@ -437,6 +437,8 @@ impl Lobe for PrincipledClearcoat {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffuseTransmission {
     pub t: Color,
+    /// How often it is sampled: (1 - spec_trans) diff_trans, Mitsuba's probability.
+    pub weight: f32,
 }
 
 impl Lobe for DiffuseTransmission {
@@ -452,7 +454,7 @@ impl Lobe for DiffuseTransmission {
 
     #[inline]
     fn sampling_weight(&self) -> f32 {
-        super::colour_weight(self.t)
+        self.weight
     }
 
     #[inline]
@@ -467,7 +469,7 @@ impl Lobe for DiffuseTransmission {
 
     #[inline]
     fn scaled(self, w: f32) -> Self {
-        DiffuseTransmission { t: self.t * w }
+        DiffuseTransmission { t: self.t * w, weight: self.weight * w }
     }
 
     #[inline]
