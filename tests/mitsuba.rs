@@ -364,18 +364,18 @@ fn materials_map_to_our_model() {
 #[test]
 fn unsupported_parts_warn_with_their_place_or_fail_with_strict() {
     let text = wrap(
-        r#"<shape type="sdfgrid"/>
+        r#"<shape type="bsplinecurve"/>
     <shape type="sphere"><bsdf type="hair"/></shape>
-    <shape type="sphere"><bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="diffuse"><texture type="volume" name="reflectance"/></bsdf></shape>
     <shape type="sphere"><bsdf type="measured"/></shape>
     <emitter type="sunsky"/>
     <shape type="sphere"><float name="wobble" value="1"/></shape>"#,
     );
     let (s, warnings) = xml(&text);
     let expect = [
-        (7, "shape `sdfgrid` is not supported"),
+        (7, "shape `bsplinecurve` is not supported"),
         (8, "BSDF `hair` is not supported"),
-        (9, "texture `mesh_attribute` is not supported"),
+        (9, "texture `volume` is not supported"),
         (10, "BSDF `measured` is not supported"),
         (11, "emitter `sunsky` is not supported"),
         (12, "property `wobble`"),
@@ -509,7 +509,7 @@ fn the_command_line_renders_xml_with_defines_and_strict() {
     assert!(status.success());
     assert_eq!(read_exr(&out).unwrap().width, 16);
     let bad = dir.join("bad.xml");
-    std::fs::write(&bad, wrap(r#"<shape type="sphere"><bsdf type="principled"/></shape>"#)).unwrap();
+    std::fs::write(&bad, wrap(r#"<shape type="sphere"><bsdf type="pplastic"/></shape>"#)).unwrap();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
         .args(["render", "-q", "--strict", "-o"])
         .arg(dir.join("bad.png"))
@@ -517,7 +517,7 @@ fn the_command_line_renders_xml_with_defines_and_strict() {
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && stderr.contains("bad.xml:7:") && stderr.contains("principled"), "{stderr}");
+    assert!(!o.status.success() && stderr.contains("bad.xml:7:") && stderr.contains("pplastic"), "{stderr}");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_caustic"))
         .args(["render", "-q", "--spp", "1", "-o"])
         .arg(dir.join("bad.png"))
