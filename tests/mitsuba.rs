@@ -713,3 +713,30 @@ fn deeply_nested_elements_are_an_error_not_a_crash() {
         }
     }
 }
+
+/// Issue 30, item 3: `-D spq=4` (a misspelling of `spp`) rendered with the default without a
+/// word; Mitsuba refuses unused parameters. Now an error naming the parameters the scene has,
+/// with a did-you-mean; a `-D` on a TOML scene (which has no `$name` parameters) is an error too.
+#[test]
+fn defines_the_scene_never_uses_are_errors_naming_its_parameters() {
+    let text = wrap(
+        r#"<default name="spp" value="4"/><default name="res" value="16"/>
+    <shape type="sphere"><float name="radius" value="$r"/></shape>"#,
+    );
+    let lo = |defs: &[(&str, &str)]| LoadOptions {
+        defines: defs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        ..Default::default()
+    };
+    // Used names load (`r` is used, `spp` and `res` have defaults but are referenced nowhere
+    // in this scene, as in Mitsuba, where a default marks nothing as used).
+    assert!(xml_opts(&text, &root(), &lo(&[("r", "0.5")]), &Options::default()).is_ok());
+    let e = xml_opts(&text, &root(), &lo(&[("r", "0.5"), ("q", "1")]), &Options::default()).err().unwrap().to_string();
+    assert!(e.contains("-D `q` is not a parameter of this scene") && e.contains("its parameters are: `r`"), "{e}");
+    let used =
+        wrap(r#"<default name="spp" value="4"/><shape type="sphere"><float name="radius" value="$spp"/></shape>"#);
+    let e = xml_opts(&used, &root(), &lo(&[("spq", "4")]), &Options::default()).err().unwrap().to_string();
+    assert!(e.contains("`spq`") && e.contains("did you mean `spp`"), "{e}");
+    let toml = root().join("scenes/06-fresnel-glass.toml");
+    let e = caustic::scene::load_scene(&toml, &lo(&[("spp", "4")])).err().unwrap().to_string();
+    assert!(e.contains("06-fresnel-glass.toml") && e.contains("TOML scenes have none"), "{e}");
+}

@@ -80,9 +80,52 @@ fn load_mitsuba_text(
     for (k, v) in &options.defines {
         cx.defines.insert(k.clone(), v.clone());
     }
+    check_defines_used(&root, &srcs, options)?;
     let mut desc = cx.build(&root)?;
     desc.warnings = cx.warnings;
     Ok(desc)
+}
+
+/// A `-D name=value` that no `$name` of the scene (its includes too) refers to is an error
+/// listing the scene's parameters, as Mitsuba refuses "unused parameters": a misspelt name would
+/// otherwise render with the default without a word.
+fn check_defines_used(root: &El, srcs: &[Src], options: &LoadOptions) -> Result<(), SceneError> {
+    if options.defines.is_empty() {
+        return Ok(());
+    }
+    let mut referenced: Vec<String> = Vec::new();
+    let mut stack = vec![root];
+    while let Some(el) = stack.pop() {
+        for a in &el.attrs {
+            let mut rest = a.value.as_str();
+            while let Some(i) = rest.find('$') {
+                let after = &rest[i + 1..];
+                let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
+                referenced.push(after[..len].to_string());
+                rest = &after[len..];
+            }
+        }
+        stack.extend(el.children.iter());
+    }
+    referenced.sort();
+    referenced.dedup();
+    let unused: Vec<&str> =
+        options.defines.iter().map(|(k, _)| k.as_str()).filter(|k| !referenced.iter().any(|r| r == k)).collect();
+    if unused.is_empty() {
+        return Ok(());
+    }
+    let list = |v: &[&str]| v.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
+    let known: Vec<&str> = referenced.iter().map(String::as_str).filter(|r| !r.is_empty()).collect();
+    let hint = unused
+        .iter()
+        .filter_map(|u| props::closest(u, known.iter().copied()).map(|k| format!(" (did you mean `{k}` for `{u}`?)")))
+        .collect::<String>();
+    let message = format!(
+        "-D {} is not a parameter of this scene{hint}; its parameters are: {}",
+        list(&unused),
+        if known.is_empty() { "none".to_string() } else { list(&known) }
+    );
+    Err(SceneError::File { path: srcs[0].name.clone(), message })
 }
 
 /// Mitsuba's `max_depth` and the element that gave it.
