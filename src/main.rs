@@ -268,6 +268,13 @@ impl RenderArgs {
             define,
             strict,
         } = self;
+        if let (Some(spp), Some(n)) = (options.spp, iterations)
+            && spp != n
+        {
+            anyhow::bail!(
+                "--spp {spp} and --iterations {n} ask for different sample counts (for sppm one iteration is one sample per pixel): give one of them"
+            );
+        }
         Ok(RenderOptions {
             scene,
             output,

@@ -167,6 +167,37 @@ pub struct PhotonOptions {
     pub initial_radius: Option<f32>,
 }
 
+impl Options {
+    /// One warning for each option given that the `kind` integrator does not read, naming the
+    /// integrators that do (an option that does nothing should say so, not be accepted
+    /// silently).
+    pub fn unused_by(&self, kind: IntegratorKind) -> Vec<String> {
+        use IntegratorKind::{Photon, Sppm, Whitted};
+        let p = &self.photon;
+        let given: [(&str, bool, &[IntegratorKind]); 11] = [
+            ("--adc-bailout", self.adc_bailout.is_some(), &[Whitted]),
+            ("--light-samples", self.light_samples.is_some(), &[Whitted, Photon]),
+            ("--photons", p.photons.is_some(), &[Photon]),
+            ("--caustic-photons", p.caustic_photons.is_some(), &[Photon]),
+            ("--gather", p.gather.is_some(), &[Photon]),
+            ("--gather-k", p.gather_k.is_some(), &[Photon]),
+            ("--irradiance-cache", p.irradiance_cache.is_some(), &[Photon]),
+            ("--cache-rays", p.cache_rays.is_some(), &[Photon]),
+            ("--max-radius", p.max_radius.is_some(), &[Photon]),
+            ("--photons-per-iter", p.photons_per_iter.is_some(), &[Sppm]),
+            ("--initial-radius", p.initial_radius.is_some(), &[Sppm]),
+        ];
+        given
+            .iter()
+            .filter(|(_, set, users)| *set && !users.contains(&kind))
+            .map(|(flag, _, users)| {
+                let names: Vec<&str> = users.iter().map(|k| k.name()).collect();
+                format!("{flag} does nothing with the {} integrator (it is read by: {})", kind.name(), names.join(", "))
+            })
+            .collect()
+    }
+}
+
 /// A number from 0 to 1, with -0 made 0 (a render's identity spells the value out).
 pub fn unit_interval(v: f32) -> Result<f32, String> {
     if (0.0..=1.0).contains(&v) { Ok(v + 0.0) } else { Err(format!("expected a number from 0 to 1, found {v}")) }
@@ -187,6 +218,28 @@ fn deserialize_unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f
 mod tests {
     use super::*;
     use clap::ValueEnum;
+
+    /// Issue 30, item 6: `--photons 1000 --integrator sppm` and `--initial-radius` with the path
+    /// tracer were accepted without a word.
+    #[test]
+    fn options_an_integrator_does_not_read_are_named() {
+        let o = Options {
+            photon: PhotonOptions { photons: Some(1000), initial_radius: Some(0.1), ..Default::default() },
+            light_samples: Some(4),
+            ..Default::default()
+        };
+        let sppm = o.unused_by(IntegratorKind::Sppm);
+        assert_eq!(sppm.len(), 2, "{sppm:?}");
+        assert!(sppm[0].contains("--light-samples") && sppm[0].contains("whitted, photon"), "{sppm:?}");
+        assert!(
+            sppm[1].contains("--photons does nothing with the sppm integrator (it is read by: photon)"),
+            "{sppm:?}"
+        );
+        let path = o.unused_by(IntegratorKind::Path);
+        assert!(path.iter().any(|w| w.contains("--initial-radius") && w.contains("sppm")), "{path:?}");
+        assert_eq!(o.unused_by(IntegratorKind::Photon).len(), 1, "only --initial-radius");
+        assert!(Options::default().unused_by(IntegratorKind::Light).is_empty());
+    }
 
     #[test]
     fn integrators_are_listed_once_and_named_alike_everywhere() {

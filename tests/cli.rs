@@ -306,3 +306,44 @@ fn film_and_sppm_beyond_max_memory_are_refused() {
         assert!(err.contains("MiB") && err.contains("--max-memory"), "{args:?}: {err}");
     }
 }
+
+/// Issue 30, item 6: `--iterations 5 --spp 9` rendered 9 without saying which won, and options
+/// the integrator does not read were accepted silently. Now the conflict is an error naming both
+/// and an unread option a warning naming the integrators that read it.
+#[test]
+fn conflicting_and_unread_options_are_said() {
+    let dir = std::env::temp_dir().join(format!("caustic-cli-options-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = caustic()
+        .args(["render", "--iterations", "5", "--spp", "9", "-o"])
+        .arg(dir.join("a.png"))
+        .arg(scene("13-cornell-caustics.toml"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--spp 9") && err.contains("--iterations 5"), "{err}");
+    assert!(!dir.join("a.png").exists());
+    let out = caustic()
+        .args([
+            "render",
+            "--integrator",
+            "sppm",
+            "--photons",
+            "1000",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+            "-o",
+        ])
+        .arg(dir.join("b.png"))
+        .arg(scene("13-cornell-caustics.toml"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && err.contains("warning: --photons does nothing with the sppm integrator"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -242,6 +242,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         for w in &loaded.warnings {
             eprintln!("warning: {w}");
         }
+        for w in opts.overrides.unused_by(loaded.integrator.kind) {
+            eprintln!("warning: {w}");
+        }
         let info = &loaded.info;
         for m in &info.meshes {
             let (lo, hi) = (m.bounds.min, m.bounds.max);
