@@ -383,17 +383,42 @@ fn main() -> ExitCode {
                 )
             );
             if stopped && TERMINATED.load(Ordering::SeqCst) {
-                eprintln!("terminated (SIGTERM): {e:#}");
+                eprintln!("terminated (SIGTERM): {}", describe(&e));
                 return ExitCode::from(143);
             }
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", describe(&e));
             if stopped { ExitCode::from(130) } else { ExitCode::FAILURE }
         }
     }
 }
 
+/// An error with its chain of causes, each said once: a cause that the message before it
+/// already quotes (a library error that names its source) is not repeated.
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            text = format!("{text}: {c}");
+        }
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
+    /// Issue 30, item 8: a missing scene file said `No such file or directory (os error 2)`
+    /// twice.
+    #[test]
+    fn causes_are_said_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory (os error 2)");
+        let e = anyhow::Error::new(caustic::scene::SceneError::Read { path: "a.toml".into(), source: io });
+        let text = super::describe(&e);
+        assert_eq!(text.matches("No such file").count(), 1, "{text}");
+        let e = anyhow::anyhow!("inner cause").context("outer");
+        assert_eq!(super::describe(&e), "outer: inner cause");
+    }
+
     use super::*;
 
     #[test]
