@@ -347,3 +347,35 @@ fn conflicting_and_unread_options_are_said() {
     assert!(out.status.success() && err.contains("warning: --photons does nothing with the sppm integrator"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 30, item 2: an SPPM render stopped with Ctrl-C said `sppm: 7 iterations in 3 passes` and
+/// then `took 12 iterations ... 12 spp` (the image holds 12): the driver did not count the
+/// iterations an interrupted pass had finished and kept. Now the counts agree with the image.
+#[test]
+fn an_interrupted_sppm_render_reports_one_iteration_count() {
+    let dir = common::scratch("cli-int-sppm");
+    let png = dir.join("s.png");
+    let child = caustic()
+        .arg("render")
+        .arg(scene("13-cornell-caustics.toml"))
+        .args(["--integrator", "sppm", "--width", "160", "--height", "160", "--spp", "1000000", "-o"])
+        .arg(&png)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(2500));
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).replace('\r', "\n");
+    let number_before = |text: &str, word: &str| -> Option<u64> {
+        let i = text.find(word)?;
+        text[..i].split_whitespace().last()?.parse().ok()
+    };
+    let driver = err.lines().find_map(|l| l.strip_prefix("sppm: ").and_then(|r| number_before(r, " iterations in")));
+    let took = err
+        .lines()
+        .find_map(|l| l.strip_prefix("sppm took ").and_then(|r| number_before(&format!(" {r}"), " iterations of")));
+    let wrote = err.lines().find_map(|l| number_before(l, " samples per pixel"));
+    assert!(driver.is_some() && driver == took && took == wrote, "{driver:?} {took:?} {wrote:?}\n{err}");
+}

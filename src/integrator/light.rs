@@ -118,7 +118,7 @@ impl LightTracer {
             });
             if interrupted.load(Ordering::Relaxed) {
                 splats.clear();
-                return PassOutcome::Interrupted;
+                return PassOutcome::Interrupted { taken: 0 };
             }
             splats.drain_into(&mut pass);
             batch = batch_end;

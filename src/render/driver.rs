@@ -15,8 +15,9 @@ use std::time::{Duration, Instant};
 pub enum PassOutcome {
     /// Every sample of the range was taken.
     Complete,
-    /// The cancel flag stopped it part-way; its samples may be partly taken.
-    Interrupted,
+    /// The cancel flag stopped it part-way: the first `taken` samples of the range were taken at
+    /// every pixel (an SPPM pass keeps the iterations it finished), the rest partly or not.
+    Interrupted { taken: u32 },
 }
 
 /// Runs a render's passes and keeps its statistics; shared by reference with the passes.
@@ -117,7 +118,9 @@ impl<'a> Driver<'a> {
             }
             let n = pass_size.min(settings.spp - done);
             let pass_start = Instant::now();
-            if pass(self, done..done + n) == PassOutcome::Interrupted {
+            if let PassOutcome::Interrupted { taken } = pass(self, done..done + n) {
+                // What the pass kept counts, so the summary and the image agree.
+                done += taken.min(n);
                 interrupted = true;
                 break;
             }

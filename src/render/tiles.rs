@@ -68,7 +68,7 @@ fn render_pass<I: RayIntegrator>(
         let bad = render_tile(scene, integrator, driver.settings, tile, range.clone(), &mut stats);
         driver.record(&stats, bad, tile.width as u64 * tile.height as u64 * range.len() as u64);
     });
-    if interrupted.into_inner() { PassOutcome::Interrupted } else { PassOutcome::Complete }
+    if interrupted.into_inner() { PassOutcome::Interrupted { taken: 0 } } else { PassOutcome::Complete }
 }
 
 /// Renders the samples of every pixel of `tile` from the pixel's next index up to `range.end`

@@ -192,9 +192,10 @@ impl Sppm {
         let mut stats = driver.run(
             |driver, range| {
                 let mut state = state.borrow_mut();
+                let start = range.start;
                 for it in range {
                     if driver.cancelled() || !self.iteration(scene, driver, &mut state, it) {
-                        return PassOutcome::Interrupted;
+                        return PassOutcome::Interrupted { taken: it - start };
                     }
                     iterations.set(iterations.get() + 1);
                 }
