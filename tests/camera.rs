@@ -266,7 +266,7 @@ fn scene_keys_are_checked_with_their_place() {
         ("filter = { type = \"mitchell\", B = 7 }", "", "normalised"),
         ("crop = { x = 30, y = 0, width = 20, height = 10 }", "", "inside the 40 x 30 image"),
         ("crop = { width = 0, height = 10 }", "", "non-empty"),
-        ("crop = { width = 5, height = 5, z = 1 }", "", "unknown field `z`"),
+        ("crop = { width = 5, height = 5, z = 1 }", "", "unknown key `z`"),
         ("", "projection = \"fisheye\"", "unknown projection `fisheye`"),
         ("", "projection = \"orthographic\"", "needs one of `view_width` or `view_height`"),
         ("", "projection = \"orthographic\"\nview_width = 2\nfov = 30", "`fov` does not apply"),

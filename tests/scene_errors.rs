@@ -20,7 +20,12 @@ fn cases() -> Vec<(&'static str, String, &'static str, usize)> {
         ("syntax error", with_cam("[render\nwidth = 3\n"), "", 4),
         ("unknown section", with_cam("[rendr]\nwidth = 3\n"), "unknown section `rendr`", 4),
         ("unknown key", with_cam("[render]\nwidht = 3\n"), "widht", 5),
-        ("wrong type", with_cam("[render]\nwidth = \"big\"\n"), "invalid type", 5),
+        (
+            "wrong type",
+            with_cam("[render]\nwidth = \"big\"\n"),
+            "expected a whole number of 0 or more, found the text \"big\"",
+            5,
+        ),
         ("negative integer", with_cam("[render]\nheight = -4\n"), "-4", 5),
         ("adc_bailout above 1", with_cam("[render]\nmax_depth = 4\nadc_bailout = 2\n"), "from 0 to 1", 6),
         ("NaN colour", with_cam("[render]\nbackground = [nan, 0, 0]\n"), "finite", 5),

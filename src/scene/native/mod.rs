@@ -101,7 +101,7 @@ impl<'a> Cx<'a> {
 
     fn toml(&self, e: toml::de::Error) -> SceneError {
         let span = e.span().unwrap_or(0..0);
-        let mut message = e.message().trim_end().to_string();
+        let mut message = plain_words(e.message().trim_end());
         if message.contains("wanted exactly 1 element") {
             message.push_str(" (each transform entry holds one operation: translate, rotate or scale)");
         }
@@ -210,5 +210,73 @@ impl<'a> Cx<'a> {
                 ),
             )
         })
+    }
+}
+
+/// A serde or TOML message in the scene's words rather than Rust's: `invalid type: string "16",
+/// expected u32` becomes `expected a whole number, found the text "16"`, and unknown or missing
+/// names are all called keys (serde says field, variant or key depending on where they are).
+fn plain_words(message: &str) -> String {
+    let kind = |rust: &str| -> String {
+        match rust.trim() {
+            "u8" | "u16" | "u32" | "u64" | "usize" => "a whole number of 0 or more".into(),
+            "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number".into(),
+            "f32" | "f64" => "a number".into(),
+            "a boolean" | "bool" => "true or false".into(),
+            "a sequence" => "a list".into(),
+            "a map" => "a table".into(),
+            other => other.to_string(),
+        }
+    };
+    let found = |serde: &str| -> String {
+        let serde = serde.trim();
+        if let Some(text) = serde.strip_prefix("string ") {
+            return format!("the text {text}");
+        }
+        for prefix in ["integer ", "floating point ", "boolean "] {
+            if let Some(v) = serde.strip_prefix(prefix) {
+                return format!("`{}`", v.trim_matches('`'));
+            }
+        }
+        match serde {
+            "sequence" => "a list".into(),
+            "map" => "a table".into(),
+            other => other.to_string(),
+        }
+    };
+    for prefix in ["invalid type: ", "invalid value: "] {
+        if let Some(rest) = message.strip_prefix(prefix)
+            && let Some((what, expected)) = rest.split_once(", expected ")
+        {
+            return format!("expected {}, found {}", kind(expected), found(what));
+        }
+    }
+    message.replacen("unknown field", "unknown key", 1).replacen("unknown variant", "unknown value", 1).replacen(
+        "missing field",
+        "missing key",
+        1,
+    )
+}
+
+#[cfg(test)]
+mod message_tests {
+    use super::plain_words;
+
+    /// Issue 30, item 8: Rust's type names and serde's three words for an unknown name.
+    #[test]
+    fn messages_use_the_scenes_words() {
+        assert_eq!(
+            plain_words(r#"invalid type: string "16", expected u32"#),
+            r#"expected a whole number of 0 or more, found the text "16""#
+        );
+        assert_eq!(plain_words("invalid type: integer `3`, expected a boolean"), "expected true or false, found `3`");
+        assert_eq!(
+            plain_words(r#"invalid type: string "x", expected f64"#),
+            r#"expected a number, found the text "x""#
+        );
+        assert_eq!(plain_words("invalid type: map, expected a sequence"), "expected a list, found a table");
+        assert!(plain_words("unknown field `spq`, expected one of `spp`").starts_with("unknown key `spq`"));
+        assert!(plain_words("unknown variant `pth`, expected one of `path`").starts_with("unknown value `pth`"));
+        assert_eq!(plain_words("missing field `type`"), "missing key `type`");
     }
 }
