@@ -199,7 +199,7 @@ impl Materials {
         let m = h.material;
         // The common case: a plain untextured material, whose lobes were made once. The BSDF
         // is built around a reference to them here, field by field (moving a `LobeSet` through
-        // a function result copies all 248 bytes of its largest variant).
+        // a function result copies the whole of its largest variant, a few hundred bytes).
         if let Some(c) = &self.cached[m as usize] {
             let Some(outward) = self.outward(m, front, false) else {
                 return Bsdf::new(frame_for(h, &Lobes::default()), h.ng, front, Lobes::default());
