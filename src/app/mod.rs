@@ -225,7 +225,10 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         // budget before reading it, and the load stops at the first that would not fit.
         let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
         let files = FileBudget::new(limit);
+        // The summary reports every phase, so its total is the wall time a user measures.
+        let started = std::time::Instant::now();
         let loaded = prepare(load_scene_within(&opts.scene, &opts.load, &files)?, &opts.overrides)?;
+        let loaded_at = started.elapsed();
         let footprint = files.footprint();
         if footprint.total() > 0 {
             log(
@@ -367,9 +370,11 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             );
         }
         let early = || AppError::InterruptedEarly { path: output.display().to_string(), existed: output.exists() };
+        let prepare_from = started.elapsed();
         let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, cancel) else {
             return Err(early());
         };
+        let prepared = started.elapsed() - prepare_from;
         if let Integrator::Photon(pm) = &integrator {
             let s = &pm.stats;
             log(opts.quiet, format_args!(
@@ -412,13 +417,22 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         if stats.nonfinite_samples > 0 {
             eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
         }
+        // Preparation: photon maps and their irradiance cache, SPPM's and the light tracer's
+        // set-up; nothing for the other integrators.
+        let preparation = if prepared.as_secs_f64() >= 0.005 {
+            format!(", {} {:.2} s", integrator.preparation_name(), prepared.as_secs_f64())
+        } else {
+            String::new()
+        };
         log(
             opts.quiet,
             format_args!(
-                "rendered {}x{} at {} spp in {:.2} s: {} rays ({} shadow), {:.2} Mrays/s -> {}",
+                "rendered {}x{} at {} spp in {:.2} s (load {:.2} s{preparation}, render {:.2} s): {} rays ({} shadow), {:.2} Mrays/s -> {}",
                 settings.width,
                 settings.height,
                 stats.samples_per_pixel,
+                started.elapsed().as_secs_f64(),
+                loaded_at.as_secs_f64(),
                 stats.wall.as_secs_f64(),
                 stats.rays.total(),
                 stats.rays.shadow_rays,

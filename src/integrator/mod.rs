@@ -39,6 +39,14 @@ pub enum Integrator {
 pub struct Cancelled;
 
 impl Integrator {
+    /// What making this integrator prepared, for the summary's list of phases.
+    pub fn preparation_name(&self) -> &'static str {
+        match self {
+            Integrator::Photon(_) => "photon maps",
+            Integrator::Whitted(_) | Integrator::Path(_) | Integrator::Sppm(_) | Integrator::Light(_) => "set-up",
+        }
+    }
+
     /// Makes the integrator `desc` asks for (photon maps are traced and built here, with their
     /// progress shown when `settings.progress`); `Err(Cancelled)` soon after `cancel` is set.
     pub fn new(
