@@ -117,7 +117,9 @@ struct RenderArgs {
     /// [default: half of the machine's memory].
     #[arg(long, value_name = "MIB")]
     max_memory: Option<u64>,
-    /// Stop starting new passes after this many seconds and write the image so far.
+    /// Stop starting new passes this many seconds after the scene started loading (loading and
+    /// preparation such as photon maps count; at least one pass is rendered) and write the image
+    /// so far.
     #[arg(long, value_name = "SECONDS")]
     time: Option<f64>,
     /// Rewrite the output image every this many seconds during the render.

@@ -404,3 +404,29 @@ fn the_summary_time_is_the_whole_wall_time() {
     // The process's own start-up and exit are all that is not counted.
     assert!((total - wall).abs() <= 0.05 * wall + 0.05, "summary says {total} s, the run took {wall:.2} s: {line}");
 }
+
+/// Issue 30, item 1: `--integrator photon --time 3` ran for 4.46 s: the budget started after
+/// the photon maps. It now counts from the start of the load: the run ends within a pass of the
+/// budget, or of the preparation when that alone takes longer (at least one pass is rendered).
+#[test]
+fn the_time_budget_includes_the_photon_maps() {
+    let dir = common::scratch("cli-time-photon");
+    let budget: f64 = 2.0;
+    let start = Instant::now();
+    let out = caustic()
+        .arg("render")
+        .arg(scene("13-cornell-caustics.toml"))
+        .args(["--integrator", "photon", "--width", "160", "--height", "160", "--time", "2", "-o"])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    let wall = start.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&out.stderr).replace('\r', "\n");
+    assert!(out.status.success(), "{err}");
+    let line = err.lines().find(|l| l.starts_with("rendered ")).expect("a summary line");
+    let seconds = |key: &str| -> f64 {
+        line.split(key).nth(1).and_then(|r| r.split(" s").next()).and_then(|t| t.trim().parse().ok()).expect(line)
+    };
+    let before_render = seconds("(load ") + seconds("photon maps ");
+    assert!(wall <= budget.max(before_render) + 1.0, "the run took {wall:.2} s for a {budget} s budget: {line}");
+}

@@ -388,7 +388,13 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             Some(job) => job.prior.clone(),
             None => Film::new(settings.width, settings.height, settings.layers),
         };
-        let out = integrator.render_from(&loaded.scene, &settings, &control, film);
+        // `--time` counts from the start of the load, so it bounds the whole run: what is left
+        // after loading and preparation goes to the render (at least one pass is rendered).
+        let mut render_settings = settings.clone();
+        if let Some(limit) = opts.time_limit {
+            render_settings.time_limit = Some(limit.saturating_sub(started.elapsed()).max(Duration::from_millis(1)));
+        }
+        let out = integrator.render_from(&loaded.scene, &render_settings, &control, film);
         let stats = out.stats;
         if let Integrator::Sppm(sppm) = &integrator {
             log(
