@@ -180,6 +180,21 @@ fn bad_spectra_and_missing_files_are_clear_errors() {
         .unwrap()
         .to_string();
     assert!(e.contains("has no attribute `vertex_normal` (it has: vertex_color, face_weight)"), "{e}");
+    // An SDF grid has no mesh attributes either (its voxels would be looked up as if top-level).
+    let vol = mesh.parent().unwrap().parent().unwrap().join("volumes/torus.vol");
+    std::fs::write(
+        &path,
+        format!(
+            r#"<scene version="3.0.0"><shape type="sdfgrid"><string name="filename" value="{}"/><string name="normals" value="analytic"/><bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" value="vertex_color"/></texture></bsdf></shape></scene>"#,
+            vol.display()
+        ),
+    )
+    .unwrap();
+    let e = load_mitsuba(&path, &LoadOptions::default(), &caustic::scene::FileBudget::unlimited())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("a `sdfgrid` shape has no mesh attributes"), "{e}");
     for (body, want) in [
         (r#"<spectrum name="reflectance" value="500:0.5, 400:0.2"/>"#, "wavelengths must increase"),
         (r#"<spectrum name="reflectance" value="500:0.5, 600"/>"#, "wavelength:value pairs"),

@@ -294,14 +294,6 @@ impl<'a> Cx<'a> {
             }
             return self.finish(&p);
         };
-        // A grid's voxels, in a group of their own placed by the grid's transform.
-        if let Some((voxels, to_world)) = sdf_out {
-            let group = b.geometry.begin_group().map_err(|e| self.err(el, e))?;
-            b.geometry.add_object(voxels, material);
-            b.geometry.end_group();
-            b.geometry.add_instance(group, &to_world).map_err(|e| e.placed(|m| self.err(el, m)))?;
-            return self.finish(&p);
-        }
         let attributes = b.geometry.mesh_attributes_read(material);
         if !attributes.is_empty() {
             let names = attributes.join("`, `");
@@ -324,6 +316,14 @@ impl<'a> Cx<'a> {
                     return Err(self.err(el, format!("mesh `{mesh_name}` has no attribute `{want}` (it has: {have})")));
                 }
             }
+        }
+        // A grid's voxels, in a group of their own placed by the grid's transform.
+        if let Some((voxels, to_world)) = sdf_out {
+            let group = b.geometry.begin_group().map_err(|e| self.err(el, e))?;
+            b.geometry.add_object(voxels, material);
+            b.geometry.end_group();
+            b.geometry.add_instance(group, &to_world).map_err(|e| e.placed(|m| self.err(el, m)))?;
+            return self.finish(&p);
         }
         let m = *b.geometry.material(material);
         if let Some((radiance, texture)) = radiance {
