@@ -200,10 +200,9 @@ impl RenderArgs {
             gather_k,
             irradiance_cache,
             cache_rays,
-            // Scene files only (no flag): never given here.
-            caustic_k: _,
+            caustic_k,
             max_radius,
-            caustic_radius: _,
+            caustic_radius,
             photons_per_iter,
             initial_radius,
         } = photon;
@@ -231,6 +230,8 @@ impl RenderArgs {
         opt("irradiance-cache", irradiance_cache.map(|v| format!("{v:?}")));
         opt("cache-rays", cache_rays.map(|v| v.to_string()));
         opt("max-radius", max_radius.map(|v| format!("{v:?}")));
+        opt("caustic-k", caustic_k.map(|v| v.to_string()));
+        opt("caustic-radius", caustic_radius.map(|v| format!("{v:?}")));
         opt("iterations", iterations.map(|v| v.to_string()));
         opt("photons-per-iter", photons_per_iter.map(|v| v.to_string()));
         opt("initial-radius", initial_radius.map(|v| format!("{v:?}")));

@@ -150,14 +150,14 @@ pub struct PhotonOptions {
     /// Final-gather rays per irradiance-cache record [default: 512].
     #[arg(long, value_name = "N")]
     pub cache_rays: Option<u32>,
-    /// Photons per caustic estimate (scene files only).
-    #[arg(skip)]
+    /// Photons per caustic estimate [default: 64].
+    #[arg(long, value_name = "K")]
     pub caustic_k: Option<usize>,
     /// Largest radius of a radiance estimate, in scene units [default: 5% of the scene's size].
     #[arg(long, value_name = "R")]
     pub max_radius: Option<f32>,
-    /// Largest radius of a caustic estimate (scene files only).
-    #[arg(skip)]
+    /// Largest radius of a caustic estimate, in scene units [default: 2% of the scene's size].
+    #[arg(long, value_name = "R")]
     pub caustic_radius: Option<f32>,
     /// SPPM photons per iteration [default: one per pixel].
     #[arg(long, value_name = "N")]
@@ -174,7 +174,7 @@ impl Options {
     pub fn unused_by(&self, kind: IntegratorKind) -> Vec<String> {
         use IntegratorKind::{Photon, Sppm, Whitted};
         let p = &self.photon;
-        let given: [(&str, bool, &[IntegratorKind]); 11] = [
+        let given: [(&str, bool, &[IntegratorKind]); 13] = [
             ("--adc-bailout", self.adc_bailout.is_some(), &[Whitted]),
             ("--light-samples", self.light_samples.is_some(), &[Whitted, Photon]),
             ("--photons", p.photons.is_some(), &[Photon]),
@@ -184,6 +184,8 @@ impl Options {
             ("--irradiance-cache", p.irradiance_cache.is_some(), &[Photon]),
             ("--cache-rays", p.cache_rays.is_some(), &[Photon]),
             ("--max-radius", p.max_radius.is_some(), &[Photon]),
+            ("--caustic-k", p.caustic_k.is_some(), &[Photon]),
+            ("--caustic-radius", p.caustic_radius.is_some(), &[Photon]),
             ("--photons-per-iter", p.photons_per_iter.is_some(), &[Sppm]),
             ("--initial-radius", p.initial_radius.is_some(), &[Sppm]),
         ];

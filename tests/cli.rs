@@ -45,6 +45,8 @@ fn help_documents_every_option() {
         "--quiet",
         "--no-antialias",
         "--light-samples",
+        "--caustic-k",
+        "--caustic-radius",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }
