@@ -298,6 +298,15 @@ pub fn reflect_local(w: Vec3) -> Vec3 {
     Vec3::new(-w.x, -w.y, w.z)
 }
 
+/// The half vector of a pair at an interface of relative index `eta`, turned to the +z side:
+/// wo + wi for reflection, the generalised wo + eta wi for refraction (rough glass, principled).
+#[inline]
+pub fn half_vector(wo: Vec3, wi: Vec3, eta: f32, reflect: bool) -> Vec3 {
+    let h = if reflect { wo + wi } else { wo + wi * eta };
+    let h = h.normalize_or_zero();
+    if h.z < 0.0 { -h } else { h }
+}
+
 /// The mirror direction of `w` about the facet normal `m`.
 #[inline]
 pub fn reflect_about(w: Vec3, m: Vec3) -> Vec3 {

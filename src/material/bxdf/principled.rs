@@ -17,7 +17,7 @@
 //! only). Conventions as in `bxdf`: `wo` towards the viewer on the +z side, `f` without the
 //! cosine.
 
-use super::{BxdfSample, Lobe, LobeFlags, Transport, reflect_about};
+use super::{BxdfSample, Lobe, LobeFlags, Transport, half_vector, reflect_about};
 use crate::material::fresnel::{fresnel_dielectric, refract};
 use crate::material::microfacet::Microfacet;
 use crate::math::{Color, Vec2, Vec3, luminance};
@@ -162,14 +162,6 @@ pub struct PrincipledSpecular {
 }
 
 impl PrincipledSpecular {
-    /// The half vector of a pair on the +z side (as for rough glass).
-    #[inline]
-    fn half(&self, wo: Vec3, wi: Vec3, reflect: bool) -> Vec3 {
-        let h = if reflect { wo + wi } else { wo + wi * self.eta };
-        let h = h.normalize_or_zero();
-        if h.z < 0.0 { -h } else { h }
-    }
-
     /// The reflectance of a facet seen at cosine `cos` whose dielectric reflectance is `fd`.
     #[inline]
     fn reflectance(&self, fd: f32, cos: f32) -> Color {
@@ -247,7 +239,7 @@ impl Lobe for PrincipledSpecular {
         if !reflect && !(self.trans > 0.0) {
             return Color::ZERO;
         }
-        let h = self.half(wo, wi, reflect);
+        let h = half_vector(wo, wi, self.eta, reflect);
         let d = self.mf.d(h);
         if !(d > 0.0) {
             return Color::ZERO;
@@ -277,7 +269,7 @@ impl Lobe for PrincipledSpecular {
             return 0.0;
         }
         let reflect = wi.z > 0.0;
-        let h = self.half(wo, wi, reflect);
+        let h = half_vector(wo, wi, self.eta, reflect);
         let (oh, ih) = (wo.dot(h), wi.dot(h));
         if !(oh > 0.0) || ih * wi.z <= 0.0 {
             return 0.0;

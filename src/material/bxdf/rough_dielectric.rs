@@ -6,7 +6,7 @@
 //! over the viewer's. Refracted radiance is scaled by 1 / eta^2 in radiance transport, not for
 //! photons (importance).
 
-use super::{BxdfSample, Lobe, LobeFlags, Transport, colour_weight, reflect_about};
+use super::{BxdfSample, Lobe, LobeFlags, Transport, colour_weight, half_vector, reflect_about};
 use crate::material::fresnel::{fresnel_dielectric, refract};
 use crate::material::microfacet::Microfacet;
 use crate::math::{Color, Vec2, Vec3};
@@ -18,17 +18,6 @@ pub struct RoughDielectric {
     /// Mitsuba's `specular_reflectance` and `specular_transmittance`.
     pub r: Color,
     pub t: Color,
-}
-
-impl RoughDielectric {
-    /// The half vector of a pair, turned to the +z side: wo + wi for reflection, the generalised
-    /// wo + eta wi for refraction.
-    #[inline]
-    fn half(&self, wo: Vec3, wi: Vec3, reflect: bool) -> Vec3 {
-        let h = if reflect { wo + wi } else { wo + wi * self.eta };
-        let h = h.normalize_or_zero();
-        if h.z < 0.0 { -h } else { h }
-    }
 }
 
 impl Lobe for RoughDielectric {
@@ -69,7 +58,7 @@ impl Lobe for RoughDielectric {
             return Color::ZERO;
         }
         let reflect = wi.z > 0.0;
-        let h = self.half(wo, wi, reflect);
+        let h = half_vector(wo, wi, self.eta, reflect);
         let d = self.mf.d(h);
         if !(d > 0.0) {
             return Color::ZERO;
@@ -98,7 +87,7 @@ impl Lobe for RoughDielectric {
             return 0.0;
         }
         let reflect = wi.z > 0.0;
-        let h = self.half(wo, wi, reflect);
+        let h = half_vector(wo, wi, self.eta, reflect);
         let (oh, ih) = (wo.dot(h), wi.dot(h));
         if !(oh > 0.0) || ih * wi.z <= 0.0 {
             return 0.0;

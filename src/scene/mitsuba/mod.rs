@@ -67,14 +67,12 @@ fn load_mitsuba_text(
 ) -> Result<SceneDescription, SceneError> {
     let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), resolver: Resolver::for_scene(base) }];
     let root = xml::parse_source(&mut srcs, 0, 0, files)?;
-    let resolver = srcs[0].resolver.clone();
     let mut cx = Cx {
         srcs: &srcs,
         defines: HashMap::new(),
         ids: HashMap::new(),
         warnings: Vec::new(),
         strict: options.strict,
-        resolver,
         files,
     };
     for (k, v) in &options.defines {
@@ -98,11 +96,9 @@ fn check_defines_used(root: &El, srcs: &[Src], options: &LoadOptions) -> Result<
     while let Some(el) = stack.pop() {
         for a in &el.attrs {
             let mut rest = a.value.as_str();
-            while let Some(i) = rest.find('$') {
-                let after = &rest[i + 1..];
-                let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
-                referenced.push(after[..len].to_string());
-                rest = &after[len..];
+            while let Some((_, key, after)) = props::next_parameter(rest) {
+                referenced.push(key.to_string());
+                rest = after;
             }
         }
         stack.extend(el.children.iter());

@@ -66,8 +66,6 @@ pub(super) struct Cx<'a> {
     pub ids: HashMap<String, &'a El>,
     pub warnings: Vec<String>,
     pub strict: bool,
-    /// Where relative file names are looked up (the scene file's resolver after parsing).
-    pub resolver: super::xml::Resolver,
     /// The hook every file is reported to before it is read (shared with the scene builder).
     pub files: &'a crate::scene::FileBudget,
 }
@@ -162,11 +160,8 @@ impl<'a> Cx<'a> {
         }
         let mut out = String::new();
         let mut rest = a.value.as_str();
-        while let Some(i) = rest.find('$') {
-            out.push_str(&rest[..i]);
-            let after = &rest[i + 1..];
-            let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
-            let key = &after[..len];
+        while let Some((before, key, after)) = next_parameter(rest) {
+            out.push_str(before);
             if key.is_empty() {
                 return Err(self.err_span(el, a.span.clone(), "`$` must be followed by a parameter name"));
             }
@@ -180,7 +175,7 @@ impl<'a> Cx<'a> {
                     ));
                 }
             }
-            rest = &after[len..];
+            rest = after;
         }
         out.push_str(rest);
         Ok(out)
@@ -190,10 +185,9 @@ impl<'a> Cx<'a> {
     /// in the scene file's `<path>` folders (newest first), then its folder. A name found
     /// nowhere is an error naming the folders searched.
     pub(super) fn resolve_file(&self, el: &El, name: &str) -> Result<std::path::PathBuf, SceneError> {
-        self.resolver
-            .resolve(name)
-            .filter(|p| p.is_file())
-            .ok_or_else(|| self.err(el, format!("file `{name}` not found (looked in {})", self.resolver.searched())))
+        self.srcs[0].resolver.resolve(name).filter(|p| p.is_file()).ok_or_else(|| {
+            self.err(el, format!("file `{name}` not found (looked in {})", self.srcs[0].resolver.searched()))
+        })
     }
 
     /// Collects `<default>`s (command-line values win) and object ids of the whole tree.
@@ -575,6 +569,15 @@ impl<'a> Cx<'a> {
             _ => Err(self.wrong_type(el, name, "a <float> or a <string> naming a material")),
         }
     }
+}
+
+/// The first `$name` reference in `text`: (the text before it, the name, the text after it);
+/// the name is empty for a `$` followed by no name character.
+pub(super) fn next_parameter(text: &str) -> Option<(&str, &str, &str)> {
+    let i = text.find('$')?;
+    let after = &text[i + 1..];
+    let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
+    Some((&text[..i], &after[..len], &after[len..]))
 }
 
 /// The name among `known` closest to `name` by edit distance, when it is close enough to be a
