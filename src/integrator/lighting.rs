@@ -115,7 +115,9 @@ pub fn light_sample(
     stats: &mut RayStats,
 ) -> Color {
     let Some(ls) = light.sample(hit.p, u, scene.textures()) else { return Color::ZERO };
-    let f = bsdf.f(wo, ls.wi, Transport::Radiance);
+    let mis = mis && !ls.delta;
+    let (f, bsdf_pdf) =
+        if mis { bsdf.eval(wo, ls.wi, Transport::Radiance) } else { (bsdf.f(wo, ls.wi, Transport::Radiance), 0.0) };
     if f == Color::ZERO {
         return Color::ZERO;
     }
@@ -124,8 +126,7 @@ pub fn light_sample(
     if !(visible > 0.0) {
         return Color::ZERO;
     }
-    let w =
-        if ls.delta || !mis { 1.0 } else { power_heuristic(ls.pdf * p_pick, bsdf.pdf(wo, ls.wi, Transport::Radiance)) };
+    let w = if mis { power_heuristic(ls.pdf * p_pick, bsdf_pdf) } else { 1.0 };
     f * ls.weight() * (cos * w * visible / p_pick)
 }
 

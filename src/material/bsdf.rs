@@ -39,6 +39,9 @@ pub struct BsdfSample {
 #[derive(Clone, Copy, Debug)]
 pub struct Lobes {
     lobes: [Bxdf; MAX_LOBES],
+    /// Each lobe's flags, kept beside it so that the loops over lobes need not dispatch on the
+    /// lobe's kind to learn whether it applies.
+    lobe_flags: [LobeFlags; MAX_LOBES],
     /// Sampling weight of each lobe for camera paths (luminance of its albedo).
     weights: [f32; MAX_LOBES],
     /// Sampling weight of each lobe for photons (its albedo averaged over the channels).
@@ -58,6 +61,7 @@ impl Default for Lobes {
         let none = Bxdf::Lambert(super::bxdf::Lambert { r: Color::ZERO });
         Lobes {
             lobes: [none; MAX_LOBES],
+            lobe_flags: [LobeFlags::NONE; MAX_LOBES],
             weights: [0.0; MAX_LOBES],
             photon_weights: [0.0; MAX_LOBES],
             total: 0.0,
@@ -80,12 +84,13 @@ impl Lobes {
         }
         let i = self.count as usize;
         self.lobes[i] = lobe;
+        self.lobe_flags[i] = lobe.flags();
         self.weights[i] = w;
         self.photon_weights[i] = lobe.mean_albedo().max(w * 1e-3);
         self.total += w;
         self.photon_total += self.photon_weights[i];
         self.count += 1;
-        self.flags |= lobe.flags();
+        self.flags |= self.lobe_flags[i];
         self.isotropic &= lobe.is_isotropic();
         self.directional |= lobe.directional_selection();
     }
@@ -272,19 +277,57 @@ impl<'a> Bsdf<'a> {
         self.lobes().iter().filter_map(Bxdf::lambert_albedo).sum()
     }
 
+    /// The lobes with their flags.
+    #[inline(always)]
+    fn lobes_with_flags(&self) -> impl Iterator<Item = (&Bxdf, LobeFlags)> {
+        let n = self.lobes.count as usize;
+        self.lobes.lobes[..n].iter().zip(self.lobes.lobe_flags[..n].iter().copied())
+    }
+
+    /// The kind of scattering that joins `wi` to the viewer: reflection when `wi` is on the
+    /// viewer's side of the geometric surface, transmission otherwise.
+    #[inline(always)]
+    fn kind(&self, wi: Vec3) -> LobeFlags {
+        if wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION }
+    }
+
     /// The BSDF's value for the pair (no cosine): the non-delta lobes of the kind the geometry
     /// gives (reflection when `wi` is on the viewer's side of the surface).
     #[inline]
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
-        let kind = if wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION };
+        let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let mut f = Color::ZERO;
-        for lobe in self.lobes() {
-            if lobe.flags().intersects(kind) && !lobe.flags().is_specular() {
+        for (lobe, flags) in self.lobes_with_flags() {
+            if flags.intersects(kind) && !flags.is_specular() {
                 f += lobe.f(wo_l, wi_l, mode);
             }
         }
         f * (self.opacity * self.perturbation(wi))
+    }
+
+    /// `f` and `pdf` of the pair at once (one change of frame, one pass over the lobes, and
+    /// each lobe's shared terms worked out once): what next-event estimation with multiple
+    /// importance sampling and mixture sampling both need.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Color, f32) {
+        let kind = self.kind(wi);
+        let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
+        let mut f = Color::ZERO;
+        let mut pdf = 0.0;
+        for ((lobe, flags), w) in self.lobes_with_flags().zip(&weights) {
+            if flags.intersects(kind) && !flags.is_specular() {
+                let (lf, lp) = lobe.eval(wo_l, wi_l, mode);
+                f += lf;
+                if total > 0.0 {
+                    pdf += w / total * lp;
+                }
+            }
+        }
+        let p = self.perturbation(wi);
+        let pdf = if total > 0.0 && p != 0.0 { pdf * self.opacity } else { 0.0 };
+        (f * (self.opacity * p), pdf)
     }
 
     /// Each lobe's probability of being chosen, for lobe weights `base` (camera or photon) seen
@@ -306,15 +349,15 @@ impl<'a> Bsdf<'a> {
     /// Density with which `sample` picks `wi` through its non-delta lobes.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
-        let kind = if wi.dot(self.ng) > 0.0 { LobeFlags::REFLECTION } else { LobeFlags::TRANSMISSION };
+        let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
         if !(total > 0.0) || self.perturbation(wi) == 0.0 {
             return 0.0;
         }
         let mut pdf = 0.0;
-        for (lobe, w) in self.lobes().iter().zip(&weights) {
-            if lobe.flags().intersects(kind) && !lobe.flags().is_specular() {
+        for ((lobe, flags), w) in self.lobes_with_flags().zip(&weights) {
+            if flags.intersects(kind) && !flags.is_specular() {
                 pdf += w / total * lobe.pdf(wo_l, wi_l, mode);
             }
         }
@@ -508,11 +551,16 @@ impl<'a> Bsdf<'a> {
         if s.flags.is_specular() {
             return Some(BsdfSample { wi, weight: s.weight / p_lobe, pdf: 0.0, flags: s.flags });
         }
-        let pdf = self.pdf(wo, wi, mode);
+        if self.lobes.count == 1 && self.opacity >= 1.0 && self.perturbed.is_none() {
+            // One lobe is the whole mixture: its own weight f |cos| / pdf and density are the
+            // BSDF's (the contract every lobe's sampler keeps; `bsdf::tests` checks it).
+            return (s.pdf > 0.0).then_some(BsdfSample { wi, weight: s.weight, pdf: s.pdf, flags: s.flags });
+        }
+        let (f, pdf) = self.eval(wo, wi, mode);
         if !(pdf > 0.0) {
             return None;
         }
-        let weight = self.f(wo, wi, mode) * (wi.dot(self.frame.z).abs() / pdf);
+        let weight = f * (wi.dot(self.frame.z).abs() / pdf);
         Some(BsdfSample { wi, weight, pdf, flags: s.flags })
     }
 

@@ -261,3 +261,27 @@ fn plastics_match_mitsubas_values() {
     let expected = (1.0 - p_spec) * wi.z / std::f32::consts::PI;
     assert!((b.pdf(wo, wi, Transport::Radiance) - expected).abs() < 1e-6);
 }
+
+#[test]
+fn rough_lobes_samples_carry_their_weight_and_density() {
+    use super::tests::check_sample_weights;
+    for wo in wos() {
+        for (name, lobe) in rough_conductors() {
+            check_sample_weights(&name, &bsdf_of(&[lobe], wo), wo, Transport::Radiance);
+        }
+        for (d, alpha) in [(Distribution::Ggx, 0.2), (Distribution::Beckmann, 0.4)] {
+            let [coat, base] = rough_plastic(d, alpha);
+            check_sample_weights("rough coating", &bsdf_of(&[coat], wo), wo, Transport::Radiance);
+            check_sample_weights("rough plastic base", &bsdf_of(&[base], wo), wo, Transport::Radiance);
+        }
+        let base = PlasticDiffuse { d: Color::new(0.2, 0.5, 0.8), eta: PLASTIC_ETA, d_mean: 0.5 };
+        check_sample_weights("plastic base", &bsdf_of(&[Bxdf::PlasticDiffuse(base)], wo), wo, Transport::Radiance);
+        for eta in [1.5, 1.0 / 1.5] {
+            let mf = Microfacet::new(Distribution::Ggx, 0.3, 0.3);
+            let glass = Bxdf::RoughDielectric(RoughDielectric { mf, eta, r: Color::ONE, t: Color::ONE });
+            for mode in [Transport::Radiance, Transport::Importance] {
+                check_sample_weights("rough glass", &bsdf_of(&[glass], wo), wo, mode);
+            }
+        }
+    }
+}

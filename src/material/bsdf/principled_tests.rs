@@ -211,3 +211,22 @@ fn white_furnace() {
         assert!(a.max_element() <= 1.0 + 2e-3 && a.min_element() >= 0.97, "glass from inside at {wo}: {a}");
     }
 }
+
+#[test]
+fn each_principled_lobe_sample_carries_its_weight_and_density() {
+    use super::tests::check_sample_weights;
+    for name in CASES.iter().chain(&THIN_CASES) {
+        let p = plain(name);
+        for wo in [Vec3::new(0.3, -0.2, 0.9).normalize(), Vec3::new(-0.8, 0.1, 0.3).normalize()] {
+            for lobe in lobes(&p, true).as_slice() {
+                if lobe.flags().is_specular() {
+                    continue;
+                }
+                let mut one = Lobes::default();
+                one.add(*lobe);
+                let b = Bsdf::new(Frame::from_z(Vec3::Z), Vec3::Z, true, one);
+                check_sample_weights(&format!("{name} {lobe:?}"), &b, wo, Transport::Radiance);
+            }
+        }
+    }
+}

@@ -309,3 +309,51 @@ fn photons_scatter_with_the_adjoint_bsdf_under_shading_normals() {
     let expected = 0.6 / std::f64::consts::PI * (wo.dot(ns) as f64).abs() / (wo.z as f64).abs() * integral;
     assert!((mean - expected).abs() < 0.005 * expected, "mean weight {mean}, expected {expected}");
 }
+
+/// Checks the sampling contract one BSDF keeps for `wo`: every non-delta sample's weight is
+/// f |cos| / pdf and its density is `pdf`, as `eval` gives them (the path tracer takes a
+/// one-lobe BSDF's sample as it comes, without evaluating the mixture), and `eval` is `f` and
+/// `pdf` bit for bit.
+pub(super) fn check_sample_weights(name: &str, b: &Bsdf, wo: Vec3, mode: Transport) {
+    let mut rng = Rng32::new(0x5eed);
+    let mut checked = 0;
+    for _ in 0..4000 {
+        let Some(s) = b.sample(wo, rng.uniform(), rng.uniform2(), mode) else { continue };
+        if s.flags.is_specular() {
+            continue;
+        }
+        let (f, pdf) = b.eval(wo, s.wi, mode);
+        assert_eq!((f, pdf), (b.f(wo, s.wi, mode), b.pdf(wo, s.wi, mode)), "{name}: eval is not f and pdf");
+        assert!((s.pdf - pdf).abs() <= 1e-3 * pdf, "{name}: wo {wo} wi {}: sampled pdf {} vs {pdf}", s.wi, s.pdf);
+        let want = f * (s.wi.dot(b.normal()).abs() / pdf);
+        let err = (s.weight - want).abs().max_element();
+        assert!(
+            err <= 2e-3 * want.max_element() + 1e-6,
+            "{name}: wo {wo} wi {}: weight {} vs f|cos|/pdf {want}",
+            s.wi,
+            s.weight
+        );
+        checked += 1;
+    }
+    assert!(checked > 100, "{name}: only {checked} non-delta samples");
+}
+
+#[test]
+fn lambert_and_phong_samples_carry_their_weight_and_density() {
+    for wo in wos() {
+        check_sample_weights(
+            "lambert",
+            &single(Bxdf::Lambert(Lambert { r: Color::new(0.7, 0.2, 0.4) }), wo),
+            wo,
+            Transport::Radiance,
+        );
+        for n in [1.0, 20.0] {
+            check_sample_weights(
+                "phong",
+                &single(Bxdf::Phong(Phong { ks: 0.8, exponent: n }), wo),
+                wo,
+                Transport::Radiance,
+            );
+        }
+    }
+}
