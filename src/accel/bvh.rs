@@ -6,13 +6,17 @@
 //! included.
 
 use super::build::{BuildPrim, build_wide};
+use super::packet::Packets;
 use super::wide::{WideNode, traverse};
 use crate::geometry::{Aabb, Ray};
 use crate::shape::{CompactShape, PrimHit, Primitives, RayShear, SurfacePoint, TriangleMesh};
 use rayon::prelude::*;
 
-/// Up to this many primitives every ray tests them all in leaf order: no box test beats a
-/// handful of shape tests (a four-sphere Whitted scene ran 17% slower through one wide node).
+/// Up to this many primitives every ray tests them all: no box test beats a handful of shape
+/// tests (a four-sphere Whitted scene ran 17% slower through one wide node). Closest-hit and
+/// shadow rays test them four at a time (`Packets`: 1.17x the scalar loop's speed on the
+/// caustic Cornell box's 7 primitives); for 18 quads the tree's culling won (the diffuse box ran
+/// 7% slower in packets; BENCHMARKS.md, issue 29).
 const LINEAR_MAX: usize = 8;
 
 pub struct Bvh {
@@ -28,6 +32,8 @@ pub struct Bvh {
     prims: Primitives,
     /// `for_each_crossing` finds every crossing (no leaf is a cylinder).
     crossings_enumerable: bool,
+    /// For at most `LINEAR_MAX` bounded primitives: all of them, four at a time.
+    packets: Option<Packets>,
 }
 
 impl Bvh {
@@ -57,7 +63,8 @@ impl Bvh {
         drop(order);
         let shapes: Vec<CompactShape> = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
         let crossings_enumerable = shapes.par_iter().all(CompactShape::crossings_enumerable);
-        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable }
+        let packets = (bounded <= LINEAR_MAX).then(|| Packets::new(&shapes[..bounded]));
+        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable, packets }
     }
 
     /// The unbounded primitives (planes), after the tree's.
@@ -105,7 +112,10 @@ impl Bvh {
 
     /// Bytes held by the tree, its leaf shapes and its primitives.
     pub fn memory_bytes(&self) -> usize {
-        self.node_bytes() + self.shapes.capacity() * std::mem::size_of::<CompactShape>() + self.prims.memory_bytes()
+        self.node_bytes()
+            + self.shapes.capacity() * std::mem::size_of::<CompactShape>()
+            + self.prims.memory_bytes()
+            + self.packets.as_ref().map_or(0, Packets::memory_bytes)
     }
 
     /// Bytes held by the tree's nodes alone.
@@ -126,6 +136,9 @@ impl Bvh {
     pub fn intersect_tree(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
         let shear = RayShear::new(ray);
         let mut closest = t_max;
+        if let Some(p) = &self.packets {
+            return p.intersect(&self.shapes, ray, &shear, &mut closest).map(|(i, h)| (i as u32, h));
+        }
         let mut best = None;
         let leaf = |first: usize, count: usize, closest: &mut f32| {
             for i in first..first + count {
@@ -136,12 +149,7 @@ impl Bvh {
             }
             false
         };
-        if self.bounded <= LINEAR_MAX {
-            let mut leaf = leaf;
-            leaf(0, self.bounded, &mut closest);
-        } else {
-            traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
-        }
+        traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
         best.map(|(i, h)| (i as u32, h))
     }
 
@@ -210,8 +218,8 @@ impl Bvh {
         if self.shapes[self.bounded..].iter().any(|s| s.intersect_unbounded(ray, t_max).is_some()) {
             return true;
         }
-        if self.bounded <= LINEAR_MAX {
-            return leaf(0, self.bounded, &mut t);
+        if let Some(p) = &self.packets {
+            return p.occluded(&self.shapes, ray, &shear, t_max);
         }
         traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }

@@ -3,6 +3,7 @@
 mod build;
 pub mod bvh;
 pub mod instances;
+mod packet;
 mod wide;
 
 pub use bvh::Bvh;

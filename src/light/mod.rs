@@ -363,16 +363,42 @@ impl Light {
     /// spot cone, behind an area light, at the light).
     // The point light, the commonest in classic scenes, is inlined into the caller: called out
     // of line, `p` went through memory and its load stalled on the store just before it.
+    // Area lights, the physical integrators' commonest, are inlined for the same reason.
     #[inline(always)]
     pub fn sample(&self, p: Vec3, u: Vec2, textures: &[Texture]) -> Option<LightSample> {
-        match *self {
-            Light::Point { position, intensity } => point_sample(position, intensity, p),
-            Light::Spot(_)
-            | Light::Projector(_)
-            | Light::Directional { .. }
-            | Light::Area { .. }
-            | Light::Environment(_) => self.sample_other(p, u, textures),
+        match self {
+            Light::Point { position, intensity } => point_sample(*position, *intensity, p),
+            Light::Area { shape, radiance, .. } => self.area_sample(shape, *radiance, p, u, textures),
+            Light::Spot(_) | Light::Projector(_) | Light::Directional { .. } | Light::Environment(_) => {
+                self.sample_other(p, u, textures)
+            }
         }
+    }
+
+    /// `sample` of an area light of `shape` and `radiance` (its texture read through
+    /// `texture_factor`).
+    #[inline(always)]
+    fn area_sample(
+        &self,
+        shape: &Shape,
+        radiance: Color,
+        p: Vec3,
+        u: Vec2,
+        textures: &[Texture],
+    ) -> Option<LightSample> {
+        let (s, pdf) = shape.sample_towards(p, u)?;
+        let v = s.p - p;
+        let d2 = v.length_squared();
+        if !(d2 > 0.0) || !(pdf > 0.0) {
+            return None;
+        }
+        let dist = d2.sqrt();
+        let wi = v / dist;
+        if s.n.dot(-wi) <= 0.0 {
+            return None;
+        }
+        let radiance = radiance * self.texture_factor(s.uv, -wi, textures);
+        Some(LightSample { wi, dist, radiance, pdf, delta: false })
     }
 
     /// `sample`, out of line: every light (`sample` itself answers for point lights).
@@ -395,21 +421,7 @@ impl Light {
             Light::Directional { direction, irradiance, .. } => {
                 Some(delta_sample(-direction, f32::INFINITY, irradiance))
             }
-            Light::Area { shape, radiance, .. } => {
-                let (s, pdf) = shape.sample_towards(p, u)?;
-                let v = s.p - p;
-                let d2 = v.length_squared();
-                if !(d2 > 0.0) || !(pdf > 0.0) {
-                    return None;
-                }
-                let dist = d2.sqrt();
-                let wi = v / dist;
-                if s.n.dot(-wi) <= 0.0 {
-                    return None;
-                }
-                let radiance = radiance * self.texture_factor(s.uv, -wi, textures);
-                Some(LightSample { wi, dist, radiance, pdf, delta: false })
-            }
+            Light::Area { shape, radiance, .. } => self.area_sample(&shape, radiance, p, u, textures),
             Light::Environment(e) => {
                 let (wi, radiance, pdf) = e.sample(u)?;
                 Some(LightSample { wi, dist: f32::INFINITY, radiance, pdf, delta: false })

@@ -94,11 +94,18 @@ impl Sampler {
         }
     }
 
-    /// A further 2-D sample for the integrator (uniform, not stratified, with the jittered sampler).
+    /// A further 2-D sample for the integrator (uniform, not stratified, with the jittered
+    /// sampler: two numbers of the pixel sample's stream, drawn inline).
+    #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
+        if self.kind == SamplerKind::Jittered {
+            self.pair += 1;
+            return self.rng.uniform2();
+        }
         self.next_pair(false)
     }
 
+    #[inline]
     pub fn next_1d(&mut self) -> f32 {
         self.next_2d().x
     }
@@ -108,6 +115,7 @@ impl Sampler {
         &mut self.rng
     }
 
+    #[inline(never)]
     fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
         let pair = self.pair;
         self.pair += 1;

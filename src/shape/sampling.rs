@@ -28,11 +28,7 @@ impl Shape {
     /// which has no finite area to spread points over.
     pub fn sample_area(&self, u: Vec2) -> Option<SurfaceSample> {
         Some(match self {
-            Shape::Quad(q) => {
-                let (a, b) = (q.e1 * u.x, q.e2 * u.y);
-                let p_error = gamma(6) * (q.p0.abs() + a.abs() + b.abs());
-                SurfaceSample { p: q.p0 + a + b, p_error, n: q.n, uv: u }
-            }
+            Shape::Quad(q) => quad_sample(q, u),
             Shape::Sphere(s) => {
                 let n = uniform_sphere(u);
                 let local = n * s.radius;
@@ -40,17 +36,7 @@ impl Shape {
                 let uv = s.param(n).uv();
                 SurfaceSample { p, p_error: gamma(5) * local.abs() + gamma(1) * p.abs(), n, uv }
             }
-            Shape::Triangle(t) => {
-                let [p0, p1, p2] = t.p;
-                // Uniform barycentrics by the square-root warp (pbrt-v4 SampleUniformTriangle).
-                let su = u.x.sqrt();
-                let (b0, b1) = (1.0 - su, u.y * su);
-                let b2 = 1.0 - b0 - b1;
-                let p = p0 * b0 + p1 * b1 + p2 * b2;
-                let p_error = gamma(7) * ((p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs());
-                let n = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-                SurfaceSample { p, p_error, n, uv: Vec2::new(b1, b2) }
-            }
+            Shape::Triangle(t) => triangle_sample(t, u),
             Shape::Disk(d) => d.sample_area(u),
             Shape::Cylinder(c) => c.sample_area(u),
             Shape::Plane(_) | Shape::SdfVoxel(_) => return None,
@@ -60,24 +46,30 @@ impl Shape {
     /// A point for shading point `p`: (surface sample, solid-angle density). Spheres are
     /// sampled by the cone they subtend (uniform in solid angle), every other finite shape by
     /// area; `None` when `p` sees the sampled point from behind or nothing can be sampled.
-    #[inline]
+    ///
+    /// Quads and triangles, the common emitters, are sampled inline: through a call, the sample
+    /// came back through memory and its first loads waited on the stores just before them.
+    #[inline(always)]
     pub fn sample_towards(&self, p: Vec3, u: Vec2) -> Option<(SurfaceSample, f32)> {
+        match self {
+            Shape::Quad(q) => by_area(quad_sample(q, u), q.area(), p),
+            Shape::Triangle(t) => by_area(triangle_sample(t, u), t.area(), p),
+            Shape::Sphere(_) | Shape::Disk(_) | Shape::Cylinder(_) | Shape::Plane(_) | Shape::SdfVoxel(_) => {
+                self.sample_towards_other(p, u)
+            }
+        }
+    }
+
+    /// `sample_towards` for the shapes it does not sample inline.
+    #[inline(never)]
+    fn sample_towards_other(&self, p: Vec3, u: Vec2) -> Option<(SurfaceSample, f32)> {
         match self {
             Shape::Quad(_)
             | Shape::Triangle(_)
             | Shape::Disk(_)
             | Shape::Cylinder(_)
             | Shape::Plane(_)
-            | Shape::SdfVoxel(_) => {
-                let s = self.sample_area(u)?;
-                let v = s.p - p;
-                let d2 = v.length_squared();
-                let cos = s.n.dot(-v) / d2.sqrt();
-                if !(cos > 0.0) {
-                    return None;
-                }
-                Some((s, d2 / (cos * self.area())))
-            }
+            | Shape::SdfVoxel(_) => by_area(self.sample_area(u)?, self.area(), p),
             Shape::Sphere(sphere) => {
                 let to_c = sphere.center - p;
                 let dc2 = to_c.length_squared();
@@ -130,4 +122,39 @@ impl Shape {
             }
         }
     }
+}
+
+/// A uniform point on a quad.
+#[inline(always)]
+fn quad_sample(q: &super::Quad, u: Vec2) -> SurfaceSample {
+    let (a, b) = (q.e1 * u.x, q.e2 * u.y);
+    let p_error = gamma(6) * (q.p0.abs() + a.abs() + b.abs());
+    SurfaceSample { p: q.p0 + a + b, p_error, n: q.n, uv: u }
+}
+
+/// A uniform point on a triangle: barycentrics by the square-root warp (pbrt-v4
+/// SampleUniformTriangle).
+#[inline(always)]
+fn triangle_sample(t: &super::Triangle, u: Vec2) -> SurfaceSample {
+    let [p0, p1, p2] = t.p;
+    let su = u.x.sqrt();
+    let (b0, b1) = (1.0 - su, u.y * su);
+    let b2 = 1.0 - b0 - b1;
+    let p = p0 * b0 + p1 * b1 + p2 * b2;
+    let p_error = gamma(7) * ((p0 * b0).abs() + (p1 * b1).abs() + (p2 * b2).abs());
+    let n = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    SurfaceSample { p, p_error, n, uv: Vec2::new(b1, b2) }
+}
+
+/// A point `s` sampled uniformly on a surface of `area`, with its solid-angle density seen from
+/// `p`; `None` when `p` sees it from behind.
+#[inline(always)]
+fn by_area(s: SurfaceSample, area: f32, p: Vec3) -> Option<(SurfaceSample, f32)> {
+    let v = s.p - p;
+    let d2 = v.length_squared();
+    let cos = s.n.dot(-v) / d2.sqrt();
+    if !(cos > 0.0) {
+        return None;
+    }
+    Some((s, d2 / (cos * area)))
 }

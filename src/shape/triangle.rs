@@ -13,12 +13,12 @@ use crate::math::{Vec2, Vec3};
 /// traversal, not once per triangle.
 #[derive(Clone, Copy, Debug)]
 pub struct RayShear {
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
 }
 
 impl RayShear {
