@@ -96,9 +96,9 @@ impl Bvh {
         self.prims.material_light(i as usize)
     }
 
-    /// Surface data, material and light at a hit `intersect` returned.
+    /// Surface data at a hit `intersect` returned (its material and light: `material_light`).
     #[inline]
-    pub fn surface(&self, i: u32, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> (SurfacePoint, u32, u32) {
+    pub fn surface(&self, i: u32, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
         self.prims.surface(i as usize, &self.shapes[i as usize], ray, h, meshes)
     }
 

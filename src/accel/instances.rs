@@ -186,7 +186,8 @@ impl Instances {
     pub fn surface(&self, h: &InstanceHit, meshes: &[TriangleMesh]) -> (SurfacePoint, u32, u32) {
         let inst = &self.instances[h.instance as usize];
         let group = &self.groups[inst.group as usize];
-        let (sp, material, light) = group.surface(h.prim, &h.ray, &h.hit, meshes);
+        let sp = group.surface(h.prim, &h.ray, &h.hit, meshes);
+        let (material, light) = group.material_light(h.prim);
         (inst.surface_to_world(&sp), material, light)
     }
 

@@ -131,7 +131,8 @@ impl Scene {
             return Some(Self::hit(h.t, &sp, material, light, h.prim));
         }
         let (i, h) = best?;
-        let (sp, material, light) = self.bvh.surface(i, ray, &h, &self.meshes);
+        let sp = self.bvh.surface(i, ray, &h, &self.meshes);
+        let (material, light) = self.bvh.material_light(i);
         Some(Self::hit(h.t, &sp, material, light, i))
     }
 
@@ -317,7 +318,7 @@ impl Crossing<'_> {
     #[inline]
     pub fn ng(&self) -> Vec3 {
         match self {
-            Crossing::Traversed { scene, ray, hit, prim } => scene.bvh.surface(*prim, ray, hit, &scene.meshes).0.ng,
+            Crossing::Traversed { scene, ray, hit, prim } => scene.bvh.surface(*prim, ray, hit, &scene.meshes).ng,
             Crossing::Hit(h) => h.ng,
         }
     }
@@ -327,7 +328,8 @@ impl Crossing<'_> {
     pub fn hit(&self) -> Hit {
         match self {
             Crossing::Traversed { scene, ray, hit, prim } => {
-                let (sp, material, light) = scene.bvh.surface(*prim, ray, hit, &scene.meshes);
+                let sp = scene.bvh.surface(*prim, ray, hit, &scene.meshes);
+                let (material, light) = scene.bvh.material_light(*prim);
                 Scene::hit(hit.t, &sp, material, light, *prim)
             }
             Crossing::Hit(h) => **h,

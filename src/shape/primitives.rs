@@ -111,27 +111,19 @@ impl Primitives {
         self.get(i, meshes).shape.compact()
     }
 
-    /// Surface data, material and light of primitive `i` at a hit `intersect` found on `leaf`,
-    /// its compact shape: a mesh triangle takes its vertices from the leaf, which the test just
-    /// read, rather than through the mesh's indices.
+    /// Surface data of primitive `i` at a hit `intersect` found on `leaf`, its compact shape: a
+    /// mesh triangle takes its vertices from the leaf, which the test just read, rather than
+    /// through the mesh's indices. (Material and light come from `material_light`: returned
+    /// together with the surface, the whole went through a temporary whose copy stalled on the
+    /// stores just made to it.)
     #[inline]
-    pub fn surface(
-        &self,
-        i: usize,
-        leaf: &CompactShape,
-        ray: &Ray,
-        h: &PrimHit,
-        meshes: &[TriangleMesh],
-    ) -> (SurfacePoint, u32, u32) {
+    pub fn surface(&self, i: usize, leaf: &CompactShape, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
         let r = self.refs[i];
         match (r.group, leaf) {
-            (WHOLE, _) => {
-                let p = &self.shapes[r.index as usize];
-                (p.shape.surface(ray, h, meshes), p.material, p.light)
-            }
+            (WHOLE, _) => self.shapes[r.index as usize].shape.surface(ray, h, meshes),
             (g, CompactShape::Triangle(p)) => {
                 let g = self.groups[g as usize];
-                (Triangle { p: *p, mesh: g.mesh, index: r.index }.surface(h, meshes), g.material, NO_LIGHT)
+                Triangle { p: *p, mesh: g.mesh, index: r.index }.surface(h, meshes)
             }
             // (A mesh triangle's leaf is always a triangle; kept total rather than panicking.)
             (
@@ -142,10 +134,7 @@ impl Primitives {
                 | CompactShape::Cylinder { .. }
                 | CompactShape::Plane(_)
                 | CompactShape::SdfVoxel(_),
-            ) => {
-                let p = self.get(i, meshes);
-                (p.shape.surface(ray, h, meshes), p.material, p.light)
-            }
+            ) => self.get(i, meshes).shape.surface(ray, h, meshes),
         }
     }
 
