@@ -87,8 +87,8 @@ pub struct Hit {
     pub material: u32,
     /// Index into the scene's lights of the light this surface emits, or `NO_LIGHT`.
     pub light: u32,
-    /// Index of the primitive hit (BVH order; in its group's BVH for an instanced one), or
-    /// `u32::MAX - i` for unbounded plane `i`.
+    /// Index of the primitive hit (BVH order, planes included; in its group's BVH for an
+    /// instanced one).
     pub prim: u32,
 }
 

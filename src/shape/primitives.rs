@@ -117,7 +117,14 @@ impl Primitives {
     /// together with the surface, the whole went through a temporary whose copy stalled on the
     /// stores just made to it.)
     #[inline]
-    pub fn surface(&self, i: usize, leaf: &CompactShape, ray: &Ray, h: &PrimHit, meshes: &[TriangleMesh]) -> SurfacePoint {
+    pub fn surface(
+        &self,
+        i: usize,
+        leaf: &CompactShape,
+        ray: &Ray,
+        h: &PrimHit,
+        meshes: &[TriangleMesh],
+    ) -> SurfacePoint {
         let r = self.refs[i];
         match (r.group, leaf) {
             (WHOLE, _) => self.shapes[r.index as usize].shape.surface(ray, h, meshes),

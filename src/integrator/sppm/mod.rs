@@ -136,12 +136,14 @@ struct PixelLayers {
     tau: Layers,
 }
 
-/// A camera path's first non-specular hit.
+/// A camera path's first non-specular hit. It keeps the hit, not its BSDF: the BSDF is made
+/// again from the hit when the pixel gathers (the same BSDF, once per pixel and iteration), as a
+/// BSDF with its lobes inline is three times the size of the hit and a point per pixel is most of
+/// SPPM's memory.
 #[derive(Clone, Copy)]
-struct VisiblePoint<'a> {
-    p: Vec3,
+struct VisiblePoint {
+    hit: Hit,
     wo: Vec3,
-    bsdf: Bsdf<'a>,
     beta: Color,
     /// Distance travelled from the camera (for the initial radius).
     dist: f32,
@@ -153,11 +155,11 @@ struct VisiblePoint<'a> {
 }
 
 /// What one iteration's camera sample of a pixel found.
-struct CameraSample<'a> {
+struct CameraSample {
     /// Emitted and directly sampled light, in all and by layer.
     ld: Color,
     ld_layers: Layers,
-    point: Option<VisiblePoint<'a>>,
+    point: Option<VisiblePoint>,
 }
 
 impl Sppm {
@@ -213,7 +215,7 @@ impl Sppm {
 
     /// One iteration: visible points, photons, statistics. Returns false when the render was
     /// cancelled during it, leaving every pixel as it was.
-    fn iteration<'s>(&self, scene: &'s Scene, driver: &Driver, state: &mut State<'s>, it: u32) -> bool {
+    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) -> bool {
         let config = &self.config;
         let settings = driver.settings;
         let w = settings.width;
@@ -288,7 +290,7 @@ impl Sppm {
             state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
                 |((px, layers), vp)| {
                     let Some(v) = vp else { return };
-                    let (m, phi, phi_caustic) = gather(v, px.r, grid, &hits);
+                    let (m, phi, phi_caustic) = gather(scene, v, px.r, grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
@@ -320,14 +322,14 @@ impl Sppm {
     /// transparent part) and a non-delta part makes the visible point with the probability of
     /// the non-delta part and follows the delta part otherwise, each weighted by the inverse of
     /// its probability, so one visible point per sample carries both.
-    fn camera_sample<'s>(
+    fn camera_sample(
         &self,
-        scene: &'s Scene,
+        scene: &Scene,
         settings: &RenderSettings,
         (x, y): (u32, u32),
         it: u32,
         stats: &mut RayStats,
-    ) -> CameraSample<'s> {
+    ) -> CameraSample {
         let config = &self.config;
         let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, it);
         // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
@@ -359,9 +361,8 @@ impl Sppm {
             // This surface is within the depth limit (the walk checked).
             let photon_depth = trace::photon_depth_limit(config.max_depth, v.bounce).unwrap_or(0);
             let point = Some(VisiblePoint {
-                p: v.hit.p,
+                hit: v.hit,
                 wo: v.wo,
-                bsdf: v.bsdf,
                 beta: walk.beta / q,
                 dist: walk.dist,
                 layer: walk.layer,
@@ -376,23 +377,25 @@ impl Sppm {
 /// The photons within radius `r` of visible point `v`: (M, their count, which sets the radius
 /// schedule; the flux the BSDF passes towards the camera; its part that came only through
 /// mirrors and glass).
-fn gather(v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
+fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
     let r2 = r * r;
     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
+    let bsdf = scene.bsdf(&v.hit, v.wo);
+    let p = v.hit.p;
     // Photons from behind pass only through a transmitting surface (rough glass).
-    let both_sides = v.bsdf.flags().is_transmission();
-    grid.for_each_near(v.p, r, |i| {
+    let both_sides = bsdf.flags().is_transmission();
+    grid.for_each_near(p, r, |i| {
         let ph = &hits[i as usize];
-        if (ph.p - v.p).length_squared() > r2 {
+        if (ph.p - p).length_squared() > r2 {
             return;
         }
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
         m += 1;
-        if (!both_sides && ph.dir.dot(v.bsdf.normal()) >= 0.0) || u32::from(ph.depth) > v.photon_depth {
+        if (!both_sides && ph.dir.dot(bsdf.normal()) >= 0.0) || u32::from(ph.depth) > v.photon_depth {
             return;
         }
-        let f = v.bsdf.f(v.wo, -ph.dir, Transport::Radiance);
+        let f = bsdf.f(v.wo, -ph.dir, Transport::Radiance);
         if f != Color::ZERO {
             phi += f * ph.flux;
             if ph.flags & trace::CAUSTIC != 0 {
@@ -413,18 +416,18 @@ fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterat
 }
 
 /// The per-pixel state of a render.
-struct State<'a> {
+struct State {
     pixels: Vec<PixelStats>,
     /// This iteration's visible points, one per pixel, and photon grid (buffers kept between
     /// iterations).
-    points: Vec<Option<VisiblePoint<'a>>>,
+    points: Vec<Option<VisiblePoint>>,
     grid: PhotonGrid,
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
     peak_bytes: usize,
 }
 
-impl State<'_> {
+impl State {
     fn image(&self, settings: &RenderSettings, iterations: u32) -> Image {
         let mut img = Image::new(settings.width, settings.height);
         for (k, p) in self.pixels.iter().enumerate() {
@@ -465,17 +468,38 @@ fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
 mod tests {
     use super::*;
 
+    /// A scene of one grey (albedo 0.5) quad in the plane z = 0, facing +z.
+    fn grey_quad() -> Scene {
+        let text = r#"
+            [camera]
+            eye = [0, 0, 3]
+            look_at = [0, 0, 0]
+            [materials.grey]
+            type = "diffuse"
+            color = [0.5, 0.5, 0.5]
+            kd = 1
+            [[lights]]
+            type = "point"
+            position = [0, 0, 2]
+            [[objects]]
+            type = "quad"
+            corner = [-1, -1, 0]
+            edge1 = [2, 0, 0]
+            edge2 = [0, 2, 0]
+            material = "grey"
+        "#;
+        let mut desc = crate::scene::load_scene_str(text, "quad.toml", std::path::Path::new(".")).unwrap();
+        desc.apply(&crate::options::Options::default());
+        desc.build().unwrap().scene
+    }
+
     #[test]
     fn every_photon_in_range_counts_in_m() {
-        use crate::material::bsdf::{Bsdf, Lobes};
-        use crate::material::bxdf::{Bxdf, Lambert};
-        let mut lobes = Lobes::default();
-        lobes.add(Bxdf::Lambert(Lambert { r: Color::splat(0.5) }));
-        let bsdf = Bsdf::new(crate::math::Frame::from_z(Vec3::Z), Vec3::Z, true, lobes);
+        let scene = grey_quad();
+        let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
         let v = VisiblePoint {
-            p: Vec3::ZERO,
+            hit: hit.unwrap(),
             wo: Vec3::Z,
-            bsdf,
             beta: Color::ONE,
             dist: 1.0,
             layer: LayerPath::CAMERA,
@@ -489,15 +513,15 @@ mod tests {
             hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
         ];
         let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&v, 0.5, &grid, &hits);
+        let (m, phi, _) = gather(&scene, &v, 0.5, &grid, &hits);
         assert_eq!(m, 3);
         assert!((phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let deep = [PhotonHit { depth: 3, ..hits[0] }];
         let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
         assert_eq!((m, phi), (1, Color::ZERO));
-        let (m, phi, _) = gather(&VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
         assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
     }
 
