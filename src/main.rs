@@ -191,6 +191,7 @@ impl RenderArgs {
             sampler,
             antialias,
             light_samples,
+            filter,
             photon,
         } = options;
         let PhotonOptions {
@@ -223,6 +224,7 @@ impl RenderArgs {
         opt("integrator", integrator.map(|v| v.name().to_string()));
         opt("sampler", sampler.map(|v| format!("{v:?}").to_lowercase()));
         opt("light-samples", light_samples.map(|v| v.to_string()));
+        opt("filter", filter.map(|f| f.spelled()));
         opt("photons", photons.map(|v| v.to_string()));
         opt("caustic-photons", caustic_photons.map(|v| v.to_string()));
         opt("gather", gather.map(|v| v.to_string()));
@@ -452,6 +454,8 @@ mod tests {
             "--no-antialias",
             "--light-samples",
             "5",
+            "--filter",
+            "mitchell:B=0.5,C=0.25",
             "--photons",
             "1000",
             "--caustic-photons",
@@ -518,6 +522,7 @@ mod tests {
             sampler,
             antialias,
             light_samples,
+            filter,
             photon,
         } = options;
         let PhotonOptions {
@@ -546,6 +551,7 @@ mod tests {
             sampler.is_some(),
             antialias.is_some(),
             light_samples.is_some(),
+            filter.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

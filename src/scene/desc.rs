@@ -234,6 +234,7 @@ impl SceneDescription {
             sampler,
             antialias,
             light_samples,
+            filter,
             photon,
         } = o.clone();
         let PhotonOptions {
@@ -272,6 +273,7 @@ impl SceneDescription {
         s.seed = seed.unwrap_or(s.seed);
         s.kind = sampler.unwrap_or(s.kind);
         s.antialias = antialias.unwrap_or(s.antialias);
+        self.film.filter = filter.unwrap_or(self.film.filter);
         let i = &mut self.integrator;
         i.kind = integrator.unwrap_or(i.kind);
         i.max_depth = max_depth.or(i.max_depth);

@@ -148,7 +148,7 @@ impl RenderDesc {
             light_samples,
             adc_bailout,
             crop: _,
-            filter: _,
+            filter,
             sample_border: _,
             photon,
         } = self;
@@ -165,6 +165,7 @@ impl RenderDesc {
             sampler: *sampler,
             antialias: *antialias,
             light_samples: *light_samples,
+            filter: filter.as_ref().map(|f| f.0),
             photon: photon.clone(),
         }
     }
