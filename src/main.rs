@@ -192,6 +192,7 @@ impl RenderArgs {
             antialias,
             light_samples,
             filter,
+            aov,
             photon,
         } = options;
         let PhotonOptions {
@@ -225,6 +226,7 @@ impl RenderArgs {
         opt("sampler", sampler.map(|v| format!("{v:?}").to_lowercase()));
         opt("light-samples", light_samples.map(|v| v.to_string()));
         opt("filter", filter.map(|f| f.spelled()));
+        opt("aov", aov.as_ref().map(|a| a.to_string()));
         opt("photons", photons.map(|v| v.to_string()));
         opt("caustic-photons", caustic_photons.map(|v| v.to_string()));
         opt("gather", gather.map(|v| v.to_string()));
@@ -456,6 +458,8 @@ mod tests {
             "5",
             "--filter",
             "mitchell:B=0.5,C=0.25",
+            "--aov",
+            "albedo,dd.y:depth,variance",
             "--photons",
             "1000",
             "--caustic-photons",
@@ -523,6 +527,7 @@ mod tests {
             antialias,
             light_samples,
             filter,
+            aov,
             photon,
         } = options;
         let PhotonOptions {
@@ -552,6 +557,7 @@ mod tests {
             antialias.is_some(),
             light_samples.is_some(),
             filter.is_some(),
+            aov.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

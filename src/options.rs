@@ -11,6 +11,7 @@
 //! (pbrt-v4's `ParameterDictionary` and Mitsuba 3's `Properties` report unused parameters for the
 //! same reason).
 
+use crate::film::aov::AovList;
 use crate::film::filter::Filter;
 use crate::sampling::SamplerKind;
 use serde::{Deserialize, Deserializer};
@@ -125,6 +126,12 @@ pub struct Options {
     #[arg(long, value_name = "NAME", value_parser = Filter::parse)]
     #[serde(deserialize_with = "deserialize_filter")]
     pub filter: Option<Filter>,
+    /// Images to write beside the render (AOVs), comma-separated: albedo, normal (sh_normal),
+    /// geo_normal, depth, position, uv (of the camera ray's first hit), variance, spp; or
+    /// Mitsuba's NAME:TYPE pairs. Extra channels of an .exr output; beside a .png, OUT.aovs.exr.
+    #[arg(long, value_name = "LIST", value_parser = AovList::parse)]
+    #[serde(deserialize_with = "deserialize_aovs")]
+    pub aov: Option<AovList>,
     /// Photon-mapping and SPPM settings (`[render.photon]` in a TOML scene).
     #[command(flatten)]
     pub photon: PhotonOptions,
@@ -220,6 +227,10 @@ fn parse_unit_interval(s: &str) -> Result<f32, String> {
 
 fn deserialize_filter<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Filter>, D::Error> {
     Filter::parse(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
+}
+
+fn deserialize_aovs<'de, D: Deserializer<'de>>(d: D) -> Result<Option<AovList>, D::Error> {
+    AovList::parse(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
 }
 
 fn deserialize_unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {

@@ -88,6 +88,7 @@ impl RenderId {
             checkpoint: _,
             progress: _,
             layers,
+            aovs,
         } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
         let mut fields: Vec<(String, String)> = vec![
@@ -103,6 +104,7 @@ impl RenderId {
             ("sampler".into(), format!("{sampler:?}").to_lowercase()),
             ("antialias".into(), antialias.to_string()),
             ("filter".into(), filter.filter.spelled()),
+            ("aovs".into(), if aovs.is_empty() { "none".into() } else { aovs.to_string() }),
             ("max_depth".into(), opt(max_depth.map(|d| d.to_string()))),
             ("light_samples".into(), light_samples.to_string()),
             ("adc_bailout".into(), format!("{adc_bailout:?}")),
@@ -216,6 +218,7 @@ mod tests {
             seed: 3,
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
+            aovs: Default::default(),
         })
     }
 
@@ -280,6 +283,7 @@ mod tests {
             antialias: Some(false),
             light_samples: Some(3),
             filter: Some(crate::film::filter::Filter::Gaussian { stddev: 0.3 }),
+            aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             photon: PhotonOptions {
                 photons: Some(1000),
                 caustic_photons: Some(500),
@@ -307,6 +311,7 @@ mod tests {
             antialias,
             light_samples,
             filter,
+            aov,
             photon,
         } = every.clone();
         let PhotonOptions {
@@ -338,6 +343,7 @@ mod tests {
             ("antialias", Options { antialias, ..none() }),
             ("light_samples", Options { light_samples, ..none() }),
             ("filter", Options { filter, ..none() }),
+            ("aov", Options { aov, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),

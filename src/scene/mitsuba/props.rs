@@ -68,6 +68,8 @@ pub(super) struct Cx<'a> {
     pub strict: bool,
     /// The hook every file is reported to before it is read (shared with the scene builder).
     pub files: &'a crate::scene::FileBudget,
+    /// The AOVs an `aov` integrator asks for.
+    pub aovs: crate::film::aov::AovList,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).

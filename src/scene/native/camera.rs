@@ -135,6 +135,8 @@ impl<'a> Cx<'a> {
             // The file's `filter` is one of the render's options, applied with them.
             filter: Filter::Box,
             sample_border: render.sample_border.unwrap_or(false),
+            // `aov` too is one of the render's options.
+            aovs: Default::default(),
         })
     }
 

@@ -61,7 +61,11 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path, files: &FileBudget) ->
     if let Some(v) = sections.remove("objects") {
         cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
     }
-    let options = render.options();
+    let mut options = render.options();
+    if let Some(a) = &render.aov {
+        let list = crate::film::aov::AovList::parse(a.get_ref()).map_err(|m| cx.at(a.span(), m))?;
+        options.aov = Some(list);
+    }
     let (width, height) = (options.width.unwrap_or(DEFAULT_SIZE.0), options.height.unwrap_or(DEFAULT_SIZE.1));
     let film = cx.film(&render, width, height)?;
     let mut desc = SceneDescription {

@@ -119,6 +119,8 @@ pub struct RenderDesc {
     pub crop: Option<Spanned<CropSpec>>,
     pub filter: Option<FilterSpec>,
     pub sample_border: Option<bool>,
+    /// AOVs to write beside the image, as `--aov` takes them.
+    pub aov: Option<Spanned<String>>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -150,6 +152,7 @@ impl RenderDesc {
             crop: _,
             filter,
             sample_border: _,
+            aov: _,
             photon,
         } = self;
         Options {
@@ -166,6 +169,8 @@ impl RenderDesc {
             antialias: *antialias,
             light_samples: *light_samples,
             filter: filter.as_ref().map(|f| f.0),
+            // Read (with its position for errors) by the loader: `aovs`.
+            aov: None,
             photon: photon.clone(),
         }
     }
