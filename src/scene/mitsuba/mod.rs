@@ -32,6 +32,7 @@ use super::footprint::{FileBudget, FileKind};
 use crate::options::IntegratorKind;
 use plugins::PluginKind;
 use props::Cx;
+pub(crate) use props::{closest, next_parameter};
 use std::collections::HashMap;
 use std::path::Path;
 use xml::{El, Resolver, Src};
