@@ -133,7 +133,8 @@ struct RenderArgs {
     /// AWS_BATCH_JOB_ARRAY_INDEX. Run again after a stop, it resumes.
     #[arg(long, value_name = "I/N")]
     shard: Option<ShardSpec>,
-    /// Mitsuba scenes: give parameter `$NAME` the value VALUE (repeatable; wins over <default>).
+    /// Give scene parameter `$NAME` the value VALUE (repeatable; wins over a Mitsuba <default> or a
+    /// TOML [parameters] default; a name the scene does not use is an error).
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     define: Vec<(String, String)>,
     /// Mitsuba scenes: treat every unsupported part as an error instead of a warning.
