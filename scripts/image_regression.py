@@ -77,6 +77,8 @@ def render(args):
     times = {}
     for scene in scenes():
         for integrator, settings in SETTINGS.items():
+            if args.integrators and integrator not in args.integrators.split(","):
+                continue
             extra = scaled(settings, REFERENCE_FACTOR) if args.reference else settings
             seeds = ["7"] if args.reference else [str(s) for s in range(1, args.seeds + 1)]
             for seed in seeds:
@@ -168,6 +170,7 @@ def main():
     r.add_argument("--out", required=True)
     r.add_argument("--reference", action="store_true", help="8x the samples, another seed")
     r.add_argument("--seeds", type=int, default=1, help="render each image with seeds 1..K")
+    r.add_argument("--integrators", help="only these integrators, e.g. photon,sppm (default: all)")
     c = sub.add_parser("compare")
     c.add_argument("old")
     c.add_argument("new")

@@ -133,7 +133,8 @@ struct RenderArgs {
     /// AWS_BATCH_JOB_ARRAY_INDEX. Run again after a stop, it resumes.
     #[arg(long, value_name = "I/N")]
     shard: Option<ShardSpec>,
-    /// Mitsuba scenes: give parameter `$NAME` the value VALUE (repeatable; wins over <default>).
+    /// Give scene parameter `$NAME` the value VALUE (repeatable; wins over a Mitsuba <default> or a
+    /// TOML [parameters] default; a name the scene does not use is an error).
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     define: Vec<(String, String)>,
     /// Mitsuba scenes: treat every unsupported part as an error instead of a warning.
@@ -191,6 +192,8 @@ impl RenderArgs {
             sampler,
             antialias,
             light_samples,
+            filter,
+            aov,
             photon,
         } = options;
         let PhotonOptions {
@@ -223,6 +226,8 @@ impl RenderArgs {
         opt("integrator", integrator.map(|v| v.name().to_string()));
         opt("sampler", sampler.map(|v| format!("{v:?}").to_lowercase()));
         opt("light-samples", light_samples.map(|v| v.to_string()));
+        opt("filter", filter.map(|f| f.spelled()));
+        opt("aov", aov.as_ref().map(|a| a.to_string()));
         opt("photons", photons.map(|v| v.to_string()));
         opt("caustic-photons", caustic_photons.map(|v| v.to_string()));
         opt("gather", gather.map(|v| v.to_string()));
@@ -452,6 +457,10 @@ mod tests {
             "--no-antialias",
             "--light-samples",
             "5",
+            "--filter",
+            "mitchell:B=0.5,C=0.25",
+            "--aov",
+            "albedo,dd.y:depth,variance",
             "--photons",
             "1000",
             "--caustic-photons",
@@ -518,6 +527,8 @@ mod tests {
             sampler,
             antialias,
             light_samples,
+            filter,
+            aov,
             photon,
         } = options;
         let PhotonOptions {
@@ -546,6 +557,8 @@ mod tests {
             sampler.is_some(),
             antialias.is_some(),
             light_samples.is_some(),
+            filter.is_some(),
+            aov.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

@@ -11,6 +11,8 @@
 //! (pbrt-v4's `ParameterDictionary` and Mitsuba 3's `Properties` report unused parameters for the
 //! same reason).
 
+use crate::film::aov::AovList;
+use crate::film::filter::Filter;
 use crate::sampling::SamplerKind;
 use serde::{Deserialize, Deserializer};
 
@@ -119,6 +121,17 @@ pub struct Options {
     /// mapping: per environment light too) [default: 16].
     #[arg(long, value_name = "N")]
     pub light_samples: Option<u32>,
+    /// Pixel reconstruction filter: box, tent, gaussian, mitchell, catmullrom or lanczos, with
+    /// parameters after a colon if wanted (gaussian:stddev=0.3) (overrides the scene).
+    #[arg(long, value_name = "NAME", value_parser = Filter::parse)]
+    #[serde(deserialize_with = "deserialize_filter")]
+    pub filter: Option<Filter>,
+    /// Images to write beside the render (AOVs), comma-separated: albedo, normal (sh_normal),
+    /// geo_normal, depth, position, uv (of the camera ray's first hit), variance, spp; or
+    /// Mitsuba's NAME:TYPE pairs. Extra channels of an .exr output; beside a .png, OUT.aovs.exr.
+    #[arg(long, value_name = "LIST", value_parser = AovList::parse)]
+    #[serde(deserialize_with = "deserialize_aovs")]
+    pub aov: Option<AovList>,
     /// Photon-mapping and SPPM settings (`[render.photon]` in a TOML scene).
     #[command(flatten)]
     pub photon: PhotonOptions,
@@ -210,6 +223,14 @@ fn parse_unit_interval(s: &str) -> Result<f32, String> {
         .ok()
         .and_then(|v| unit_interval(v).ok())
         .ok_or_else(|| format!("expected a number from 0 to 1, found `{s}`"))
+}
+
+fn deserialize_filter<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Filter>, D::Error> {
+    Filter::parse(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
+}
+
+fn deserialize_aovs<'de, D: Deserializer<'de>>(d: D) -> Result<Option<AovList>, D::Error> {
+    AovList::parse(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
 }
 
 fn deserialize_unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {

@@ -738,5 +738,7 @@ fn defines_the_scene_never_uses_are_errors_naming_its_parameters() {
     assert!(e.contains("`spq`") && e.contains("did you mean `spp`"), "{e}");
     let toml = root().join("scenes/06-fresnel-glass.toml");
     let e = caustic::scene::load_scene(&toml, &lo(&[("spp", "4")])).err().unwrap().to_string();
-    assert!(e.contains("06-fresnel-glass.toml") && e.contains("TOML scenes have none"), "{e}");
+    // A TOML scene without parameters refuses a -D the same way (issue 30 item 3: TOML scenes
+    // have `$name` parameters now).
+    assert!(e.contains("06-fresnel-glass.toml") && e.contains("its parameters are: none"), "{e}");
 }

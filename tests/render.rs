@@ -139,3 +139,28 @@ fn thin_lens_with_zero_radius_renders_the_pinhole_image_bit_for_bit() {
     let blurred = render_text(&text.replace("fov = 45", "fov = 45\nlens_radius = 0.2\nfocal_distance = 2.5"));
     assert_ne!(a, blurred);
 }
+
+/// Issue 30, item 7: `--filter` (one of the render's options) renders what the scene file's
+/// `filter` key renders, bit for bit, and over the file's own filter.
+#[test]
+fn the_command_line_filter_is_the_scene_files_filter() {
+    let scene = |filter: &str| {
+        format!(
+            "[render]\nwidth = 24\nheight = 18\nspp = 4\n{filter}\n[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [[lights]]\ntype = \"point\"\nposition = [2, 3, 4]\nintensity = 20\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n"
+        )
+    };
+    let render = |text: &str, o: &Options| {
+        caustic::app::load_toml_str(text, "f.toml", std::path::Path::new("."), o).unwrap().render().image
+    };
+    let none = Options::default();
+    let mitchell = caustic::film::filter::Filter::Mitchell { b: 0.5, c: 0.25 };
+    let from_file = render(&scene("filter = { type = \"mitchell\", B = 0.5, C = 0.25 }"), &none);
+    let from_option = render(&scene(""), &Options { filter: Some(mitchell), ..none.clone() });
+    let over_file = render(&scene("filter = \"lanczos\""), &Options { filter: Some(mitchell), ..none.clone() });
+    let boxed = render(&scene(""), &none);
+    assert_eq!(from_file, from_option);
+    assert_eq!(from_file, over_file);
+    assert_ne!(from_file, boxed, "the filter changes the image: the test can fail");
+}

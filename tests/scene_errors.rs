@@ -123,3 +123,76 @@ fn image_size_overrides_are_checked() {
     let e = load_toml_str(CAMERA, "x.toml", Path::new("."), &o).err().unwrap();
     assert!(e.to_string().contains("out of range"));
 }
+
+/// Issue 30, item 3: `-D name=value` fills `$name` in TOML scenes as in Mitsuba XML: defaults in
+/// `[parameters]`, values with the default's type, checked where they are used, and a `-D` the
+/// scene never uses refused with its parameters and a did-you-mean.
+mod parameters {
+    use caustic::scene::{FileBudget, LoadOptions, load_scene_within};
+
+    const SCENE: &str = "[parameters]\nspp = 16\nradius = 1\ncolour = [0.8, 0.2, 0.1]\nmesh = \"blob\"\n\
+[render]\nspp = \"$spp\"\n[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+[materials.m]\ntype = \"diffuse\"\ncolor = \"$colour\"\n\
+[[objects]]\ntype = \"sphere\"\nradius = \"$radius\"\nmaterial = \"m\"\n\
+[[objects]]\ntype = \"mesh\"\nfile = \"meshes/$mesh.ply\"\n";
+
+    fn err(text: &str, defines: &[(&str, &str)]) -> String {
+        match load(text, defines) {
+            Ok(_) => panic!("loaded"),
+            Err(e) => e,
+        }
+    }
+
+    fn load(text: &str, defines: &[(&str, &str)]) -> Result<caustic::scene::SceneDescription, String> {
+        let dir = std::env::temp_dir().join(format!("caustic-params-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("meshes")).unwrap();
+        let blob = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/blob.ply");
+        std::fs::copy(&blob, dir.join("meshes/blob.ply")).unwrap();
+        std::fs::copy(&blob, dir.join("meshes/other.ply")).unwrap();
+        // Each load its own file: the tests run at the same time.
+        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = dir.join(format!("p{n}.toml"));
+        std::fs::write(&path, text).unwrap();
+        let o = LoadOptions {
+            defines: defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+            strict: false,
+        };
+        load_scene_within(&path, &o, &FileBudget::unlimited()).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn defaults_and_defines_fill_parameters_with_their_types() {
+        let Ok(d) = load(SCENE, &[]) else { panic!() };
+        assert_eq!(d.sampler.spp, Some(16));
+        assert!(d.files().iter().any(|f| f.ends_with("meshes/blob.ply")));
+        let d = match load(SCENE, &[("spp", "4"), ("mesh", "other"), ("radius", "2.5")]) {
+            Ok(d) => d,
+            Err(e) => panic!("{e}"),
+        };
+        assert_eq!(d.sampler.spp, Some(4));
+        assert!(d.files().iter().any(|f| f.ends_with("meshes/other.ply")));
+    }
+
+    #[test]
+    fn wrong_types_and_unknown_names_are_said_in_the_scenes_words() {
+        let e = err(SCENE, &[("spp", "abc")]);
+        assert!(
+            e.contains("-D spp=abc: `$spp` is a number in this scene (its default, line 2), found the text \"abc\""),
+            "{e}"
+        );
+        let e = err(SCENE, &[("spp", "4.5")]);
+        assert!(e.contains(":7:7: expected a whole number") && e.contains("(the value of parameter `$spp`)"), "{e}");
+        let e = err(SCENE, &[("spq", "4")]);
+        assert!(e.contains("-D `spq` is not a parameter of this scene (did you mean `spp` for `spq`?)"), "{e}");
+        assert!(e.contains("`colour`, `mesh`, `radius`, `spp`"), "{e}");
+        // Checked where it is used, at the use's line, naming the parameter.
+        let e = err(&SCENE.replace("radius = 1\n", "radius = -1\n"), &[]);
+        assert!(e.contains(".toml:16:") && e.contains("(the value of parameter `$radius`)"), "{e}");
+        let e = err(&SCENE.replace("spp = 16\n", ""), &[]);
+        assert!(
+            e.contains("parameter `$spp` has no value: give it a default in [parameters] or pass -D spp=VALUE"),
+            "{e}"
+        );
+    }
+}

@@ -26,7 +26,7 @@ pub fn merge_files(
             write_image(&film.layer_image(k), &layer_path(output, name))?;
         }
     }
-    write_image(&film.image(), output)?;
+    super::write_outputs(&film.image(), &film, output)?;
     let what = match report.sums {
         SumKind::Exact => "samples per pixel",
         SumKind::Runs => "iterations (independent progressive runs, weighted by iterations)",

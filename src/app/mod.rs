@@ -9,7 +9,8 @@ pub use farm::{SlurmOptions, farm_slurm, merge_files};
 
 use crate::farm::FarmError;
 use crate::farm::shard::ShardSpec;
-use crate::film::output::{Format, OutputError, check_writable, layer_path, write_image};
+use crate::film::aov::AovKind;
+use crate::film::output::{Format, OutputError, aov_path, check_writable, layer_path, write_exr_channels, write_image};
 use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
 use crate::options::{IntegratorKind, Options};
@@ -163,7 +164,11 @@ impl LoadedScene {
 /// Other geometry is already loaded by then and is not counted.
 pub fn estimate_render_bytes(loaded: &LoadedScene, settings: &RenderSettings) -> u64 {
     let image = 12;
-    let per_pixel = BYTES_PER_PIXEL + image + if settings.layers { LAYER_BYTES_PER_PIXEL + 4 * image } else { 0 };
+    let per_pixel = BYTES_PER_PIXEL
+        + image
+        + if settings.layers { LAYER_BYTES_PER_PIXEL + 4 * image } else { 0 }
+        + settings.aovs.summed_channels() as u64 * 16
+        + settings.aovs.channel_names().len() as u64 * 4;
     let film = settings.pixels() * per_pixel;
     film.saturating_add(crate::integrator::estimated_bytes(&loaded.integrator, &loaded.scene, settings))
         .saturating_add(loaded.scene.environment_bytes())
@@ -284,6 +289,17 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             ),
         );
         let mut settings: RenderSettings = loaded.settings.clone();
+        if settings.aovs.has(AovKind::Variance)
+            && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
+        {
+            // Their pixels are not means of samples: there is no sample variance to give.
+            eprintln!(
+                "warning: the variance AOV is not written with the {} integrator (its pixels are not means of \
+                 camera samples); it is written with whitted, path and photon",
+                loaded.integrator.kind.name()
+            );
+            settings.aovs = settings.aovs.without(AovKind::Variance);
+        }
         settings.time_limit = opts.time_limit;
         settings.checkpoint = opts.checkpoint;
         settings.progress = !opts.quiet;
@@ -386,7 +402,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         let film = match &job {
             Some(job) => job.prior.clone(),
-            None => Film::new(settings.width, settings.height, settings.layers),
+            None => settings.new_film(),
         };
         // `--time` counts from the start of the load, so it bounds the whole run: what is left
         // after loading and preparation goes to the render (at least one pass is rendered).
@@ -419,7 +435,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
             write_image(img, &layer_path(&output, name))?;
         }
-        write_image(&out.image, &output)?;
+        write_outputs(&out.image, &out.film, &output)?;
         if stats.nonfinite_samples > 0 {
             eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
         }
@@ -451,6 +467,23 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         Ok(Summary { output: output.clone(), stats })
     })
+}
+
+/// Writes the image to `output` and, when the render has AOVs, their channels: in the same file
+/// for an EXR, in `NAME.aovs.exr` beside a PNG.
+pub fn write_outputs(image: &crate::film::Image, film: &Film, output: &Path) -> Result<(), OutputError> {
+    if film.aovs.is_empty() {
+        return write_image(image, output);
+    }
+    let channels = film.aov_images();
+    let size = (image.width, image.height);
+    match aov_path(output) {
+        Some(beside) => {
+            write_image(image, output)?;
+            write_exr_channels(size, None, &channels, &beside)
+        }
+        None => write_exr_channels(size, Some(image), &channels, output),
+    }
 }
 
 /// The worker threads a scheduler gave this job (`SLURM_CPUS_PER_TASK` inside a Slurm job), used

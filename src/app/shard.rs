@@ -42,10 +42,11 @@ impl ShardJob {
             width: settings.width,
             height: settings.height,
             layers: settings.layers,
+            aovs: settings.aovs.clone(),
         };
         settings.first_sample = range.start;
         settings.spp = range.end;
-        let fresh = || Film::new(settings.width, settings.height, settings.layers);
+        let fresh = || settings.new_film();
         let prior = if output.exists() {
             match read_partial(output) {
                 Ok(p) if p.header == header => {

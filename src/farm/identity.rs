@@ -66,14 +66,14 @@ impl RenderId {
         let RenderSettings {
             width,
             height,
-            // The crop window's place in the film, the pixel filter and the window samples may
-            // fall in: they come from the scene file's `crop`, `filter` and `sample_border`
-            // (hashed in `scene`) and the film's size. Only the crop's size is compared (`width`,
-            // `height`), so two film sizes given by `--width`/`--height` whose rescaled crops
-            // round to the same window are not told apart; a field for the film's size would
-            // make every partial file written so far refuse to merge.
+            // The crop window's place in the film and the window samples may fall in: they come
+            // from the scene file's `crop` and `sample_border` (hashed in `scene`) and the film's
+            // size. Only the crop's size is compared (`width`, `height`), so two film sizes given
+            // by `--width`/`--height` whose rescaled crops round to the same window are not told
+            // apart; a field for the film's size would make every partial file written so far
+            // refuse to merge. The pixel filter can come from `--filter` too: it is a field.
             origin: _,
-            filter: _,
+            filter,
             window: _,
             spp,
             // Where this shard starts: the shards of one render differ in it.
@@ -88,6 +88,7 @@ impl RenderId {
             checkpoint: _,
             progress: _,
             layers,
+            aovs,
         } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
         let mut fields: Vec<(String, String)> = vec![
@@ -102,6 +103,8 @@ impl RenderId {
             ("strata".into(), strata.to_string()),
             ("sampler".into(), format!("{sampler:?}").to_lowercase()),
             ("antialias".into(), antialias.to_string()),
+            ("filter".into(), filter.filter.spelled()),
+            ("aovs".into(), if aovs.is_empty() { "none".into() } else { aovs.to_string() }),
             ("max_depth".into(), opt(max_depth.map(|d| d.to_string()))),
             ("light_samples".into(), light_samples.to_string()),
             ("adc_bailout".into(), format!("{adc_bailout:?}")),
@@ -215,6 +218,7 @@ mod tests {
             seed: 3,
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
+            aovs: Default::default(),
         })
     }
 
@@ -278,6 +282,8 @@ mod tests {
             sampler: Some(SamplerKind::Sobol),
             antialias: Some(false),
             light_samples: Some(3),
+            filter: Some(crate::film::filter::Filter::Gaussian { stddev: 0.3 }),
+            aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             photon: PhotonOptions {
                 photons: Some(1000),
                 caustic_photons: Some(500),
@@ -304,6 +310,8 @@ mod tests {
             sampler,
             antialias,
             light_samples,
+            filter,
+            aov,
             photon,
         } = every.clone();
         let PhotonOptions {
@@ -334,6 +342,8 @@ mod tests {
             ("sampler", Options { sampler, ..none() }),
             ("antialias", Options { antialias, ..none() }),
             ("light_samples", Options { light_samples, ..none() }),
+            ("filter", Options { filter, ..none() }),
+            ("aov", Options { aov, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),

@@ -104,7 +104,7 @@ pub fn merge(paths: &[PathBuf], allow_partial: bool) -> Result<(Film, MergeRepor
     let order = check_headers(&parts)?;
     let first = &parts[0].1;
     let total: u32 = first.id.get("samples").and_then(|s| s.parse().ok()).unwrap_or(0);
-    let mut film = Film::new(first.width, first.height, first.layers);
+    let mut film = Film::new(first.width, first.height, first.layers).with_aovs(&first.aovs);
     let mut missing = Vec::new();
     let mut covered = 0u32;
     for &i in &order {

@@ -15,6 +15,7 @@
 use super::FarmError;
 use super::identity::RenderId;
 use super::shard::Shard;
+use crate::film::aov::AovList;
 use crate::film::{Film, LAYER_NAMES};
 use exr::prelude::*;
 use std::ops::Range;
@@ -55,6 +56,8 @@ pub struct PartialHeader {
     pub width: u32,
     pub height: u32,
     pub layers: bool,
+    /// The AOVs it holds sums for (the identity's `aovs`).
+    pub aovs: AovList,
 }
 
 /// A partial image read back: its header and film.
@@ -92,12 +95,19 @@ struct Columns {
     count: Vec<u32>,
     sums: Vec<Vec<u32>>,
     layers: Vec<Vec<Vec<u32>>>,
+    /// Four words per summed AOV channel (`AovList::sum_names`), channel by channel.
+    aov: Vec<Vec<u32>>,
+}
+
+/// Channel names of the AOV sums: `caustic.aov.` + the channel + the word 0..3.
+fn aov_sum_names(aovs: &AovList) -> Vec<String> {
+    aovs.sum_names().iter().flat_map(|c| (0..4).map(move |w| format!("caustic.aov.{c}{w}"))).collect()
 }
 
 fn checksum(c: &Columns) -> u64 {
     let mut h = Xxh3::new();
     hash_words(&mut h, &c.count);
-    for w in c.sums.iter().chain(c.layers.iter().flatten()) {
+    for w in c.sums.iter().chain(c.layers.iter().flatten()).chain(&c.aov) {
         hash_words(&mut h, w);
     }
     h.digest()
@@ -110,6 +120,7 @@ fn columns(film: &Film) -> Columns {
         count: vec![0; n],
         sums: vec![vec![0; n]; 12],
         layers: if layers { vec![vec![vec![0; n]; 12]; 4] } else { Vec::new() },
+        aov: vec![vec![0; n]; 4 * film.aovs.summed_channels()],
     };
     let split = |out: &mut [Vec<u32>], p: usize, sum: &[i128; 3]| {
         for (ch, v) in sum.iter().enumerate() {
@@ -129,6 +140,12 @@ fn columns(film: &Film) -> Columns {
                 if let Some(l) = t.layers.get(k) {
                     for (out, sum) in c.layers.iter_mut().zip(l) {
                         split(out, p, sum);
+                    }
+                }
+                let stride = t.aov_stride as usize;
+                for (ch, v) in t.aov[k * stride..(k + 1) * stride].iter().enumerate() {
+                    for w in 0..4 {
+                        c.aov[ch * 4 + w][p] = ((*v as u128) >> (32 * w)) as u32;
                     }
                 }
             }
@@ -155,7 +172,13 @@ pub fn write_partial(path: &Path, header: &PartialHeader, film: &Film) -> Result
             means(&format!("{name}."), &film.layer_image(k));
         }
     }
+    for (name, values) in film.aov_images() {
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(values)));
+    }
     let sum = checksum(&cols);
+    for (name, words) in aov_sum_names(&film.aovs).into_iter().zip(cols.aov) {
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(words)));
+    }
     channels.push(AnyChannel::new("caustic.count", FlatSamples::U32(cols.count)));
     for (name, words) in sum_names("caustic.sum.").into_iter().zip(cols.sums) {
         channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(words)));
@@ -239,7 +262,11 @@ fn parse_header(path: &Path, attrs: &LayerAttributes, width: usize, height: usiz
         return Err(damaged("size (the pixels do not match the render's size)"));
     }
     let layers = id.get("layers") == Some("true");
-    Ok(PartialHeader { id, shard, range, sums, width: width as u32, height: height as u32, layers })
+    let aovs = match id.get("aovs") {
+        None | Some("none") => AovList::default(),
+        Some(text) => AovList::parse(text).map_err(|_| damaged("AOV list"))?,
+    };
+    Ok(PartialHeader { id, shard, range, sums, width: width as u32, height: height as u32, layers, aovs })
 }
 
 /// Reads only the header of the partial image `path` (fast: no pixels are decoded).
@@ -311,7 +338,8 @@ pub fn read_partial_bytes(bytes: &[u8], path: &Path) -> Result<Partial, FarmErro
             layers.push(cols);
         }
     }
-    let cols = Columns { count, sums, layers };
+    let aov = aov_sum_names(&header.aovs).iter().map(|s| channel(s).cloned()).collect::<Result<_, _>>()?;
+    let cols = Columns { count, sums, layers, aov };
     let expected = attribute(&layer.attributes, "caustic.checksum");
     if expected.as_deref() != Some(&format!("{:016x}", checksum(&cols))) {
         return Err(part_err(path, "is damaged: its sums do not match their checksum"));
@@ -325,7 +353,7 @@ pub fn read_partial_bytes(bytes: &[u8], path: &Path) -> Result<Partial, FarmErro
 }
 
 fn film_of(c: &Columns, h: &PartialHeader) -> Film {
-    let mut film = Film::new(h.width, h.height, h.layers);
+    let mut film = Film::new(h.width, h.height, h.layers).with_aovs(&h.aovs);
     let join = |cols: &[Vec<u32>], p: usize| -> [i128; 3] {
         std::array::from_fn(|ch| (0..4).fold(0u128, |acc, w| acc | (cols[ch * 4 + w][p] as u128) << (32 * w)) as i128)
     };
@@ -341,6 +369,10 @@ fn film_of(c: &Columns, h: &PartialHeader) -> Film {
                     for (acc, cols) in l.iter_mut().zip(&c.layers) {
                         *acc = join(cols, p);
                     }
+                }
+                let stride = t.aov_stride as usize;
+                for (ch, acc) in t.aov[k * stride..(k + 1) * stride].iter_mut().enumerate() {
+                    *acc = (0..4).fold(0u128, |a, w| a | (c.aov[ch * 4 + w][p] as u128) << (32 * w)) as i128;
                 }
             }
         }
@@ -366,6 +398,7 @@ mod tests {
             seed: 1,
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
+            aovs: AovList::default(),
         });
         settings.layers = layers;
         let id = RenderId::new(&[], &[], &IntegratorDesc::default(), &settings).unwrap();
@@ -377,6 +410,7 @@ mod tests {
             width: 19,
             height: 17,
             layers,
+            aovs: AovList::default(),
         }
     }
 
@@ -411,6 +445,33 @@ mod tests {
             assert_eq!(img, f.image());
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 30, item 10: AOV sums (first-hit values and the sums of squares of `variance`) are
+    /// saved and read back exactly, and the checksum covers them.
+    #[test]
+    fn aov_sums_round_trip_exactly() {
+        let aovs = AovList::parse("albedo,dd.y:depth,variance,spp").unwrap();
+        let mut h = header(false);
+        for (k, v) in &mut h.id.fields {
+            if k == "aovs" {
+                *v = aovs.to_string();
+            }
+        }
+        h.aovs = aovs.clone();
+        let mut f = Film::new(19, 17, false).with_aovs(&aovs);
+        for (n, t) in f.tiles.iter_mut().enumerate() {
+            for k in 0..t.count.len() {
+                let v = (n * 100 + k) as f32 * 0.01;
+                t.add(k, &[Color::splat(v), Color::ZERO, Color::ZERO, Color::ZERO]);
+                t.add_first_hit(k, &[v, 0.5, -v, 1e3 + v], if k % 2 == 0 { 1.0 } else { -1.25 });
+            }
+        }
+        let bytes = written(&h, &f);
+        let p = read_partial_bytes(&bytes, Path::new("aov.exr")).unwrap();
+        assert_eq!(p.header, h);
+        assert!(p.film == f && p.film.aov_images() == f.aov_images());
+        assert!(f.tiles[0].aov.iter().any(|&v| v != 0));
     }
 
     proptest::proptest! {

@@ -120,6 +120,78 @@ impl Filter {
         }
     }
 
+    /// The filter called `name` with Mitsuba's default parameters (`catmullrom` is Mitchell's
+    /// cubic with B = 0, C = 1/2).
+    pub fn named(name: &str) -> Option<Filter> {
+        Some(match name {
+            "box" => Filter::Box,
+            "tent" => Filter::Tent { radius: 1.0 },
+            "gaussian" => Filter::Gaussian { stddev: 0.5 },
+            "mitchell" => Filter::Mitchell { b: 1.0 / 3.0, c: 1.0 / 3.0 },
+            "catmullrom" => Filter::Mitchell { b: 0.0, c: 0.5 },
+            "lanczos" => Filter::Lanczos { lobes: 3 },
+            _ => return None,
+        })
+    }
+
+    /// The names `named` knows.
+    pub const NAMES: [&'static str; 6] = ["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"];
+
+    /// A filter as the command line gives it: a name, optionally with parameters after a colon
+    /// (`gaussian`, `gaussian:stddev=0.3`, `mitchell:B=0.5,C=0.25`, `lanczos:lobes=2`), each the
+    /// scene format's key of that filter. Checked as a scene's filter is.
+    pub fn parse(text: &str) -> Result<Filter, String> {
+        let (name, params) = text.split_once(':').unwrap_or((text, ""));
+        let mut f = Filter::named(name.trim())
+            .ok_or_else(|| format!("unknown filter `{name}`; expected one of: {}", Filter::NAMES.join(", ")))?;
+        for param in params.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (key, value) =
+                param.split_once('=').ok_or_else(|| format!("expected KEY=VALUE after `{name}:`, found `{param}`"))?;
+            let number = |v: &str| v.trim().parse::<f32>().ok().filter(|x| x.is_finite());
+            let bad = || format!("expected a number for `{key}`, found `{value}`");
+            match (&mut f, key.trim()) {
+                (Filter::Tent { radius }, "radius") => *radius = number(value).ok_or_else(bad)?,
+                (Filter::Gaussian { stddev }, "stddev") => *stddev = number(value).ok_or_else(bad)?,
+                (Filter::Mitchell { b, .. }, "B" | "b") if name != "catmullrom" => {
+                    *b = number(value).ok_or_else(bad)?
+                }
+                (Filter::Mitchell { c, .. }, "C" | "c") if name != "catmullrom" => {
+                    *c = number(value).ok_or_else(bad)?
+                }
+                (Filter::Lanczos { lobes }, "lobes") => {
+                    *lobes = value
+                        .trim()
+                        .parse()
+                        .map_err(|_| format!("expected a whole number for `lobes`, found `{value}`"))?
+                }
+                (_, key) => {
+                    let takes = match name {
+                        "tent" => "radius",
+                        "gaussian" => "stddev",
+                        "mitchell" => "B, C",
+                        "lanczos" => "lobes",
+                        _ => "no parameters",
+                    };
+                    return Err(format!("a {name} filter has no `{key}` (it takes {takes})"));
+                }
+            }
+        }
+        f.check()?;
+        Ok(f)
+    }
+
+    /// The filter as `parse` reads it back (for a farm shard's arguments and the render's
+    /// identity).
+    pub fn spelled(&self) -> String {
+        match *self {
+            Filter::Box => "box".into(),
+            Filter::Tent { radius } => format!("tent:radius={radius:?}"),
+            Filter::Gaussian { stddev } => format!("gaussian:stddev={stddev:?}"),
+            Filter::Mitchell { b, c } => format!("mitchell:B={b:?},C={c:?}"),
+            Filter::Lanczos { lobes } => format!("lanczos:lobes={lobes}"),
+        }
+    }
+
     /// Checks the parameters: a positive radius up to [`MAX_RADIUS`], and a filter
     /// whose weights over the smallest window a pixel can be normalised by (its own pixel, up to
     /// the radius on either side) integrate to a clearly positive number.

@@ -5,13 +5,15 @@
 //! machines a render farm spreads the samples over. The film is stored tile by tile so that each
 //! tile is owned by one worker while it renders.
 
+pub mod aov;
 pub mod filter;
 pub mod fixed;
 pub mod output;
 pub mod splat;
 
 use crate::math::Color;
-use fixed::{FixedRgb, add_rgb, mean, to_fixed_rgb};
+use aov::{AovKind, AovList};
+use fixed::{FixedRgb, add_rgb, mean, to_fixed, to_fixed_rgb};
 
 /// The light arriving along a camera ray, split by where it came from. The parts sum to the
 /// pixel's value:
@@ -84,6 +86,11 @@ pub struct Tile {
     pub count: Vec<u32>,
     /// Per-pixel sums of the four layers (empty when layers are not wanted).
     pub layers: Vec<[FixedRgb; 4]>,
+    /// Per-pixel sums of the AOVs (`film::aov`), `aov_stride` per pixel: the first `aov_hits`
+    /// are first-hit values, the rest the sums of squares of the samples' RGB (for `variance`).
+    pub aov: Vec<i128>,
+    pub aov_stride: u32,
+    pub aov_hits: u32,
 }
 
 impl Tile {
@@ -98,6 +105,12 @@ impl Tile {
             return false;
         }
         add_rgb(&mut self.sum[k], &to_fixed_rgb(c));
+        if self.aov_stride > self.aov_hits {
+            let at = k * self.aov_stride as usize + self.aov_hits as usize;
+            for (acc, v) in self.aov[at..at + 3].iter_mut().zip(c.to_array()) {
+                *acc += to_fixed(v * v);
+            }
+        }
         if let Some(l) = self.layers.get_mut(k) {
             for (acc, v) in l.iter_mut().zip(layers) {
                 add_rgb(acc, &to_fixed_rgb(*v));
@@ -107,12 +120,26 @@ impl Tile {
     }
 }
 
+impl Tile {
+    /// Adds a camera sample's first-hit AOV values (`AovList::first_hit_values`), weighted as
+    /// its radiance was (the filter's sign and normalisation), to pixel `k`.
+    #[inline]
+    pub fn add_first_hit(&mut self, k: usize, values: &[f32], weight: f32) {
+        let at = k * self.aov_stride as usize;
+        for (acc, v) in self.aov[at..at + self.aov_hits as usize].iter_mut().zip(values) {
+            *acc += to_fixed(v * weight);
+        }
+    }
+}
+
 /// Per-pixel exact sums and sample counts of a render, tile by tile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     pub width: u32,
     pub height: u32,
     pub tiles: Vec<Tile>,
+    /// The AOVs the tiles hold sums for (none unless `with_aovs`).
+    pub aovs: AovList,
 }
 
 impl Film {
@@ -124,10 +151,76 @@ impl Film {
                 let h = TILE_SIZE.min(height - y0);
                 let n = (w * h) as usize;
                 let layers = if layers { vec![[[0; 3]; 4]; n] } else { Vec::new() };
-                tiles.push(Tile { x0, y0, width: w, height: h, sum: vec![[0; 3]; n], count: vec![0; n], layers });
+                tiles.push(Tile {
+                    x0,
+                    y0,
+                    width: w,
+                    height: h,
+                    sum: vec![[0; 3]; n],
+                    count: vec![0; n],
+                    layers,
+                    aov: Vec::new(),
+                    aov_stride: 0,
+                    aov_hits: 0,
+                });
             }
         }
-        Film { width, height, tiles }
+        Film { width, height, tiles, aovs: AovList::default() }
+    }
+
+    /// The film with room for the sums of `aovs`, all zero (the film must hold none yet).
+    pub fn with_aovs(mut self, aovs: &AovList) -> Self {
+        let (stride, hits) = (aovs.summed_channels() as u32, aovs.first_hit_channels() as u32);
+        for t in &mut self.tiles {
+            t.aov = vec![0; t.count.len() * stride as usize];
+            t.aov_stride = stride;
+            t.aov_hits = hits;
+        }
+        self.aovs = aovs.clone();
+        self
+    }
+
+    /// Each AOV channel's image (`AovList::channel_names` order), row by row: first-hit values
+    /// as the mean of the pixel's samples, `variance` as the variance of the pixel's mean
+    /// (the samples' unbiased variance over their count; 0 below two samples), `spp` the count.
+    pub fn aov_images(&self) -> Vec<(String, Vec<f32>)> {
+        let n = (self.width * self.height) as usize;
+        let names = self.aovs.channel_names();
+        let mut out: Vec<Vec<f32>> = vec![vec![0.0; n]; names.len()];
+        let scale = (1u64 << fixed::FRACTION_BITS) as f64;
+        for t in &self.tiles {
+            for j in 0..t.height {
+                for i in 0..t.width {
+                    let k = (j * t.width + i) as usize;
+                    let p = ((t.y0 + j) * self.width + t.x0 + i) as usize;
+                    let count = t.count[k] as f64;
+                    let sums = &t.aov[k * t.aov_stride as usize..(k + 1) * t.aov_stride as usize];
+                    let (mut hit, mut ch) = (0usize, 0usize);
+                    for a in &self.aovs.0 {
+                        for c in 0..a.kind.channels().len() {
+                            out[ch][p] = match a.kind {
+                                AovKind::Spp => t.count[k] as f32,
+                                AovKind::Variance => {
+                                    let s = t.sum[k][c] as f64 / scale;
+                                    let s2 = sums[t.aov_hits as usize + c] as f64 / scale;
+                                    if count < 2.0 {
+                                        0.0
+                                    } else {
+                                        ((s2 - s * s / count) / (count * (count - 1.0))).max(0.0) as f32
+                                    }
+                                }
+                                _ => {
+                                    hit += 1;
+                                    if count > 0.0 { (sums[hit - 1] as f64 / scale / count) as f32 } else { 0.0 }
+                                }
+                            };
+                            ch += 1;
+                        }
+                    }
+                }
+            }
+        }
+        names.into_iter().zip(out).collect()
     }
 
     /// A film holding `n` samples per pixel whose means are `image` and `layers` (the four
@@ -171,6 +264,9 @@ impl Film {
                 for (s, o) in l.iter_mut().zip(o) {
                     add_rgb(s, o);
                 }
+            }
+            for (s, o) in a.aov.iter_mut().zip(&b.aov) {
+                *s += *o;
             }
         }
     }

@@ -85,6 +85,50 @@ pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
     result
 }
 
+/// Writes a `width` x `height` OpenEXR file of float channels atomically: the image `img`'s
+/// R, G, B when given, and `extra` (name, values row by row): the AOVs beside an image
+/// (`film::aov`), in the image's file or, beside a PNG, in one of their own.
+pub fn write_exr_channels(
+    (width, height): (u32, u32),
+    img: Option<&Image>,
+    extra: &[(String, Vec<f32>)],
+    path: &Path,
+) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    if let Some(img) = img {
+        for (ch, name) in ["R", "G", "B"].into_iter().enumerate() {
+            let v: Vec<f32> = img.pixels.iter().map(|c| c.to_array()[ch]).collect();
+            channels.push(AnyChannel::new(name, FlatSamples::F32(v)));
+        }
+    }
+    for (name, values) in extra {
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(values.clone())));
+    }
+    let size = (width as usize, height as usize);
+    let layer =
+        Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels.into()));
+    let tmp = temp_path(path);
+    let result = exr::image::Image::from_layer(layer)
+        .write()
+        .to_file(&tmp)
+        .map_err(|e| write_err(path, e))
+        .and_then(|()| fs::rename(&tmp, path).map_err(|e| write_err(path, e)));
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Where the AOVs of an image written to `path` go: into the image itself when it is an EXR,
+/// else `NAME.aovs.exr` beside it.
+pub fn aov_path(path: &Path) -> Option<PathBuf> {
+    match Format::from_path(path) {
+        Ok(Format::Exr) => None,
+        _ => Some(path.with_extension("aovs.exr")),
+    }
+}
+
 /// 8-bit sRGB bytes of an image, row by row.
 pub fn srgb8(img: &Image) -> Vec<u8> {
     img.pixels.iter().flat_map(|c| c.to_array().map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8)).collect()

@@ -85,8 +85,7 @@ impl Integrator {
 
     /// Renders the image (and its layers when `settings.layers`).
     pub fn render(&self, scene: &Scene, settings: &RenderSettings, control: &RenderControl) -> RenderOutput {
-        let film = Film::new(settings.width, settings.height, settings.layers);
-        self.render_from(scene, settings, control, film)
+        self.render_from(scene, settings, control, settings.new_film())
     }
 
     /// Continues a render from `film`, which holds what an earlier run of the same render (from
@@ -100,13 +99,18 @@ impl Integrator {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        match self {
-            Integrator::Whitted(i) => render_rays_from(scene, i, settings, control, film),
-            Integrator::Path(i) => render_rays_from(scene, i, settings, control, film),
-            Integrator::Photon(i) => render_rays_from(scene, i.as_ref(), settings, control, film),
+        // SPPM's and the light tracer's pixels are not sums of camera samples: their first-hit
+        // AOVs are added afterwards, for the sample indices the render took.
+        let before: Vec<Vec<u32>> = film.tiles.iter().map(|t| t.count.clone()).collect();
+        let mut out = match self {
+            Integrator::Whitted(i) => return render_rays_from(scene, i, settings, control, film),
+            Integrator::Path(i) => return render_rays_from(scene, i, settings, control, film),
+            Integrator::Photon(i) => return render_rays_from(scene, i.as_ref(), settings, control, film),
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
             Integrator::Light(i) => i.render(scene, settings, control, film),
-        }
+        };
+        crate::render::aov::add_first_hits(scene, settings, &mut out.film, &before);
+        out
     }
 }
 

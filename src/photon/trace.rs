@@ -119,7 +119,7 @@ pub const MAX_BOUNCES: u32 = 64;
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power); rays leave
 /// surfaces with offset `bias`.
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
-    let hits = run_chunks(
+    let (hits, _) = run_chunks(
         0,
         n_emit,
         |i| {
@@ -141,7 +141,15 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Wat
 }
 
 /// Traces caustic photons aimed at the bounding spheres `targets` (of mirrors, metals and glass:
-/// `specular_targets`) until `n_store` are stored or `cap` have been emitted.
+/// `specular_targets`) until exactly `n_store` are stored, or `cap` have been emitted.
+///
+/// Photons are emitted in index order (in parallel chunks joined in order), so "the first
+/// `n_store` hits" is the same set on any thread count. As in Jensen's photon tracing loop (emit
+/// until enough are stored, then scale the stored photons by 1 / the number emitted), every
+/// stored photon's power is divided by the photons emitted up to and including the one that
+/// made the last stored hit: photons that stored nothing count, those emitted after it (traced
+/// in the same batch) do not. When that photon stored more than one hit (it went on through a
+/// mirror part after its first caustic hit), its hits past the `n_store`th are dropped.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_caustic(
     scene: &Scene,
@@ -155,12 +163,16 @@ pub fn trace_caustic(
     if targets.is_empty() || n_store == 0 {
         return PhotonPass::default();
     }
-    let batch = n_store.max(CHUNK * 4);
     let mut hits = Vec::new();
+    // The photon index of each stored hit, to know how many were emitted up to the last one.
+    let mut sources: Vec<u64> = Vec::new();
     let mut emitted = 0u64;
+    // The first batch emits as many as are wanted; later ones what the hits per photon so far
+    // say is missing, with a tenth more (the batch size changes the work, not the result).
+    let mut batch = n_store.max(CHUNK * 4);
     while (hits.len() as u64) < n_store && emitted < cap && !watch.cancelled() {
         let n = batch.min(cap - emitted);
-        hits.extend(run_chunks(
+        let (h, s) = run_chunks(
             emitted,
             n,
             |i| {
@@ -177,9 +189,19 @@ pub fn trace_caustic(
             1.0,
             bias,
             Watch { progress: None, ..watch },
-        ));
+        );
+        hits.extend(h);
+        sources.extend(s);
         emitted += n;
         watch.advance(n);
+        let missing = n_store.saturating_sub(hits.len() as u64);
+        let per_photon = hits.len() as f64 / emitted as f64;
+        batch = if per_photon > 0.0 { (missing as f64 / per_photon * 1.1) as u64 } else { emitted.saturating_mul(2) }
+            .max(CHUNK * 4);
+    }
+    if (hits.len() as u64) >= n_store && !watch.cancelled() {
+        hits.truncate(n_store as usize);
+        emitted = sources[n_store as usize - 1] + 1;
     }
     let scale = 1.0 / emitted.max(1) as f32;
     hits.iter_mut().for_each(|h| h.flux *= scale);
@@ -197,7 +219,8 @@ struct Emitted {
 
 /// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order, each
 /// stored flux multiplied by `scale` (1 / photons emitted, when known beforehand). Once the
-/// watch's cancel flag is set, chunks not yet started are skipped.
+/// watch's cancel flag is set, chunks not yet started are skipped. With `caustic_only` the
+/// second list holds the index of the photon that made each hit (empty otherwise).
 #[allow(clippy::too_many_arguments)]
 fn run_chunks(
     first: u64,
@@ -208,17 +231,18 @@ fn run_chunks(
     scale: f32,
     bias: f32,
     watch: Watch,
-) -> Vec<PhotonHit> {
+) -> (Vec<PhotonHit>, Vec<u64>) {
     let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<Vec<PhotonHit>> = (0..chunks)
+    let parts: Vec<(Vec<PhotonHit>, Vec<u64>)> = (0..chunks)
         .into_par_iter()
         .map(|c| {
             // Room for one stored hit per global photon (a closed room stores one or two), so
             // threads do not take turns in the allocator growing their buffers; caustic photons
             // are mostly not stored.
             let mut out = Vec::with_capacity(if caustic_only { 0 } else { 2 * CHUNK as usize });
+            let mut sources = Vec::new();
             if watch.cancelled() {
-                return out;
+                return (out, sources);
             }
             let start = first + c * CHUNK;
             let end = (start + CHUNK).min(first + n);
@@ -227,6 +251,9 @@ fn run_chunks(
                     let flux = e.flux / p_light;
                     if flux.max_element() > 0.0 && flux.is_finite() {
                         trace_photon(scene, e.ray, flux, &mut rng, caustic_only, bias, &mut out);
+                        if caustic_only {
+                            sources.resize(out.len(), i);
+                        }
                     }
                 }
             }
@@ -234,10 +261,11 @@ fn run_chunks(
                 out.iter_mut().for_each(|h| h.flux *= scale);
             }
             watch.advance(end - start);
-            out
+            (out, sources)
         })
         .collect();
-    parts.concat()
+    let (hits, sources): (Vec<Vec<PhotonHit>>, Vec<Vec<u64>>) = parts.into_iter().unzip();
+    (hits.concat(), sources.concat())
 }
 
 /// Follows one photon, appending its stored hits to `out`.

@@ -4,12 +4,14 @@
 //! (a per-ray `radiance`), and multi-pass methods such as SPPM drive their own passes through the
 //! same [`Driver`].
 
+pub mod aov;
 mod driver;
 mod tiles;
 
 pub use driver::{Driver, PassOutcome};
 pub use tiles::{render_rays, render_rays_from};
 
+use crate::film::aov::AovList;
 use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
@@ -52,6 +54,8 @@ pub struct RenderSettings {
     pub progress: bool,
     /// Also accumulate the direct, specular, caustic and indirect layers.
     pub layers: bool,
+    /// The AOVs to write beside the image (`film::aov`).
+    pub aovs: AovList,
 }
 
 impl RenderSettings {
@@ -80,7 +84,13 @@ impl RenderSettings {
             checkpoint: None,
             progress: false,
             layers: false,
+            aovs: s.aovs.clone(),
         }
+    }
+
+    /// An empty film for this render: its image, the layers and AOVs asked for.
+    pub fn new_film(&self) -> Film {
+        Film::new(self.width, self.height, self.layers).with_aovs(&self.aovs)
     }
 
     pub fn pixels(&self) -> u64 {

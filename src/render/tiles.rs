@@ -23,7 +23,7 @@ pub fn render_rays<I: RayIntegrator>(
     settings: &RenderSettings,
     control: &RenderControl,
 ) -> RenderOutput {
-    let film = Film::new(settings.width, settings.height, settings.layers);
+    let film = settings.new_film();
     render_rays_from(scene, integrator, settings, control, film)
 }
 
@@ -84,6 +84,10 @@ fn render_tile<I: RayIntegrator>(
 ) -> u64 {
     let mut bad = 0;
     let mut scratch = I::Scratch::default();
+    // First-hit AOVs, when asked for: one more intersection per camera sample.
+    let aovs = &settings.aovs;
+    let first_hits = tile.aov_hits > 0;
+    let mut values = [0.0f32; super::aov::MAX_FIRST_HIT_CHANNELS];
     for j in 0..tile.height {
         for i in 0..tile.width {
             let (x, y) = (tile.x0 + i, tile.y0 + j);
@@ -91,6 +95,10 @@ fn render_tile<I: RayIntegrator>(
             let next = settings.first_sample.saturating_add(tile.count[k]);
             let pixel_seed = settings.pixel_seed(x, y);
             let mut trace = |(mut sampler, ray, weight): (Sampler, Ray, f32)| {
+                if first_hits {
+                    aovs.first_hit_values(&super::aov::first_hit(scene, &ray), &mut values);
+                    tile.add_first_hit(k, &values, weight);
+                }
                 let mut layers = integrator.radiance(scene, &ray, &mut sampler, &mut scratch, stats);
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);

@@ -116,7 +116,7 @@ impl Default for SamplerDesc {
 }
 
 /// The film as described: which window of it is rendered and how samples make pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct FilmDesc {
     /// Render only this window of the film (`None`: all of it).
     pub crop: Option<Crop>,
@@ -126,6 +126,8 @@ pub struct FilmDesc {
     /// Also take samples outside the window, up to the filter's radius (Mitsuba's
     /// `sample_border`), so that the window's edge pixels are filtered as in the whole image.
     pub sample_border: bool,
+    /// The AOVs to write beside the image (Mitsuba's `aov` integrator, `[render] aov`, `--aov`).
+    pub aovs: crate::film::aov::AovList,
 }
 
 /// The image and its sampling, resolved: what the render loop needs.
@@ -144,6 +146,7 @@ pub struct Sampling {
     pub seed: u64,
     pub sampler: SamplerKind,
     pub antialias: bool,
+    pub aovs: crate::film::aov::AovList,
 }
 
 /// How a file is read (not part of the scene): Mitsuba parameters and strictness.
@@ -234,6 +237,8 @@ impl SceneDescription {
             sampler,
             antialias,
             light_samples,
+            filter,
+            aov,
             photon,
         } = o.clone();
         let PhotonOptions {
@@ -272,6 +277,10 @@ impl SceneDescription {
         s.seed = seed.unwrap_or(s.seed);
         s.kind = sampler.unwrap_or(s.kind);
         s.antialias = antialias.unwrap_or(s.antialias);
+        self.film.filter = filter.unwrap_or(self.film.filter);
+        if let Some(aovs) = aov {
+            self.film.aovs = aovs;
+        }
         let i = &mut self.integrator;
         i.kind = integrator.unwrap_or(i.kind);
         i.max_depth = max_depth.or(i.max_depth);
@@ -338,6 +347,7 @@ impl SceneDescription {
             seed: s.seed,
             sampler: s.kind,
             antialias: s.antialias,
+            aovs: self.film.aovs.clone(),
         })
     }
 

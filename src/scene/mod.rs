@@ -42,26 +42,17 @@ pub fn load_scene_within(
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
         return mitsuba::load_mitsuba(path, options, files);
     }
-    if let Some((k, _)) = options.defines.first() {
-        // Said rather than ignored: a TOML scene has no `$name` parameters to fill.
-        return Err(SceneError::File {
-            path: path.display().to_string(),
-            message: format!(
-                "-D {k}=... sets a `$name` parameter of a Mitsuba XML scene; TOML scenes have none (give render options such as --spp on the command line, or set them in [render])"
-            ),
-        });
-    }
     files.open(path, FileKind::Scene)?;
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    native::load_toml_str(&text, &path.display().to_string(), &base, files)
+    native::load_toml_str(&text, &path.display().to_string(), &base, files, &options.defines)
 }
 
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
 /// paths resolve against `base`.
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
-    native::load_toml_str(text, name, base, &FileBudget::unlimited())
+    native::load_toml_str(text, name, base, &FileBudget::unlimited(), &[])
 }
 
 pub struct Scene {

@@ -227,3 +227,23 @@ fn the_branch_free_search_finds_the_bin_partition_point_finds() {
         }
     }
 }
+
+/// Issue 30, item 7: the command line's `--filter` names the scene format's filters and
+/// parameters, and spells them back as it reads them (a farm shard's arguments).
+#[test]
+fn command_line_filters_read_back_as_written() {
+    assert_eq!(Filter::parse("gaussian"), Ok(Filter::Gaussian { stddev: 0.5 }));
+    assert_eq!(Filter::parse("catmullrom"), Ok(Filter::Mitchell { b: 0.0, c: 0.5 }));
+    assert_eq!(Filter::parse("mitchell:B=0.5,C=0.25"), Ok(Filter::Mitchell { b: 0.5, c: 0.25 }));
+    assert_eq!(Filter::parse("tent:radius=1.5"), Ok(Filter::Tent { radius: 1.5 }));
+    for f in ALL {
+        assert_eq!(Filter::parse(&f.spelled()), Ok(f), "{}", f.spelled());
+    }
+    let e = Filter::parse("gauss").unwrap_err();
+    assert!(e.contains("unknown filter `gauss`") && e.contains("gaussian"), "{e}");
+    let e = Filter::parse("gaussian:radius=2").unwrap_err();
+    assert_eq!(e, "a gaussian filter has no `radius` (it takes stddev)");
+    let e = Filter::parse("gaussian:stddev=-1").unwrap_err();
+    assert!(e.contains("stddev must be positive"), "{e}");
+    assert!(Filter::parse("lanczos:lobes=x").is_err());
+}

@@ -32,6 +32,7 @@ use super::footprint::{FileBudget, FileKind};
 use crate::options::IntegratorKind;
 use plugins::PluginKind;
 use props::Cx;
+pub(crate) use props::{closest, next_parameter};
 use std::collections::HashMap;
 use std::path::Path;
 use xml::{El, Resolver, Src};
@@ -73,6 +74,7 @@ fn load_mitsuba_text(
         ids: HashMap::new(),
         warnings: Vec::new(),
         strict: options.strict,
+        aovs: Default::default(),
         files,
     };
     for (k, v) in &options.defines {
@@ -222,7 +224,7 @@ impl<'a> Cx<'a> {
             camera: sensor.camera,
             width: sensor.width,
             height: sensor.height,
-            film: sensor.film,
+            film: super::desc::FilmDesc { aovs: std::mem::take(&mut self.aovs), ..sensor.film },
             sampler: sensor.sampler,
             integrator: IntegratorDesc { kind, max_depth, ..IntegratorDesc::default() },
             warnings: Vec::new(),
@@ -292,12 +294,29 @@ impl<'a> Cx<'a> {
             // Wrappers that add channels to the film (moments for variance estimates, AOVs)
             // around the integrators that make the image: the image is the first nested one's.
             "moment" | "aov" => {
-                if p.kind == "aov" {
-                    let _ = self.string(&p, "aovs")?;
-                    self.warn(
-                        el,
-                        "the aov integrator's extra channels are not written; the image is its nested integrator's",
-                    )?;
+                if p.kind == "aov"
+                    && let Some((text, at)) = self.string(&p, "aovs")?
+                {
+                    // Mitsuba's `name:type` pairs, each an AOV written beside the image (the
+                    // command line's `--aov` replaces them); types caustic has no counterpart
+                    // for are skipped with a warning.
+                    let mut kept = Vec::new();
+                    for entry in text.split(',').map(str::trim).filter(|e| !e.is_empty()) {
+                        let kind = entry.split_once(':').map_or(entry, |(_, k)| k.trim());
+                        if crate::film::aov::AovKind::MITSUBA_ONLY.contains(&kind) {
+                            self.warn(at, format!("the `{kind}` AOV is not supported and is not written"))?;
+                        } else if !entry.contains(':') {
+                            return Err(
+                                self.err(at, format!("AOV `{entry}`: expected a name:type pair, e.g. dd.y:depth"))
+                            );
+                        } else {
+                            kept.push(entry);
+                        }
+                    }
+                    if !kept.is_empty() {
+                        self.aovs = crate::film::aov::AovList::parse(&kept.join(","))
+                            .map_err(|m| self.err(at, format!("aovs: {m}")))?;
+                    }
                 }
                 let nested = self.object(&p, None, "integrator");
                 let Some(&(inner, _)) = nested.first() else {

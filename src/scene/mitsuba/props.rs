@@ -68,6 +68,8 @@ pub(super) struct Cx<'a> {
     pub strict: bool,
     /// The hook every file is reported to before it is read (shared with the scene builder).
     pub files: &'a crate::scene::FileBudget,
+    /// The AOVs an `aov` integrator asks for.
+    pub aovs: crate::film::aov::AovList,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).
@@ -573,7 +575,7 @@ impl<'a> Cx<'a> {
 
 /// The first `$name` reference in `text`: (the text before it, the name, the text after it);
 /// the name is empty for a `$` followed by no name character.
-pub(super) fn next_parameter(text: &str) -> Option<(&str, &str, &str)> {
+pub(crate) fn next_parameter(text: &str) -> Option<(&str, &str, &str)> {
     let i = text.find('$')?;
     let after = &text[i + 1..];
     let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
@@ -582,7 +584,7 @@ pub(super) fn next_parameter(text: &str) -> Option<(&str, &str, &str)> {
 
 /// The name among `known` closest to `name` by edit distance, when it is close enough to be a
 /// misspelling (at most a third of the name's letters differ, and at least one does).
-pub(super) fn closest<'k>(name: &str, known: impl Iterator<Item = &'k str>) -> Option<&'k str> {
+pub(crate) fn closest<'k>(name: &str, known: impl Iterator<Item = &'k str>) -> Option<&'k str> {
     let limit = (name.chars().count() / 3).max(1);
     known
         .filter(|k| *k != name)

@@ -132,8 +132,11 @@ impl<'a> Cx<'a> {
         };
         Ok(FilmDesc {
             crop,
-            filter: render.filter.as_ref().map_or(Filter::Box, |f| f.0),
+            // The file's `filter` is one of the render's options, applied with them.
+            filter: Filter::Box,
             sample_border: render.sample_border.unwrap_or(false),
+            // `aov` too is one of the render's options.
+            aovs: Default::default(),
         })
     }
 

@@ -11,6 +11,7 @@
 mod camera;
 mod materials;
 mod objects;
+mod params;
 mod schema;
 
 use super::SceneError;
@@ -32,10 +33,19 @@ use toml::de::{DeString, DeTable, DeValue, ValueDeserializer};
 const DEFAULT_SIZE: (u32, u32) = (640, 480);
 
 /// Loads a TOML scene from `text`; `name` is used in messages and mesh paths resolve against
-/// `base`. Every mesh and image is reported to `files` before it is read.
-pub fn load_toml_str(text: &str, name: &str, base: &Path, files: &FileBudget) -> Result<SceneDescription, SceneError> {
-    let cx = Cx { path: name, text, base, files };
-    let mut sections = cx.sections()?;
+/// `base`; `defines` are the `-D name=value` given for its `$name` parameters. Every mesh and
+/// image is reported to `files` before it is read.
+pub fn load_toml_str<'a>(
+    text: &'a str,
+    name: &'a str,
+    base: &'a Path,
+    files: &'a FileBudget,
+    defines: &'a [(String, String)],
+) -> Result<SceneDescription, SceneError> {
+    let plain = Cx { path: name, text, base, files, substituted: &[] };
+    let mut sections = plain.sections()?;
+    let substituted = params::substitute(&plain, &mut sections, defines)?;
+    let cx = Cx { substituted: &substituted, ..plain };
     let render: RenderDesc = match sections.remove("render") {
         Some(v) => cx.de(v)?,
         None => RenderDesc::default(),
@@ -61,7 +71,11 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path, files: &FileBudget) ->
     if let Some(v) = sections.remove("objects") {
         cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
     }
-    let options = render.options();
+    let mut options = render.options();
+    if let Some(a) = &render.aov {
+        let list = crate::film::aov::AovList::parse(a.get_ref()).map_err(|m| cx.at(a.span(), m))?;
+        options.aov = Some(list);
+    }
     let (width, height) = (options.width.unwrap_or(DEFAULT_SIZE.0), options.height.unwrap_or(DEFAULT_SIZE.1));
     let film = cx.film(&render, width, height)?;
     let mut desc = SceneDescription {
@@ -92,6 +106,8 @@ struct Cx<'a> {
     text: &'a str,
     base: &'a Path,
     files: &'a FileBudget,
+    /// Where `$name` parameters were put, so that an error about one names it.
+    substituted: &'a [(Range<usize>, String)],
 }
 
 impl<'a> Cx<'a> {
@@ -104,6 +120,9 @@ impl<'a> Cx<'a> {
         let mut message = plain_words(e.message().trim_end());
         if message.contains("wanted exactly 1 element") {
             message.push_str(" (each transform entry holds one operation: translate, rotate or scale)");
+        }
+        if let Some((_, name)) = self.substituted.iter().find(|(s, _)| s.start <= span.start && span.end <= s.end) {
+            message.push_str(&format!(" (the value of parameter `${name}`)"));
         }
         self.at(span, message)
     }
@@ -127,14 +146,14 @@ impl<'a> Cx<'a> {
         let mut sections = HashMap::new();
         for (key, value) in doc.into_inner() {
             let k: &str = key.get_ref();
-            let known = ["render", "camera", "textures", "materials", "lights", "groups", "objects"]
+            let known = ["parameters", "render", "camera", "textures", "materials", "lights", "groups", "objects"]
                 .into_iter()
                 .find(|s| *s == k);
             let Some(section) = known else {
                 return Err(self.at(
                     key.span(),
                     format!(
-                        "unknown section `{k}`; expected one of render, camera, textures, materials, lights, groups, objects"
+                        "unknown section `{k}`; expected one of parameters, render, camera, textures, materials, lights, groups, objects"
                     ),
                 ));
             };

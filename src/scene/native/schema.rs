@@ -119,6 +119,8 @@ pub struct RenderDesc {
     pub crop: Option<Spanned<CropSpec>>,
     pub filter: Option<FilterSpec>,
     pub sample_border: Option<bool>,
+    /// AOVs to write beside the image, as `--aov` takes them.
+    pub aov: Option<Spanned<String>>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -148,8 +150,9 @@ impl RenderDesc {
             light_samples,
             adc_bailout,
             crop: _,
-            filter: _,
+            filter,
             sample_border: _,
+            aov: _,
             photon,
         } = self;
         Options {
@@ -165,6 +168,9 @@ impl RenderDesc {
             sampler: *sampler,
             antialias: *antialias,
             light_samples: *light_samples,
+            filter: filter.as_ref().map(|f| f.0),
+            // Read (with its position for errors) by the loader: `aovs`.
+            aov: None,
             photon: photon.clone(),
         }
     }
