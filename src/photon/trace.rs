@@ -112,6 +112,17 @@ impl<'a> Watch<'a> {
     }
 }
 
+/// Which hits a photon pass stores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Store {
+    /// Every hit on a surface with a non-delta part (the global photon map).
+    All,
+    /// Every such hit but the photons' first (SPPM, which samples direct light from the lights).
+    Indirect,
+    /// Hits after mirrors and glass only, and no further bounce (the caustic map).
+    Caustic,
+}
+
 const CHUNK: u64 = 4096;
 /// Bounces after which a photon is dropped (Russian roulette ends nearly all paths long before).
 pub const MAX_BOUNCES: u32 = 64;
@@ -119,7 +130,23 @@ pub const MAX_BOUNCES: u32 = 64;
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power); rays leave
 /// surfaces with offset `bias`.
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
-    let (hits, _) = run_chunks(
+    let mut hits = Vec::new();
+    trace_global_into(scene, n_emit, seed, bias, Store::All, watch, &mut hits);
+    PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
+}
+
+/// `trace_global` storing the hits `store` names into `hits` (its old contents replaced, its
+/// buffer kept: SPPM traces a pass per iteration into the same one).
+pub fn trace_global_into(
+    scene: &Scene,
+    n_emit: u64,
+    seed: u64,
+    bias: f32,
+    store: Store,
+    watch: Watch,
+    hits: &mut Vec<PhotonHit>,
+) {
+    run_chunks(
         0,
         n_emit,
         |i| {
@@ -132,12 +159,13 @@ pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Wat
             Some((Emitted { ray, flux: e.flux }, p, rng))
         },
         scene,
-        false,
+        store,
         1.0 / n_emit.max(1) as f32,
         bias,
         watch,
+        hits,
+        &mut Vec::new(),
     );
-    PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
 /// Traces caustic photons aimed at the bounding spheres `targets` (of mirrors, metals and glass:
@@ -172,7 +200,8 @@ pub fn trace_caustic(
     let mut batch = n_store.max(CHUNK * 4);
     while (hits.len() as u64) < n_store && emitted < cap && !watch.cancelled() {
         let n = batch.min(cap - emitted);
-        let (h, s) = run_chunks(
+        let (mut h, mut s) = (Vec::new(), Vec::new());
+        run_chunks(
             emitted,
             n,
             |i| {
@@ -185,10 +214,12 @@ pub fn trace_caustic(
                 Some((Emitted { ray, flux }, p, rng))
             },
             scene,
-            true,
+            Store::Caustic,
             1.0,
             bias,
             Watch { progress: None, ..watch },
+            &mut h,
+            &mut s,
         );
         hits.extend(h);
         sources.extend(s);
@@ -217,21 +248,23 @@ struct Emitted {
     flux: Color,
 }
 
-/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order, each
-/// stored flux multiplied by `scale` (1 / photons emitted, when known beforehand). Once the
-/// watch's cancel flag is set, chunks not yet started are skipped. With `caustic_only` the
-/// second list holds the index of the photon that made each hit (empty otherwise).
+/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order into
+/// `hits` (replacing what it held), each stored flux multiplied by `scale` (1 / photons emitted,
+/// when known beforehand). Once the watch's cancel flag is set, chunks not yet started are
+/// skipped. For the caustic map, `sources` receives the index of the photon that made each hit.
 #[allow(clippy::too_many_arguments)]
 fn run_chunks(
     first: u64,
     n: u64,
     emit: impl Fn(u64) -> Option<(Emitted, f32, Rng32)> + Sync,
     scene: &Scene,
-    caustic_only: bool,
+    store: Store,
     scale: f32,
     bias: f32,
     watch: Watch,
-) -> (Vec<PhotonHit>, Vec<u64>) {
+    hits: &mut Vec<PhotonHit>,
+    sources: &mut Vec<u64>,
+) {
     let chunks = n.div_ceil(CHUNK);
     let parts: Vec<(Vec<PhotonHit>, Vec<u64>)> = (0..chunks)
         .into_par_iter()
@@ -239,7 +272,11 @@ fn run_chunks(
             // Room for one stored hit per global photon (a closed room stores one or two), so
             // threads do not take turns in the allocator growing their buffers; caustic photons
             // are mostly not stored.
-            let mut out = Vec::with_capacity(if caustic_only { 0 } else { 2 * CHUNK as usize });
+            let mut out = Vec::with_capacity(match store {
+                Store::All => 2 * CHUNK as usize,
+                Store::Indirect => CHUNK as usize,
+                Store::Caustic => 0,
+            });
             let mut sources = Vec::new();
             if watch.cancelled() {
                 return (out, sources);
@@ -250,8 +287,8 @@ fn run_chunks(
                 if let Some((e, p_light, mut rng)) = emit(i) {
                     let flux = e.flux / p_light;
                     if flux.max_element() > 0.0 && flux.is_finite() {
-                        trace_photon(scene, e.ray, flux, &mut rng, caustic_only, bias, &mut out);
-                        if caustic_only {
+                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, &mut out);
+                        if store == Store::Caustic {
                             sources.resize(out.len(), i);
                         }
                     }
@@ -264,8 +301,13 @@ fn run_chunks(
             (out, sources)
         })
         .collect();
-    let (hits, sources): (Vec<Vec<PhotonHit>>, Vec<Vec<u64>>) = parts.into_iter().unzip();
-    (hits.concat(), sources.concat())
+    hits.clear();
+    hits.reserve(parts.iter().map(|p| p.0.len()).sum());
+    sources.clear();
+    for (h, s) in parts {
+        hits.extend_from_slice(&h);
+        sources.extend_from_slice(&s);
+    }
 }
 
 /// Follows one photon, appending its stored hits to `out`.
@@ -274,10 +316,11 @@ pub fn trace_photon(
     mut ray: Ray,
     mut flux: Color,
     rng: &mut Rng32,
-    caustic_only: bool,
+    store: Store,
     bias: f32,
     out: &mut Vec<PhotonHit>,
 ) {
+    let caustic_only = store == Store::Caustic;
     let mut only_specular = true;
     // Scattering events so far (passing through a mask is none).
     let mut depth = 0;
@@ -309,7 +352,9 @@ pub fn trace_photon(
                 } else {
                     0
                 };
-                out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
+                if depth > 0 || store == Store::All {
+                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
+                }
             }
         }
         let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };

@@ -3,14 +3,15 @@
 
 use crate::math::Vec3;
 use crate::photon::trace::PhotonHit;
-use rayon::prelude::*;
 
-/// Photons of one iteration sorted into a hash grid: entries sorted by (bucket, cell).
+/// Photons of one iteration sorted into a hash grid: entries in bucket order, and within a
+/// bucket in photon order.
 pub(super) struct PhotonGrid {
     pub(super) cell: f32,
     origin: Vec3,
     mask: u64,
-    /// bucket -> range in `entries`.
+    /// bucket -> range in `entries` (one more than the buckets; also the sort's write cursors
+    /// while it runs).
     pub(super) starts: Vec<u32>,
     /// (cell key, photon index)
     pub(super) entries: Vec<(u64, u32)>,
@@ -31,25 +32,42 @@ impl PhotonGrid {
     }
 
     /// Sorts `hits` into the grid again, reusing its buffers (an SPPM iteration allocates no
-    /// new grid).
+    /// new grid). A counting sort by bucket, in photon order within each bucket: a query,
+    /// which scans a cell's bucket for the cell's key, meets the cell's photons in photon
+    /// order, as a sort by (bucket, key, photon) would give them, in linear time.
     pub(super) fn rebuild(&mut self, hits: &[PhotonHit], cell: f32, origin: Vec3) {
         let size = hits.len().next_power_of_two().max(1);
         let mask = size as u64 - 1;
-        self.entries.clear();
-        self.entries.par_extend(
-            hits.par_iter().enumerate().map(|(i, h)| (cell_key(Self::coords(h.p, origin, cell)), i as u32)),
-        );
-        let bucket = |k: u64| crate::sampling::mix64(k) & mask;
-        self.entries.par_sort_unstable_by_key(|&(k, i)| (bucket(k), k, i));
+        let bucket = |k: u64| (crate::sampling::mix64(k) & mask) as usize;
+        // Keys are worked out twice (to count, then to place) rather than kept: a buffer of
+        // them was a tenth of SPPM's memory.
+        let key = |h: &PhotonHit| cell_key(Self::coords(h.p, origin, cell));
         self.starts.clear();
         self.starts.resize(size + 1, 0);
-        for &(k, _) in &self.entries {
-            self.starts[bucket(k) as usize + 1] += 1;
+        for h in hits {
+            self.starts[bucket(key(h)) + 1] += 1;
         }
         for b in 0..size {
             self.starts[b + 1] += self.starts[b];
         }
+        self.entries.clear();
+        self.entries.resize(hits.len(), (0, 0));
+        // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
+        // starts are then one bucket behind, and shifting them back restores them.
+        for (i, h) in hits.iter().enumerate() {
+            let k = key(h);
+            let b = bucket(k);
+            self.entries[self.starts[b] as usize] = (k, i as u32);
+            self.starts[b] += 1;
+        }
+        self.starts.copy_within(0..size, 1);
+        self.starts[0] = 0;
         (self.cell, self.origin, self.mask) = (cell, origin, mask);
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.entries.capacity() * std::mem::size_of::<(u64, u32)>() + self.starts.capacity() * 4
     }
 
     #[inline]

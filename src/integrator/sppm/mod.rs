@@ -7,8 +7,8 @@
 //!    iteration) follows mirrors and glass to the first non-specular surface, adds emitted and
 //!    directly sampled light there, and leaves a visible point (position, BSDF, throughput);
 //! 2. `photon_pass`: photons from the lights, stored where they land on diffuse surfaces after at
-//!    least one bounce (direct light is already counted), in a hash grid whose cells are as large
-//!    as the largest search radius;
+//!    least one bounce (direct light is already counted: their first hits are not stored), in a
+//!    hash grid whose cells are as large as the largest search radius;
 //! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
 //!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
 //!
@@ -142,16 +142,48 @@ struct PixelLayers {
 /// SPPM's memory.
 #[derive(Clone, Copy)]
 struct VisiblePoint {
-    hit: Hit,
+    /// What the BSDF is made from (`Shading::hit`).
+    at: Shading,
     wo: Vec3,
     beta: Color,
-    /// Distance travelled from the camera (for the initial radius).
-    dist: f32,
     /// The layers of the light gathered there.
     layer: LayerPath,
     /// Most scattering events a photon gathered there may have had, so that whole paths keep
     /// to the depth limit (`trace::photon_depth_limit`).
-    photon_depth: u32,
+    photon_depth: u8,
+}
+
+/// The part of a hit its BSDF is made from: a hit without its distance, error bound and light.
+#[derive(Clone, Copy)]
+struct Shading {
+    p: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    param: crate::geometry::SurfaceParam,
+    material: u32,
+    prim: u32,
+}
+
+impl Shading {
+    fn of(h: &Hit) -> Self {
+        Shading { p: h.p, ng: h.ng, ns: h.ns, param: h.param, material: h.material, prim: h.prim }
+    }
+
+    /// A hit that makes the same BSDF as the one this was taken from (`Scene::bsdf` reads none
+    /// of the fields left out).
+    fn hit(&self) -> Hit {
+        Hit {
+            t: 0.0,
+            p: self.p,
+            p_error: Vec3::ZERO,
+            ng: self.ng,
+            ns: self.ns,
+            param: self.param,
+            material: self.material,
+            light: crate::geometry::NO_LIGHT,
+            prim: self.prim,
+        }
+    }
 }
 
 /// What one iteration's camera sample of a pixel found.
@@ -159,7 +191,8 @@ struct CameraSample {
     /// Emitted and directly sampled light, in all and by layer.
     ld: Color,
     ld_layers: Layers,
-    point: Option<VisiblePoint>,
+    /// The visible point, and its distance from the camera (for a pixel's first radius).
+    point: Option<(VisiblePoint, f32)>,
 }
 
 impl Sppm {
@@ -177,6 +210,7 @@ impl Sppm {
         let state = RefCell::new(State {
             pixels: vec![PixelStats::default(); n_pixels],
             points: Vec::new(),
+            hits: Vec::new(),
             grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
@@ -228,12 +262,12 @@ impl Sppm {
         // here abandons the iteration before any pixel has changed.
         let seed = hash_seed(&[settings.seed, it as u64]);
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
-        let pass = trace::trace_global(scene, config.photons_per_iter, seed, config.ray_bias, watch);
-        if pass.cancelled {
+        let mut hits = std::mem::take(&mut state.hits);
+        let store = trace::Store::Indirect;
+        trace::trace_global_into(scene, config.photons_per_iter, seed, config.ray_bias, store, watch, &mut hits);
+        if watch.cancelled() {
             return false;
         }
-        let mut hits = pass.hits;
-        hits.retain(|h| h.flags & trace::DIRECT == 0);
         // Pass 2: each pixel's camera sample: its emitted and direct light goes into the pixel,
         // and its visible point (a new one gets a radius) into a buffer kept between iterations.
         state.points.resize(n_pixels, None);
@@ -259,12 +293,12 @@ impl Sppm {
                 } else {
                     nonfinite = 1;
                 }
-                if let Some(v) = &sample.point
+                if let Some((_, dist)) = sample.point
                     && px.r == 0.0
                 {
-                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, v.dist, diag));
+                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
                 }
-                *point = sample.point;
+                *point = sample.point.map(|(v, _)| v);
                 (stats, nonfinite)
             })
             .reduce(
@@ -285,7 +319,7 @@ impl Sppm {
         if max_r > 0.0 && !hits.is_empty() {
             state.grid.rebuild(&hits, max_r, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
-            bytes += grid.entries.capacity() * std::mem::size_of::<(u64, u32)>() + grid.starts.capacity() * 4;
+            bytes += grid.memory_bytes();
             let layers = layers_of(&mut state.layers, n_pixels);
             state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
                 |((px, layers), vp)| {
@@ -310,6 +344,7 @@ impl Sppm {
             );
         }
         state.peak_bytes = state.peak_bytes.max(bytes);
+        state.hits = hits;
         driver.record(&RayStats::default(), 0, settings.pixels());
         true
     }
@@ -360,14 +395,16 @@ impl Sppm {
             }
             // This surface is within the depth limit (the walk checked).
             let photon_depth = trace::photon_depth_limit(config.max_depth, v.bounce).unwrap_or(0);
-            let point = Some(VisiblePoint {
-                hit: v.hit,
-                wo: v.wo,
-                beta: walk.beta / q,
-                dist: walk.dist,
-                layer: walk.layer,
-                photon_depth,
-            });
+            let point = Some((
+                VisiblePoint {
+                    at: Shading::of(&v.hit),
+                    wo: v.wo,
+                    beta: walk.beta / q,
+                    layer: walk.layer,
+                    photon_depth: photon_depth.min(u8::MAX.into()) as u8,
+                },
+                walk.dist,
+            ));
             return CameraSample { ld, ld_layers, point };
         }
         CameraSample { ld, ld_layers, point: None }
@@ -380,8 +417,8 @@ impl Sppm {
 fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
     let r2 = r * r;
     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
-    let bsdf = scene.bsdf(&v.hit, v.wo);
-    let p = v.hit.p;
+    let bsdf = scene.bsdf(&v.at.hit(), v.wo);
+    let p = v.at.p;
     // Photons from behind pass only through a transmitting surface (rough glass).
     let both_sides = bsdf.flags().is_transmission();
     grid.for_each_near(p, r, |i| {
@@ -392,7 +429,7 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[Ph
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
         m += 1;
-        if (!both_sides && ph.dir.dot(bsdf.normal()) >= 0.0) || u32::from(ph.depth) > v.photon_depth {
+        if (!both_sides && ph.dir.dot(bsdf.normal()) >= 0.0) || ph.depth > v.photon_depth {
             return;
         }
         let f = bsdf.f(v.wo, -ph.dir, Transport::Radiance);
@@ -421,6 +458,8 @@ struct State {
     /// This iteration's visible points, one per pixel, and photon grid (buffers kept between
     /// iterations).
     points: Vec<Option<VisiblePoint>>,
+    /// This iteration's photons (a buffer kept between iterations).
+    hits: Vec<PhotonHit>,
     grid: PhotonGrid,
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
@@ -498,12 +537,11 @@ mod tests {
         let scene = grey_quad();
         let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
         let v = VisiblePoint {
-            hit: hit.unwrap(),
+            at: Shading::of(&hit.unwrap()),
             wo: Vec3::Z,
             beta: Color::ONE,
-            dist: 1.0,
             layer: LayerPath::CAMERA,
-            photon_depth: trace::MAX_PHOTON_DEPTH,
+            photon_depth: trace::MAX_PHOTON_DEPTH as u8,
         };
         let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, depth: 0, n: Vec3::Z };
         let hits = [
