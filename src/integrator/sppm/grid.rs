@@ -1,5 +1,5 @@
-//! The photons of one SPPM iteration in a hash grid: entries sorted by (bucket, cell), so a
-//! pixel's query visits its photons in a fixed order whatever the thread count.
+//! The photons of one SPPM iteration in a hash grid: entries in bucket order, so a pixel's query
+//! visits its photons in a fixed order whatever the thread count.
 
 use crate::math::Vec3;
 use crate::photon::trace::PhotonHit;
@@ -13,8 +13,9 @@ pub(super) struct PhotonGrid {
     /// bucket -> range in `entries` (one more than the buckets; also the sort's write cursors
     /// while it runs).
     pub(super) starts: Vec<u32>,
-    /// (cell key, photon index)
-    pub(super) entries: Vec<(u64, u32)>,
+    /// (photon position, photon index): a query tests the distance on entries read in order,
+    /// and reads a photon only when it is in range.
+    pub(super) entries: Vec<(Vec3, u32)>,
 }
 
 #[inline]
@@ -32,14 +33,12 @@ impl PhotonGrid {
     }
 
     /// Sorts `hits` into the grid again, reusing its buffers (an SPPM iteration allocates no
-    /// new grid). A counting sort by bucket, in photon order within each bucket: a query,
-    /// which scans a cell's bucket for the cell's key, meets the cell's photons in photon
-    /// order, as a sort by (bucket, key, photon) would give them, in linear time.
+    /// new grid): a counting sort by bucket, in photon order within each bucket.
     pub(super) fn rebuild(&mut self, hits: &[PhotonHit], cell: f32, origin: Vec3) {
         let size = hits.len().next_power_of_two().max(1);
         let mask = size as u64 - 1;
         let bucket = |k: u64| (crate::sampling::mix64(k) & mask) as usize;
-        // Keys are worked out twice (to count, then to place) rather than kept: a buffer of
+        // Buckets are worked out twice (to count, then to place) rather than kept: a buffer of
         // them was a tenth of SPPM's memory.
         let key = |h: &PhotonHit| cell_key(Self::coords(h.p, origin, cell));
         self.starts.clear();
@@ -51,13 +50,12 @@ impl PhotonGrid {
             self.starts[b + 1] += self.starts[b];
         }
         self.entries.clear();
-        self.entries.resize(hits.len(), (0, 0));
+        self.entries.resize(hits.len(), (Vec3::ZERO, 0));
         // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
         // starts are then one bucket behind, and shifting them back restores them.
         for (i, h) in hits.iter().enumerate() {
-            let k = key(h);
-            let b = bucket(k);
-            self.entries[self.starts[b] as usize] = (k, i as u32);
+            let b = bucket(key(h));
+            self.entries[self.starts[b] as usize] = (h.p, i as u32);
             self.starts[b] += 1;
         }
         self.starts.copy_within(0..size, 1);
@@ -67,7 +65,7 @@ impl PhotonGrid {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.entries.capacity() * std::mem::size_of::<(u64, u32)>() + self.starts.capacity() * 4
+        self.entries.capacity() * std::mem::size_of::<(Vec3, u32)>() + self.starts.capacity() * 4
     }
 
     #[inline]
@@ -76,24 +74,62 @@ impl PhotonGrid {
         [c.x.clamp(-1e6, 1e6) as i32, c.y.clamp(-1e6, 1e6) as i32, c.z.clamp(-1e6, 1e6) as i32]
     }
 
-    /// Calls `f(photon index)` for every photon in the cells overlapping the sphere (p, r), each
-    /// once, in a fixed order.
+    /// Calls `f(photon index)` for every photon within distance `r` of `p` (at most `r`), each
+    /// once, in a fixed order. A cell's bucket holds photons of other cells too, which the
+    /// distance test leaves out; each bucket is read once (in increasing order, each in photon
+    /// order), so a photon in range is met once however many of the query's cells share its
+    /// bucket. A query of more than `MAX_BUCKETS` cells (a radius far above the cells' size)
+    /// reads the cells in turn instead and counts a photon when its own cell is read.
     #[inline]
-    pub(super) fn for_each_near(&self, p: Vec3, r: f32, mut f: impl FnMut(u32)) {
+    pub(super) fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(u32)) {
+        const MAX_BUCKETS: usize = 64;
         let lo = Self::coords(p - Vec3::splat(r), self.origin, self.cell);
         let hi = Self::coords(p + Vec3::splat(r), self.origin, self.cell);
+        let r2 = r * r;
+        let span = |a: usize| (i64::from(hi[a]) - i64::from(lo[a]) + 1) as usize;
+        let bucket = |c: [i32; 3]| (crate::sampling::mix64(cell_key(c)) & self.mask) as usize;
+        if span(0) * span(1) * span(2) <= MAX_BUCKETS {
+            let mut buckets = [0usize; MAX_BUCKETS];
+            let mut n = 0;
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets[n] = bucket([x, y, z]);
+                        n += 1;
+                    }
+                }
+            }
+            let buckets = &mut buckets[..n];
+            buckets.sort_unstable();
+            let mut last = usize::MAX;
+            for &b in buckets.iter() {
+                if b != last {
+                    self.scan(b, p, r2, |_, i| f(i));
+                    last = b;
+                }
+            }
+            return;
+        }
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    let key = cell_key([x, y, z]);
-                    let b = (crate::sampling::mix64(key) & self.mask) as usize;
-                    let range = self.starts[b] as usize..self.starts[b + 1] as usize;
-                    for &(k, i) in &self.entries[range] {
-                        if k == key {
+                    self.scan(bucket([x, y, z]), p, r2, |q, i| {
+                        if Self::coords(q, self.origin, self.cell) == [x, y, z] {
                             f(i);
                         }
-                    }
+                    });
                 }
+            }
+        }
+    }
+
+    /// Calls `f(position, index)` for the photons of bucket `b` within squared distance `r2` of
+    /// `p`.
+    #[inline(always)]
+    fn scan(&self, b: usize, p: Vec3, r2: f32, mut f: impl FnMut(Vec3, u32)) {
+        for &(q, i) in &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize] {
+            if (q - p).length_squared() <= r2 {
+                f(q, i);
             }
         }
     }
@@ -117,21 +153,21 @@ mod tests {
                 n: Vec3::Y,
             })
             .collect();
-        let r = 0.3;
-        let grid = PhotonGrid::build(&hits, r, Vec3::splat(-2.0));
-        for _ in 0..200 {
-            let q = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
-            let mut found = Vec::new();
-            grid.for_each_near(q, r, |i| {
-                if (hits[i as usize].p - q).length() <= r {
-                    found.push(i)
-                }
-            });
-            let mut brute: Vec<u32> =
-                (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length() <= r).collect();
-            found.sort();
-            brute.sort();
-            assert_eq!(found, brute);
+        // Cells of twice the radius and of the radius (buckets read once each), and cells far
+        // smaller than the radius (cells read in turn).
+        for (cell, r) in [(0.6, 0.3), (0.3, 0.3), (0.05, 0.3)] {
+            let grid = PhotonGrid::build(&hits, cell, Vec3::splat(-2.0));
+            for _ in 0..200 {
+                let q = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
+                let mut found = Vec::new();
+                grid.for_each_within(q, r, |i| found.push(i));
+                let mut brute: Vec<u32> =
+                    (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length_squared() <= r * r).collect();
+                // Each once: sorted, the lists are equal only without repeats.
+                found.sort();
+                brute.sort();
+                assert_eq!(found, brute, "cell {cell}, radius {r}");
+            }
         }
     }
 }

@@ -8,7 +8,7 @@
 //!    directly sampled light there, and leaves a visible point (position, BSDF, throughput);
 //! 2. `photon_pass`: photons from the lights, stored where they land on diffuse surfaces after at
 //!    least one bounce (direct light is already counted: their first hits are not stored), in a
-//!    hash grid whose cells are as large as the largest search radius;
+//!    hash grid whose cells are twice the mean search radius;
 //! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
 //!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
 //!
@@ -82,7 +82,7 @@ pub fn estimated_bytes(pixels: u64, photons_per_iter: u64, layers: bool) -> u64 
     let layer_bytes = if layers { std::mem::size_of::<PixelLayers>() } else { 0 };
     let per_pixel =
         (std::mem::size_of::<PixelStats>() + std::mem::size_of::<Option<VisiblePoint>>() + layer_bytes) as u64;
-    let per_photon = 3 * (std::mem::size_of::<PhotonHit>() + std::mem::size_of::<(u64, u32)>() + 4) as u64;
+    let per_photon = 3 * (std::mem::size_of::<PhotonHit>() + std::mem::size_of::<(Vec3, u32)>() + 4) as u64;
     pixels.saturating_mul(per_pixel).saturating_add(photons_per_iter.saturating_mul(per_photon))
 }
 
@@ -310,14 +310,24 @@ impl Sppm {
             );
         driver.record(&rays, nonfinite, 0);
         let vps = &state.points;
-        let max_r = state.pixels.iter().map(|p| p.r).fold(0.0f32, f32::max);
+        // The grid's cells are twice the mean radius, so most queries read eight cells: a pixel
+        // of a larger radius reads more. Cells as large as the largest radius made every pixel
+        // scan photons far out of its reach; cells of the mean radius, 27 cells' scattered
+        // reads per pixel (BENCHMARKS.md, issue 29).
+        let (sum, n) = state
+            .pixels
+            .iter()
+            .zip(vps)
+            .filter(|(_, v)| v.is_some())
+            .fold((0.0f64, 0u64), |(s, n), (p, _)| (s + f64::from(p.r), n + 1));
+        let cell = if n > 0 { 2.0 * (sum / n as f64) as f32 } else { 0.0 };
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
             + hits.capacity() * std::mem::size_of::<PhotonHit>();
-        if max_r > 0.0 && !hits.is_empty() {
-            state.grid.rebuild(&hits, max_r, scene.bounds().min.min(Vec3::ZERO));
+        if cell > 0.0 && !hits.is_empty() {
+            state.grid.rebuild(&hits, cell, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
             bytes += grid.memory_bytes();
             let layers = layers_of(&mut state.layers, n_pixels);
@@ -415,24 +425,29 @@ impl Sppm {
 /// schedule; the flux the BSDF passes towards the camera; its part that came only through
 /// mirrors and glass).
 fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
-    let r2 = r * r;
     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
     let bsdf = scene.bsdf(&v.at.hit(), v.wo);
     let p = v.at.p;
     // Photons from behind pass only through a transmitting surface (rough glass).
     let both_sides = bsdf.flags().is_transmission();
-    grid.for_each_near(p, r, |i| {
+    let (ns, ng) = (bsdf.normal(), bsdf.geometric_normal());
+    // A Lambertian BSDF's value is the same for every direction above the surface: worked out
+    // once (the same value `f` gives each photon), not per photon.
+    let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
+    grid.for_each_within(p, r, |i| {
         let ph = &hits[i as usize];
-        if (ph.p - p).length_squared() > r2 {
-            return;
-        }
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
         m += 1;
-        if (!both_sides && ph.dir.dot(bsdf.normal()) >= 0.0) || ph.depth > v.photon_depth {
+        if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
             return;
         }
-        let f = bsdf.f(v.wo, -ph.dir, Transport::Radiance);
+        let wi = -ph.dir;
+        let f = match constant {
+            Some(c) if wi.dot(ng) > 0.0 && wi.dot(ns) > 0.0 => c,
+            Some(_) => Color::ZERO,
+            None => bsdf.f(v.wo, wi, Transport::Radiance),
+        };
         if f != Color::ZERO {
             phi += f * ph.flux;
             if ph.flags & trace::CAUSTIC != 0 {
