@@ -31,7 +31,7 @@ fn case_text(case: &str) -> String {
 }
 
 fn load_xml(text: &str, spp: u32, o: &Options) -> LoadedScene {
-    let lo = LoadOptions { defines: vec![("spp".into(), spp.to_string())], strict: true };
+    let lo = LoadOptions { defines: vec![("spp".into(), spp.to_string())], strict: true, ..Default::default() };
     let desc = load_mitsuba_str(text, "case.xml", &dir(), &lo).unwrap_or_else(|e| panic!("{e}"));
     caustic::app::prepare(desc, o).unwrap_or_else(|e| panic!("{e}"))
 }

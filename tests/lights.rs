@@ -126,8 +126,12 @@ fn furnace_white_sphere_reads_the_environment_radiance() {
 fn load(case: &str, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("spp".to_string(), spp.to_string())];
     let o = Options { seed: Some(seed), ..Default::default() };
-    caustic::app::load(&dir().join(format!("{case}.xml")), &LoadOptions { defines, strict: true }, &o)
-        .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
+    caustic::app::load(
+        &dir().join(format!("{case}.xml")),
+        &LoadOptions { defines, strict: true, ..Default::default() },
+        &o,
+    )
+    .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
 
 /// The path tracer against Mitsuba: mean luminance within 1%, RMSE within 1.25 times what the

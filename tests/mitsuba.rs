@@ -142,7 +142,11 @@ fn cornell_box_matches_mitsubas_own_render() {
     let ours = |seed: u64| {
         let o = Options { seed: Some(seed), ..Default::default() };
         let defines = vec![("res".to_string(), "64".to_string()), ("spp".to_string(), spp.to_string())];
-        render_with(&load_with("scenes/mitsuba/cornell-box.xml", &LoadOptions { defines, strict: false }, &o))
+        render_with(&load_with(
+            "scenes/mitsuba/cornell-box.xml",
+            &LoadOptions { defines, strict: false, ..Default::default() },
+            &o,
+        ))
     };
     let (a, b) = (ours(1), ours(2));
     // Our noise per image, from two independent renders; Mitsuba's from its sample count.

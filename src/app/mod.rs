@@ -28,7 +28,7 @@ pub struct RenderOptions {
     pub output: Option<PathBuf>,
     /// The command line's options, each replacing the scene file's value when given.
     pub overrides: Options,
-    /// How the file is read (Mitsuba `-D` parameters, `--strict`).
+    /// How the file is read (`-D` parameters, `--set` values, `--strict`).
     pub load: LoadOptions,
     /// Worker threads; all cores when `None`.
     pub threads: Option<usize>,
@@ -310,7 +310,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         let say = |m: &str| log(opts.quiet, format_args!("{m}"));
         let job = match shard {
-            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load.defines, &mut settings, s, &output, &say)?),
+            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load, &mut settings, s, &output, &say)?),
             None => None,
         };
         if let Some(job) = &job
