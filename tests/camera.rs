@@ -237,7 +237,7 @@ fn filtered_images_are_bit_identical_for_any_thread_count_and_sample_split() {
         let mut settings = s.settings.clone();
         settings.first_sample = first;
         settings.spp = spp;
-        let integrator = Integrator::new(&s.integrator, &s.scene, &settings, control.cancel).unwrap();
+        let integrator = Integrator::new(&s.integrator, &s.scene, &settings, &control).unwrap();
         integrator.render(&s.scene, &settings, &control).film
     };
     let mut film = part(0, 2);

@@ -33,7 +33,7 @@ fn render(s: &LoadedScene, kind: IntegratorKind, spp: u32) -> RenderOutput {
     let mut desc = s.integrator.clone();
     desc.kind = kind;
     let control = RenderControl::uncancelled();
-    let integrator = Integrator::new(&desc, &s.scene, &settings, control.cancel).expect("not cancelled");
+    let integrator = Integrator::new(&desc, &s.scene, &settings, &control).expect("not cancelled");
     integrator.render(&s.scene, &settings, &control)
 }
 

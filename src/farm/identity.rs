@@ -88,11 +88,10 @@ impl RenderId {
             seed,
             sampler,
             antialias,
-            // When to stop, checkpoint and report progress: the samples are the same either way
-            // (a shard refuses a time limit).
+            // When to stop and checkpoint: the samples are the same either way (a shard refuses
+            // a time limit).
             time_limit: _,
             checkpoint: _,
-            progress: _,
             layers,
             aovs,
         } = settings;
