@@ -19,7 +19,7 @@ fn cases() -> Vec<(&'static str, String, &'static str, usize)> {
     vec![
         ("syntax error", with_cam("[render\nwidth = 3\n"), "", 4),
         ("unknown section", with_cam("[rendr]\nwidth = 3\n"), "unknown section `rendr`", 4),
-        ("unknown key", with_cam("[render]\nwidht = 3\n"), "widht", 5),
+        ("unknown key", with_cam("[render]\nwidht = 3\n"), "unknown key `widht` (did you mean `width`?)", 5),
         (
             "wrong type",
             with_cam("[render]\nwidth = \"big\"\n"),
@@ -274,6 +274,11 @@ mod set {
         let no_render = SCENE.replace("[render]\nwidth = 24\nheight = 18\nspp = 1\nintegrator = \"whitted\"\n", "");
         let s = with_sets(&no_render, &[("film.width", "10"), ("render.photon.gather", "0")]).unwrap();
         assert_eq!((s.settings.width, s.integrator.photon.gather), (10, Some(0)));
+        // A filter with parameters as --filter spells it, or as a TOML table.
+        let tent = caustic::film::filter::Filter::Tent { radius: 1.5 };
+        assert_eq!(with_sets(SCENE, &[("film.filter", "tent:radius=1.5")]).unwrap().settings.filter.filter, tent);
+        let table = with_sets(SCENE, &[("film.filter", "{ type = \"tent\", radius = 1.5 }")]).unwrap();
+        assert_eq!(table.settings.filter.filter, tent);
     }
 
     #[test]

@@ -261,7 +261,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             );
         }
         for w in &loaded.warnings {
-            display.warn(&w);
+            display.warn(w);
         }
         for w in opts.overrides.unused_by(loaded.integrator.kind) {
             display.warn(&w);

@@ -336,5 +336,14 @@ mod message_tests {
         assert!(plain_words("unknown field `spq`, expected one of `spp`").starts_with("unknown key `spq`"));
         assert!(plain_words("unknown variant `pth`, expected one of `path`").starts_with("unknown value `pth`"));
         assert_eq!(plain_words("missing field `type`"), "missing key `type`");
+        // The nearest accepted name, when one is near.
+        assert_eq!(
+            plain_words("unknown field `spq`, expected one of `width`, `spp`"),
+            "unknown key `spq` (did you mean `spp`?), expected one of `width`, `spp`"
+        );
+        assert_eq!(
+            plain_words("unknown field `zzz`, expected one of `width`, `spp`"),
+            "unknown key `zzz`, expected one of `width`, `spp`"
+        );
     }
 }
