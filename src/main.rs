@@ -137,6 +137,13 @@ struct RenderArgs {
     /// TOML [parameters] default; a name the scene does not use is an error).
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
     define: Vec<(String, String)>,
+    /// Put VALUE in place of the scene's value of KEY, a key path: render.spp=4,
+    /// materials.glass.ior=1.6, objects.0.radius=2; integrator.*, film.* and sampler.* name
+    /// [render] keys (integrator.light_samples=4, film.filter=gaussian); Mitsuba scenes: a
+    /// property of an element (integrator.max_depth=4, sensor.film.width=320) (repeatable; checked
+    /// as the scene file's values are).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = caustic::scene::native::parse_set)]
+    set: Vec<(String, String)>,
     /// Mitsuba scenes: treat every unsupported part as an error instead of a warning.
     #[arg(long)]
     strict: bool,
@@ -178,6 +185,7 @@ impl RenderArgs {
             quiet,
             shard: _,
             define,
+            set,
             strict,
         } = self;
         let Options {
@@ -257,6 +265,9 @@ impl RenderArgs {
         for (k, v) in define {
             a.push(format!("-D{k}={v}"));
         }
+        for (k, v) in set {
+            a.push(format!("--set={k}={v}"));
+        }
         a
     }
 
@@ -274,6 +285,7 @@ impl RenderArgs {
             quiet,
             shard,
             define,
+            set,
             strict,
         } = self;
         if let (Some(spp), Some(n)) = (options.spp, iterations)
@@ -287,7 +299,7 @@ impl RenderArgs {
             scene,
             output,
             overrides: Options { spp: options.spp.or(iterations), ..options },
-            load: LoadOptions { defines: define, strict },
+            load: LoadOptions { defines: define, sets: set, strict },
             layers,
             max_memory: max_memory.map(|m| m.saturating_mul(1 << 20)),
             threads,
@@ -495,6 +507,10 @@ mod tests {
             "1/4",
             "-D",
             "name=a b'c",
+            "--set",
+            "materials.\"frosted glass\".alpha=0.3",
+            "--set",
+            "film.filter=tent:radius=1.5",
             "--strict",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
@@ -513,6 +529,7 @@ mod tests {
             quiet,
             shard,
             define,
+            set,
             strict,
         } = &*args;
         let Options {
@@ -577,6 +594,7 @@ mod tests {
             *quiet,
             shard.is_some(),
             !define.is_empty(),
+            set.len() == 2,
             *strict,
         ];
         assert!(given.iter().all(|&g| g), "{given:?}");

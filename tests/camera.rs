@@ -31,7 +31,7 @@ fn case_text(case: &str) -> String {
 }
 
 fn load_xml(text: &str, spp: u32, o: &Options) -> LoadedScene {
-    let lo = LoadOptions { defines: vec![("spp".into(), spp.to_string())], strict: true };
+    let lo = LoadOptions { defines: vec![("spp".into(), spp.to_string())], strict: true, ..Default::default() };
     let desc = load_mitsuba_str(text, "case.xml", &dir(), &lo).unwrap_or_else(|e| panic!("{e}"));
     caustic::app::prepare(desc, o).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -237,7 +237,7 @@ fn filtered_images_are_bit_identical_for_any_thread_count_and_sample_split() {
         let mut settings = s.settings.clone();
         settings.first_sample = first;
         settings.spp = spp;
-        let integrator = Integrator::new(&s.integrator, &s.scene, &settings, control.cancel).unwrap();
+        let integrator = Integrator::new(&s.integrator, &s.scene, &settings, &control).unwrap();
         integrator.render(&s.scene, &settings, &control).film
     };
     let mut film = part(0, 2);

@@ -48,6 +48,7 @@ fn help_documents_every_option() {
         "--caustic-k",
         "--caustic-radius",
         "--filter",
+        "--set",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }
@@ -432,4 +433,115 @@ fn the_time_budget_includes_the_photon_maps() {
     };
     let before_render = seconds("(load ") + seconds("photon maps ");
     assert!(wall <= budget.max(before_render) + 1.0, "the run took {wall:.2} s for a {budget} s budget: {line}");
+}
+
+/// The screen a terminal shows after `raw` is written to it, `width` columns wide: lines, the
+/// cursor moves (`ESC[nA`), line and screen clears (`ESC[nK`, `ESC[nJ`) and wrapping at the
+/// last column as terminals do it (a character written there moves the cursor to the next line
+/// only when another follows), which is all a progress bar uses.
+#[cfg(target_os = "linux")]
+fn screen(raw: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<Vec<char>> = vec![Vec::new()];
+    let (mut row, mut col, mut pending) = (0usize, 0usize, false);
+    let mut chars = raw.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\x1b' => {
+                if chars.peek() != Some(&'[') {
+                    continue;
+                }
+                chars.next();
+                let mut arg = String::new();
+                let command = loop {
+                    match chars.next() {
+                        Some(c) if c.is_ascii_digit() || c == ';' || c == '?' => arg.push(c),
+                        Some(c) => break c,
+                        None => break ' ',
+                    }
+                };
+                let n: usize = arg.trim_start_matches('?').parse().unwrap_or(0);
+                pending = false;
+                match command {
+                    'A' => row = row.saturating_sub(n.max(1)),
+                    'K' if n == 2 => lines[row].clear(),
+                    'K' => lines[row].truncate(col),
+                    'J' => {
+                        lines.truncate(row + 1);
+                        lines[row].truncate(col);
+                    }
+                    _ => {}
+                }
+            }
+            '\r' => (col, pending) = (0, false),
+            '\n' => {
+                (row, col, pending) = (row + 1, 0, false);
+                if lines.len() <= row {
+                    lines.push(Vec::new());
+                }
+            }
+            c => {
+                if pending {
+                    (row, col, pending) = (row + 1, 0, false);
+                    if lines.len() <= row {
+                        lines.push(Vec::new());
+                    }
+                }
+                let line = &mut lines[row];
+                if line.len() <= col {
+                    line.resize(col + 1, ' ');
+                }
+                line[col] = c;
+                if col + 1 == width { pending = true } else { col += 1 }
+            }
+        }
+    }
+    lines.into_iter().map(|l| l.into_iter().collect::<String>().trim_end().to_string()).collect()
+}
+
+/// Issue 30, item 1: on a terminal the photon integrator drew a bar per phase, each clearing the
+/// last (the `cache: ... 6.42 s` line was never shown), and nothing said how long the whole
+/// render would take. Now one bar runs across the phases, naming each with its place in the
+/// render and an ETA for all that is left, and each phase's line is printed above it and stays.
+/// The program runs on a pseudo-terminal (`script`); its output is replayed as a terminal would
+/// show it.
+#[cfg(target_os = "linux")]
+#[test]
+fn on_a_terminal_phase_lines_stay_above_one_bar_with_an_eta() {
+    let dir = common::scratch("cli-tty");
+    let typescript = dir.join("typescript");
+    let quote = |p: &Path| format!("'{}'", p.display());
+    let command = format!(
+        "stty cols 100 rows 50; exec {} render {} --integrator photon --width 64 --height 64 --spp 2 \
+         --photons 40000 --caustic-photons 20000 -o {}",
+        quote(Path::new(env!("CARGO_BIN_EXE_caustic"))),
+        quote(&scene("13-cornell-caustics.toml")),
+        quote(&dir.join("p.png"))
+    );
+    let status = Command::new("script")
+        .args(["-q", "-e", "-c", &command])
+        .arg(&typescript)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .status()
+        .expect("script (util-linux) runs the program on a pseudo-terminal");
+    assert!(status.success());
+    let raw = std::fs::read_to_string(&typescript).unwrap();
+    let shown = screen(&raw, 100);
+    // Every phase's line is on the screen at the end, in the order the phases ran, with the
+    // summary after them and no bar left.
+    let at = |start: &str| shown.iter().position(|l| l.starts_with(start));
+    let order: Vec<Option<usize>> =
+        ["photons: ", "caustics: ", "maps: ", "gather: ", "cache: ", "render: ", "rendered "].map(at).to_vec();
+    assert!(order.iter().all(Option::is_some) && order.is_sorted(), "{order:?}\n{}", shown.join("\n"));
+    assert!(shown.iter().all(|l| !l.contains("ETA")), "the bar is cleared at the end:\n{}", shown.join("\n"));
+    // One bar: the load, then each phase with its place among the render's seven (the load, five
+    // preparation steps, the passes), and an ETA in seconds.
+    assert!(raw.contains("load ["), "no bar while loading:\n{raw}");
+    for (i, phase) in ["photons", "caustics", "maps", "gather", "cache", "render"].iter().enumerate() {
+        assert!(raw.contains(&format!("{phase} ({}/7)", i + 2)), "no bar for {phase}:\n{raw}");
+    }
+    let eta = raw.split("ETA ").skip(1).any(|r| {
+        r.split_whitespace().next().is_some_and(|t| t.ends_with('s') && t[..t.len() - 1].parse::<u32>().is_ok())
+    });
+    assert!(eta, "no ETA in seconds:\n{raw}");
 }

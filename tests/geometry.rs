@@ -228,8 +228,12 @@ fn mitsuba_instances_render_as_the_flattened_scene() {
 fn load_xml(case: &str, res: u32, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("res".to_string(), res.to_string()), ("spp".to_string(), spp.to_string())];
     let o = Options { seed: Some(seed), ..Default::default() };
-    caustic::app::load(&dir().join(format!("{case}.xml")), &LoadOptions { defines, strict: true }, &o)
-        .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
+    caustic::app::load(
+        &dir().join(format!("{case}.xml")),
+        &LoadOptions { defines, strict: true, ..Default::default() },
+        &o,
+    )
+    .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
 
 /// Renders `case` with two seeds and compares with Mitsuba's image; returns a failure or None.

@@ -33,7 +33,7 @@ fn render(s: &LoadedScene, kind: IntegratorKind, spp: u32) -> RenderOutput {
     let mut desc = s.integrator.clone();
     desc.kind = kind;
     let control = RenderControl::uncancelled();
-    let integrator = Integrator::new(&desc, &s.scene, &settings, control.cancel).expect("not cancelled");
+    let integrator = Integrator::new(&desc, &s.scene, &settings, &control).expect("not cancelled");
     integrator.render(&s.scene, &settings, &control)
 }
 
@@ -126,8 +126,12 @@ fn furnace_white_sphere_reads_the_environment_radiance() {
 fn load(case: &str, spp: u32, seed: u64) -> LoadedScene {
     let defines = vec![("spp".to_string(), spp.to_string())];
     let o = Options { seed: Some(seed), ..Default::default() };
-    caustic::app::load(&dir().join(format!("{case}.xml")), &LoadOptions { defines, strict: true }, &o)
-        .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
+    caustic::app::load(
+        &dir().join(format!("{case}.xml")),
+        &LoadOptions { defines, strict: true, ..Default::default() },
+        &o,
+    )
+    .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
 }
 
 /// The path tracer against Mitsuba: mean luminance within 1%, RMSE within 1.25 times what the

@@ -142,7 +142,11 @@ fn cornell_box_matches_mitsubas_own_render() {
     let ours = |seed: u64| {
         let o = Options { seed: Some(seed), ..Default::default() };
         let defines = vec![("res".to_string(), "64".to_string()), ("spp".to_string(), spp.to_string())];
-        render_with(&load_with("scenes/mitsuba/cornell-box.xml", &LoadOptions { defines, strict: false }, &o))
+        render_with(&load_with(
+            "scenes/mitsuba/cornell-box.xml",
+            &LoadOptions { defines, strict: false, ..Default::default() },
+            &o,
+        ))
     };
     let (a, b) = (ours(1), ours(2));
     // Our noise per image, from two independent renders; Mitsuba's from its sample count.
@@ -741,4 +745,69 @@ fn defines_the_scene_never_uses_are_errors_naming_its_parameters() {
     // A TOML scene without parameters refuses a -D the same way (issue 30 item 3: TOML scenes
     // have `$name` parameters now).
     assert!(e.contains("06-fresnel-glass.toml") && e.contains("its parameters are: none"), "{e}");
+}
+
+/// Issue 30, item 7 (`--set` on Mitsuba scenes): KEY is elements from `<scene>` down (by tag,
+/// or from an object's id) and a property of the last, with Mitsuba's names; the value is read as
+/// one written in the file, and an error about it names the `--set`.
+#[test]
+fn set_changes_a_property_as_if_written_in_the_file() {
+    let text = std::fs::read_to_string(root().join("scenes/mitsuba/cornell-box.xml")).unwrap();
+    let sets = |s: &[(&str, &str)]| LoadOptions {
+        defines: vec![("res".into(), "24".into())],
+        sets: s.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+        ..Default::default()
+    };
+    let load = |text: &str, s: &[(&str, &str)]| xml_opts(text, &root(), &sets(s), &Options::default());
+    let set = [
+        ("integrator.max_depth", "3"),
+        ("sensor.sampler.sample_count", "2"),
+        ("white.reflectance", "0.5, 0.4, 0.3"),
+        ("sensor.fov", "30"),
+        ("sensor.principal_point_offset_x", "0.1"),
+    ];
+    let written = text
+        .replace(r#"<integer name="max_depth" value="9"/>"#, r#"<integer name="max_depth" value="3"/>"#)
+        .replace(r#"value="$spp""#, r#"value="2""#)
+        .replace(
+            r#"<rgb name="reflectance" value="0.73, 0.73, 0.73"/>"#,
+            r#"<rgb name="reflectance" value="0.5, 0.4, 0.3"/>"#,
+        )
+        .replace(r#"<float name="fov" value="39.3"/>"#, r#"<float name="fov" value="30"/>"#)
+        .replace(
+            r#"<float name="fov" value="30"/>"#,
+            r#"<float name="fov" value="30"/><float name="principal_point_offset_x" value="0.1"/>"#,
+        );
+    let (by_set, _) = load(&text, &set).unwrap_or_else(|e| panic!("{e}"));
+    let (by_file, _) = load(&written, &[]).unwrap_or_else(|e| panic!("{e}"));
+    // Mitsuba's max_depth 3 is two bounces here.
+    assert_eq!((by_set.integrator.max_depth, by_set.settings.spp), (Some(2), 2));
+    assert_eq!(by_set.settings, by_file.settings);
+    assert_eq!(by_set.render().image.pixels, by_file.render().image.pixels);
+    let (plain, _) = load(&text.replace("$spp", "2"), &[]).unwrap();
+    assert_ne!(by_set.render().image.pixels, plain.render().image.pixels, "the values change the image");
+
+    let err = |s: &[(&str, &str)]| match load(&text, s) {
+        Ok(_) => panic!("{s:?} loaded"),
+        Err(e) => {
+            assert_eq!(e.location(), None, "{e}");
+            e.to_string()
+        }
+    };
+    for (s, words) in [
+        (
+            ("integrator.max_deth", "4"),
+            "--set integrator.max_deth=4: <integrator type=\"path\"> has no property `max_deth` (did you mean `max_depth`?), so this --set would change nothing",
+        ),
+        (("integrator.max_depth", "2.5"), "--set integrator.max_depth=2.5: expected a whole number, found `2.5`"),
+        (("sensor.fov", "wide"), "--set sensor.fov=wide: expected a number, found `wide`"),
+        (("sensor.flm.width", "3"), "has no nested `flm` (did you mean `film`?)"),
+        (("intgrator.max_depth", "3"), "the scene has no element `intgrator` (did you mean `integrator`?)"),
+        (("sensor.film", "3"), "`film` is a nested <film>, not a property"),
+        (("max_depth", "3"), "name an element and one of its properties"),
+        (("integrator.type", "ptracer"), "`type` is the element's plugin, not a property"),
+    ] {
+        let e = err(&[s]);
+        assert!(e.starts_with("case.xml: --set ") && e.contains(words), "{s:?}: {e}");
+    }
 }

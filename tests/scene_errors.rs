@@ -19,7 +19,7 @@ fn cases() -> Vec<(&'static str, String, &'static str, usize)> {
     vec![
         ("syntax error", with_cam("[render\nwidth = 3\n"), "", 4),
         ("unknown section", with_cam("[rendr]\nwidth = 3\n"), "unknown section `rendr`", 4),
-        ("unknown key", with_cam("[render]\nwidht = 3\n"), "widht", 5),
+        ("unknown key", with_cam("[render]\nwidht = 3\n"), "unknown key `widht` (did you mean `width`?)", 5),
         (
             "wrong type",
             with_cam("[render]\nwidth = \"big\"\n"),
@@ -156,7 +156,7 @@ mod parameters {
         std::fs::write(&path, text).unwrap();
         let o = LoadOptions {
             defines: defines.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
-            strict: false,
+            ..Default::default()
         };
         load_scene_within(&path, &o, &FileBudget::unlimited()).map_err(|e| e.to_string())
     }
@@ -194,5 +194,125 @@ mod parameters {
             e.contains("parameter `$spp` has no value: give it a default in [parameters] or pass -D spp=VALUE"),
             "{e}"
         );
+    }
+}
+
+/// Issue 30, item 7 (`--set`): any key of a TOML scene by its path, put into the file's tree
+/// before it is read, so the value meets the checks a value written in the file meets; an error
+/// about it names the `--set`, not a line of the file.
+mod set {
+    use caustic::app::prepare;
+    use caustic::options::Options;
+    use caustic::scene::{LoadOptions, SceneError, load_scene_str_with};
+    use std::path::Path;
+
+    /// A glass ball and an area light (light samples count) on a floor: the keys the tests change.
+    const SCENE: &str = "[render]\nwidth = 24\nheight = 18\nspp = 1\nintegrator = \"whitted\"\n\
+[camera]\neye = [0, 1, 4]\nlook_at = [0, 0.5, 0]\nfov = 40\n\
+[materials.glass]\ntype = \"dielectric\"\nior = 1.5\n\
+[materials.floor]\ntype = \"diffuse\"\ncolor = [0.8, 0.7, 0.6]\n\
+[[lights]]\ntype = \"area\"\ncorner = [-0.5, 3, -0.5]\nedge1 = [1, 0, 0]\nedge2 = [0, 0, 1]\nintensity = 20\n\
+[[objects]]\ntype = \"plane\"\nmaterial = \"floor\"\n\
+[[objects]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.5\nmaterial = \"glass\"\n";
+
+    fn with_sets(text: &str, sets: &[(&str, &str)]) -> Result<caustic::app::LoadedScene, SceneError> {
+        let lo = LoadOptions {
+            sets: sets.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+            ..Default::default()
+        };
+        let desc = load_scene_str_with(text, "s.toml", Path::new(env!("CARGO_MANIFEST_DIR")), &lo)?;
+        prepare(desc, &Options::default())
+    }
+
+    fn err(sets: &[(&str, &str)]) -> SceneError {
+        match with_sets(SCENE, sets) {
+            Ok(_) => panic!("{sets:?} loaded"),
+            Err(e) => e,
+        }
+    }
+
+    /// The issue's examples render exactly as the file with those values written in it.
+    #[test]
+    fn set_values_render_as_the_file_with_them_written() {
+        let sets = [
+            ("render.spp", "4"),
+            ("integrator.light_samples", "4"),
+            ("film.filter", "gaussian"),
+            ("materials.glass.ior", "1.6"),
+            ("camera.fov", "30"),
+            ("sampler.seed", "7"),
+        ];
+        let written = SCENE
+            .replace("spp = 1\n", "spp = 4\nlight_samples = 4\nfilter = \"gaussian\"\nseed = 7\n")
+            .replace("ior = 1.5", "ior = 1.6")
+            .replace("fov = 40", "fov = 30");
+        let by_set = with_sets(SCENE, &sets).unwrap();
+        let by_file = with_sets(&written, &[]).unwrap();
+        let plain = with_sets(SCENE, &[]).unwrap();
+        assert_eq!(by_set.settings.spp, 4);
+        assert_eq!(by_set.integrator.light_samples, 4);
+        assert_eq!(by_set.settings.seed, 7);
+        assert_eq!(by_set.settings, by_file.settings);
+        let (a, b) = (by_set.render().image, by_file.render().image);
+        assert_eq!(a.pixels, b.pixels, "--set and the same values written in the file render alike");
+        assert_ne!(a.pixels, plain.render().image.pixels, "the values change the image");
+    }
+
+    /// Later `--set`s of a key win, a `--set` wins over a `$name` parameter there, a key the
+    /// file lacks is added, a list entry is picked by its index, and a section the file lacks is
+    /// made.
+    #[test]
+    fn set_adds_replaces_and_indexes() {
+        let s = with_sets(SCENE, &[("render.spp", "2"), ("sampler.spp", "3")]).unwrap();
+        assert_eq!(s.settings.spp, 3);
+        let param = SCENE.replace("spp = 1\n", "spp = \"$n\"\n").replace("[render]", "[parameters]\nn = 5\n[render]");
+        assert_eq!(with_sets(&param, &[("render.spp", "6")]).unwrap().settings.spp, 6);
+        let s = with_sets(SCENE, &[("render.max_depth", "2"), ("integrator", "path")]).unwrap();
+        assert_eq!((s.integrator.max_depth, s.integrator.kind.name()), (Some(2), "path"));
+        let wider = with_sets(SCENE, &[("objects.1.radius", "0.9")]).unwrap();
+        assert!(wider.scene.bounds().max.x > 0.85, "{:?}", wider.scene.bounds());
+        let no_render = SCENE.replace("[render]\nwidth = 24\nheight = 18\nspp = 1\nintegrator = \"whitted\"\n", "");
+        let s = with_sets(&no_render, &[("film.width", "10"), ("render.photon.gather", "0")]).unwrap();
+        assert_eq!((s.settings.width, s.integrator.photon.gather), (10, Some(0)));
+        // A filter with parameters as --filter spells it, or as a TOML table.
+        let tent = caustic::film::filter::Filter::Tent { radius: 1.5 };
+        assert_eq!(with_sets(SCENE, &[("film.filter", "tent:radius=1.5")]).unwrap().settings.filter.filter, tent);
+        let table = with_sets(SCENE, &[("film.filter", "{ type = \"tent\", radius = 1.5 }")]).unwrap();
+        assert_eq!(table.settings.filter.filter, tent);
+    }
+
+    #[test]
+    fn set_errors_name_the_set_with_the_files_words() {
+        let cases: [(&[(&str, &str)], &str); 10] = [
+            (&[("render.spq", "4")], "--set render.spq=4: unknown key `spq` (did you mean `spp`?)"),
+            (&[("render.spp", "x")], "--set render.spp=x: expected a whole number of 0 or more, found the text \"x\""),
+            (
+                &[("integrator.light_sample", "4")],
+                "unknown key `light_sample` of integrator (did you mean `light_samples`?)",
+            ),
+            (&[("film.filter", "gausian")], "unknown filter `gausian` (did you mean `gaussian`?)"),
+            (
+                &[("materials.glas.ior", "1.6")],
+                "no material named `glas` (defined: floor, glass); did you mean `glass`?",
+            ),
+            (&[("materials.glass.ior", "-1")], "--set materials.glass.ior=-1: expected a positive number, found -1"),
+            (&[("materials.glass.iorr", "1")], "unknown key `iorr` for a dielectric material (did you mean `ior`?)"),
+            (&[("objects.5.radius", "1")], "`objects` has 2 entries (0 to 1): it has no entry 5"),
+            (&[("camera.fvo", "30")], "--set camera.fvo=30: unknown key `fvo` (did you mean `fov`?)"),
+            (&[("rendr.spp", "4")], "unknown section `rendr` (did you mean `render`?)"),
+        ];
+        for (sets, words) in cases {
+            let e = err(sets);
+            let text = e.to_string();
+            assert!(text.starts_with("s.toml: --set ") && text.contains(words), "{sets:?}: {text}");
+            // Not a position in the file: the value came from the command line.
+            assert_eq!(e.location(), None, "{text}");
+        }
+        // A value written in the file still gets its line.
+        let e = match with_sets(&SCENE.replace("radius = 0.5", "radius = -0.5"), &[("render.spp", "2")]) {
+            Ok(_) => panic!("a negative radius loaded"),
+            Err(e) => e,
+        };
+        assert_eq!(e.location().map(|l| l.0), Some(SCENE.lines().position(|l| l == "radius = 0.5").unwrap() + 1));
     }
 }

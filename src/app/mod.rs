@@ -14,6 +14,7 @@ use crate::film::output::{Format, OutputError, aov_path, check_writable, layer_p
 use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
 use crate::options::{IntegratorKind, Options};
+use crate::progress::Display;
 use crate::render::{CheckpointFn, RenderControl, RenderSettings, RenderStats};
 use crate::scene::desc::{IntegratorDesc, LoadInfo};
 use crate::scene::{FileBudget, LoadOptions, Scene, SceneDescription, SceneError, load_scene, load_scene_within};
@@ -28,7 +29,7 @@ pub struct RenderOptions {
     pub output: Option<PathBuf>,
     /// The command line's options, each replacing the scene file's value when given.
     pub overrides: Options,
-    /// How the file is read (Mitsuba `-D` parameters, `--strict`).
+    /// How the file is read (`-D` parameters, `--set` values, `--strict`).
     pub load: LoadOptions,
     /// Worker threads; all cores when `None`.
     pub threads: Option<usize>,
@@ -151,7 +152,7 @@ impl LoadedScene {
     /// cancellation).
     pub fn render(&self) -> crate::render::RenderOutput {
         let control = RenderControl::uncancelled();
-        match Integrator::new(&self.integrator, &self.scene, &self.settings, control.cancel) {
+        match Integrator::new(&self.integrator, &self.scene, &self.settings, &control) {
             Ok(integrator) => integrator.render(&self.scene, &self.settings, &control),
             Err(_) => unreachable!("the flag of an uncancelled render is never set"),
         }
@@ -189,6 +190,13 @@ pub fn system_memory() -> u64 {
 fn log(quiet: bool, msg: std::fmt::Arguments) {
     if !quiet {
         eprintln!("{msg}");
+    }
+}
+
+/// A line of a render's log: above the progress bar on a terminal, nothing with `--quiet`.
+fn say(display: &Display, msg: std::fmt::Arguments) {
+    if display.enabled() {
+        display.say(&msg.to_string());
     }
 }
 
@@ -232,12 +240,17 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         let files = FileBudget::new(limit);
         // The summary reports every phase, so its total is the wall time a user measures.
         let started = std::time::Instant::now();
+        // One display for the whole run: the load, the integrator's preparation and the passes
+        // are its phases, and `--time` counts from here as the bar does.
+        let display = Display::new(!opts.quiet, opts.time_limit);
+        let load = display.phase("load", 0);
         let loaded = prepare(load_scene_within(&opts.scene, &opts.load, &files)?, &opts.overrides)?;
+        load.end();
         let loaded_at = started.elapsed();
         let footprint = files.footprint();
         if footprint.total() > 0 {
-            log(
-                opts.quiet,
+            say(
+                &display,
                 format_args!(
                     "scene files: about {} MiB (meshes {} MiB, textures {} MiB, instances {} MiB)",
                     footprint.total().div_ceil(1 << 20),
@@ -248,25 +261,25 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             );
         }
         for w in &loaded.warnings {
-            eprintln!("warning: {w}");
+            display.warn(w);
         }
         for w in opts.overrides.unused_by(loaded.integrator.kind) {
-            eprintln!("warning: {w}");
+            display.warn(&w);
         }
         let info = &loaded.info;
         for m in &info.meshes {
             let (lo, hi) = (m.bounds.min, m.bounds.max);
             let size = hi - lo;
-            log(
-                opts.quiet,
+            say(
+                &display,
                 format_args!(
                     "mesh {}: {} triangles, bounds ({:.4}, {:.4}, {:.4}) to ({:.4}, {:.4}, {:.4}), size {:.4} x {:.4} x {:.4}",
                     m.name, m.triangles, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z
                 ),
             );
         }
-        log(
-            opts.quiet,
+        say(
+            &display,
             format_args!(
                 "scene {}: {} primitives ({} triangles{}){}, {} planes, {} lights; BVH {} nodes in {:.1} ms",
                 opts.scene.display(),
@@ -293,59 +306,60 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
         {
             // Their pixels are not means of samples: there is no sample variance to give.
-            eprintln!(
-                "warning: the variance AOV is not written with the {} integrator (its pixels are not means of \
+            display.warn(&format!(
+                "the variance AOV is not written with the {} integrator (its pixels are not means of \
                  camera samples); it is written with whitted, path and photon",
                 loaded.integrator.kind.name()
-            );
+            ));
             settings.aovs = settings.aovs.without(AovKind::Variance);
         }
         settings.time_limit = opts.time_limit;
         settings.checkpoint = opts.checkpoint;
-        settings.progress = !opts.quiet;
         settings.layers = opts.layers;
         if opts.time_limit.is_some() && opts.overrides.spp.is_none() && opts.overrides.spp_axis.is_none() {
             // A time budget without a sample count renders until the time is up.
             settings.spp = u32::MAX;
         }
-        let say = |m: &str| log(opts.quiet, format_args!("{m}"));
+        let say_line = |m: &str| display.say(m);
         let job = match shard {
-            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load.defines, &mut settings, s, &output, &say)?),
+            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load, &mut settings, s, &output, &say_line)?),
             None => None,
         };
         if let Some(job) = &job
             && job.complete()
         {
             if output.exists() {
-                log(opts.quiet, format_args!("shard {} is already complete in `{}`", job.header.shard, output.display()));
+                say(&display, format_args!("shard {} is already complete in `{}`", job.header.shard, output.display()));
             } else {
                 // A shard of a render with fewer samples than shards has none to take.
                 job.save(&job.prior)?;
-                log(opts.quiet, format_args!("shard {} has no samples to take; wrote an empty part", job.header.shard));
+                say(&display, format_args!("shard {} has no samples to take; wrote an empty part", job.header.shard));
             }
             let stats = RenderStats { samples_per_pixel: job.prior.min_samples(), ..RenderStats::default() };
             return Ok(Summary { output: output.clone(), stats });
         }
+        // The phases to come and their estimated costs, for the progress bar's ETA.
+        display.plan(&crate::integrator::plan(&loaded.integrator, &loaded.scene, &settings));
         let checkpoint_image = |film: &Film| match write_image(&film.image(), &output) {
-            Ok(()) => log(
-                opts.quiet,
+            Ok(()) => say(
+                &display,
                 format_args!("checkpoint: wrote {} ({} spp)", output.display(), film.min_samples()),
             ),
-            Err(e) => eprintln!("warning: checkpoint failed: {e}"),
+            Err(e) => display.warn(&format!("checkpoint failed: {e}")),
         };
         let checkpoint_partial = |film: &Film| {
             if let Some(job) = &job {
                 match job.save(film) {
-                    Ok(()) => log(
-                        opts.quiet,
+                    Ok(()) => say(
+                        &display,
                         format_args!("checkpoint: saved samples {} in {}", job.held(film), output.display()),
                     ),
-                    Err(e) => eprintln!("warning: checkpoint failed: {e}"),
+                    Err(e) => display.warn(&format!("checkpoint failed: {e}")),
                 }
             }
         };
         let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
-        let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint) };
+        let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint), progress: &display };
         // Everything big the render will allocate, estimated before any of it is.
         let mut need = estimate_render_bytes(&loaded, &settings) + loaded.scene.geometry_bytes();
         if job.is_some() {
@@ -355,8 +369,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         // Loading peaks higher than the loaded scene (the BVH's build temporaries): the larger
         // of the footprint counted while loading and what rendering holds is the peak.
-        log(
-            opts.quiet,
+        say(
+            &display,
             format_args!(
                 "memory: about {} MiB at peak (loading {} MiB; rendering {} MiB, of which the loaded geometry {} MiB; limit {} MiB)",
                 need.max(footprint.total()).div_ceil(1 << 20),
@@ -376,8 +390,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
                 &loaded.scene,
                 settings.seed,
             );
-            log(
-                opts.quiet,
+            say(
+                &display,
                 format_args!(
                     "photon maps: {} photons emitted for the global map (stored at each diffuse bounce); caustic \
                      photons emitted until {} are stored (at most {} emitted)",
@@ -387,13 +401,13 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         let early = || AppError::InterruptedEarly { path: output.display().to_string(), existed: output.exists() };
         let prepare_from = started.elapsed();
-        let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, cancel) else {
+        let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, &control) else {
             return Err(early());
         };
         let prepared = started.elapsed() - prepare_from;
         if let Integrator::Photon(pm) = &integrator {
             let s = &pm.stats;
-            log(opts.quiet, format_args!(
+            say(&display, format_args!(
                 "photon maps ready: global {1} stored from {0} emitted ({2:.1} MiB); caustic {4} stored from {3} emitted ({5:.1} MiB){6}; traced in {7:.2} s, maps built in {8:.2} s",
                 s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
                 s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
@@ -413,8 +427,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         let out = integrator.render_from(&loaded.scene, &render_settings, &control, film);
         let stats = out.stats;
         if let Integrator::Sppm(sppm) = &integrator {
-            log(
-                opts.quiet,
+            say(
+                &display,
                 format_args!(
                     "sppm took {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
                     stats.samples_per_pixel,
@@ -425,7 +439,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
             );
         }
         if let Some(job) = &job {
-            return finish_shard(job, &out.film, &stats, opts.quiet);
+            return finish_shard(job, &out.film, &stats, &display);
         }
         // An image with fewer than one sample in some pixel is not worth keeping, and must never
         // replace an earlier image: stop without writing.
@@ -437,7 +451,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         }
         write_outputs(&out.image, &out.film, &output)?;
         if stats.nonfinite_samples > 0 {
-            eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
+            display.warn(&format!("{} samples were NaN or infinite and counted as black", stats.nonfinite_samples));
         }
         // Preparation: photon maps and their irradiance cache, SPPM's and the light tracer's
         // set-up; nothing for the other integrators.
@@ -446,8 +460,8 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         } else {
             String::new()
         };
-        log(
-            opts.quiet,
+        say(
+            &display,
             format_args!(
                 "rendered {}x{} at {} spp in {:.2} s (load {:.2} s{preparation}, render {:.2} s): {} rays ({} shadow), {:.2} Mrays/s -> {}",
                 settings.width,
@@ -494,7 +508,12 @@ fn scheduler_cpus() -> Option<usize> {
 }
 
 /// Saves a shard's film (unless it holds nothing new) and says how far it got.
-fn finish_shard(job: &shard::ShardJob, film: &Film, stats: &RenderStats, quiet: bool) -> Result<Summary, AppError> {
+fn finish_shard(
+    job: &shard::ShardJob,
+    film: &Film,
+    stats: &RenderStats,
+    display: &Display,
+) -> Result<Summary, AppError> {
     let path = job.output.display().to_string();
     let new_samples = film.tiles.iter().flat_map(|t| &t.count).sum::<u32>()
         > job.prior.tiles.iter().flat_map(|t| &t.count).sum::<u32>();
@@ -503,13 +522,13 @@ fn finish_shard(job: &shard::ShardJob, film: &Film, stats: &RenderStats, quiet: 
     }
     let held = job.held(film);
     if stats.nonfinite_samples > 0 {
-        eprintln!("warning: {} samples were NaN or infinite and counted as black", stats.nonfinite_samples);
+        display.warn(&format!("{} samples were NaN or infinite and counted as black", stats.nonfinite_samples));
     }
     if stats.interrupted {
         return Err(AppError::ShardInterrupted { path, held, shard: job.header.shard.to_string() });
     }
-    log(
-        quiet,
+    say(
+        display,
         format_args!(
             "shard {} done: samples {held} in {} ({:.2} s, {:.2} Mrays/s)",
             job.header.shard,

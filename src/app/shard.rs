@@ -8,6 +8,7 @@ use crate::farm::shard::Shard;
 use crate::film::Film;
 use crate::options::IntegratorKind;
 use crate::render::RenderSettings;
+use crate::scene::LoadOptions;
 use std::path::{Path, PathBuf};
 
 /// A shard about to render.
@@ -20,17 +21,18 @@ pub struct ShardJob {
 
 impl ShardJob {
     /// Restricts `settings` (the whole render's) to the shard's samples and picks up the
-    /// partial image at `output` when it is an earlier run of the same shard. `log` receives
+    /// partial image at `output` when it is an earlier run of the same shard (the scene read with
+    /// `load`). `log` receives
     /// what was found.
     pub fn prepare(
         loaded: &LoadedScene,
-        defines: &[(String, String)],
+        load: &LoadOptions,
         settings: &mut RenderSettings,
         shard: Shard,
         output: &Path,
         log: &dyn Fn(&str),
     ) -> Result<Self, AppError> {
-        let id = RenderId::new(&loaded.info.files, defines, &loaded.integrator, settings)
+        let id = RenderId::new(&loaded.info.files, load, &loaded.integrator, settings)
             .map_err(|e| AppError::Shard(format!("cannot read a scene file to identify the render: {e}")))?;
         let range = shard.range(settings.spp);
         let sums = if loaded.integrator.kind == IntegratorKind::Sppm { SumKind::Runs } else { SumKind::Exact };

@@ -5,6 +5,7 @@
 
 use crate::options::PhotonOptions;
 use crate::render::RenderSettings;
+use crate::scene::LoadOptions;
 use crate::scene::desc::IntegratorDesc;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -27,14 +28,19 @@ pub struct Difference {
 
 impl RenderId {
     /// The identity of a render of the scene whose files are `files` (scene file first, then
-    /// everything it reads), with `-D` parameters `defines`, integrator `integrator` and settings
-    /// `settings` (the whole render's: `first_sample` is not part of it).
+    /// everything it reads), read with `load` (its `-D` parameters and `--set` values), with
+    /// integrator `integrator` and settings `settings` (the whole render's: `first_sample` is
+    /// not part of it).
     pub fn new(
         files: &[PathBuf],
-        defines: &[(String, String)],
+        load: &LoadOptions,
         integrator: &IntegratorDesc,
         settings: &RenderSettings,
     ) -> std::io::Result<Self> {
+        // What changes the scene as it is read: the parameters and the values put in place of the
+        // file's (a `--set` of a material's key shows in no other field). Strictness only turns
+        // warnings into errors.
+        let LoadOptions { defines, sets, strict: _ } = load;
         // Destructured without `..`: a new field of the description or the settings does not
         // compile until it is part of the identity, or named here as one that leaves the image as
         // it is. The names and the text of the values are those of partial files already written.
@@ -82,11 +88,10 @@ impl RenderId {
             seed,
             sampler,
             antialias,
-            // When to stop, checkpoint and report progress: the samples are the same either way
-            // (a shard refuses a time limit).
+            // When to stop and checkpoint: the samples are the same either way (a shard refuses
+            // a time limit).
             time_limit: _,
             checkpoint: _,
-            progress: _,
             layers,
             aovs,
         } = settings;
@@ -124,6 +129,17 @@ impl RenderId {
         defines.sort();
         for (k, v) in defines {
             fields.push((format!("-D {k}"), v));
+        }
+        // The value each key ends with (a later --set of a key wins), by key: the order the
+        // keys were given in does not change the render.
+        let mut last: Vec<(String, String)> = Vec::new();
+        for (k, v) in sets {
+            last.retain(|(key, _)| key != k);
+            last.push((k.clone(), v.clone()));
+        }
+        last.sort();
+        for (k, v) in last {
+            fields.push((format!("--set {k}"), v));
         }
         Ok(RenderId { fields })
     }
@@ -225,21 +241,46 @@ mod tests {
     #[test]
     fn text_round_trips_and_differences_name_the_field() {
         let desc = IntegratorDesc::default();
-        let defines = vec![("spp".to_string(), "a\nb \\ c".to_string())];
-        let a = RenderId::new(&[], &defines, &desc, &settings()).unwrap();
+        let load = LoadOptions { defines: vec![("spp".to_string(), "a\nb \\ c".to_string())], ..Default::default() };
+        let a = RenderId::new(&[], &load, &desc, &settings()).unwrap();
         assert_eq!(RenderId::from_text(&a.to_text()), Some(a.clone()));
         let mut s = settings();
         s.seed = 4;
-        let b = RenderId::new(&[], &defines, &desc, &s).unwrap();
+        let b = RenderId::new(&[], &load, &desc, &s).unwrap();
         let d = a.difference(&b).unwrap();
         assert_eq!((d.field.as_str(), d.left.as_str(), d.right.as_str()), ("seed", "3", "4"));
         // The first sample of a shard is not part of the identity.
         s.seed = 3;
         s.first_sample = 8;
-        assert_eq!(a.difference(&RenderId::new(&[], &defines, &desc, &s).unwrap()), None);
-        let c = RenderId::new(&[], &[], &desc, &settings()).unwrap();
+        assert_eq!(a.difference(&RenderId::new(&[], &load, &desc, &s).unwrap()), None);
+        let c = RenderId::new(&[], &LoadOptions::default(), &desc, &settings()).unwrap();
         assert_eq!(a.difference(&c).unwrap().field, "-D spp");
         assert_eq!(RenderId::from_text("no separator"), None);
+    }
+
+    /// Issue 30, item 7: a `--set` of a material's key changes the image and shows in no other
+    /// field, so each key's last value is a field; the order the keys are given in is not.
+    #[test]
+    fn set_values_are_part_of_the_identity() {
+        let desc = IntegratorDesc::default();
+        let sets = |s: &[(&str, &str)]| LoadOptions {
+            sets: s.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+            ..Default::default()
+        };
+        let id = |s: &[(&str, &str)]| RenderId::new(&[], &sets(s), &desc, &settings()).unwrap();
+        let none = id(&[]);
+        let glass = id(&[("materials.glass.ior", "1.6")]);
+        let d = none.difference(&glass).unwrap();
+        assert_eq!(
+            (d.field.as_str(), d.left.as_str(), d.right.as_str()),
+            ("--set materials.glass.ior", "(absent)", "1.6")
+        );
+        assert_eq!(RenderId::from_text(&glass.to_text()), Some(glass.clone()));
+        let two = id(&[("materials.glass.ior", "1.6"), ("camera.fov", "30")]);
+        assert_eq!(two.difference(&id(&[("camera.fov", "30"), ("materials.glass.ior", "1.6")])), None);
+        // The later value of a key is the one rendered.
+        assert_eq!(id(&[("materials.glass.ior", "1.2"), ("materials.glass.ior", "1.6")]).difference(&glass), None);
+        assert!(id(&[("materials.glass.ior", "1.6"), ("materials.glass.ior", "1.2")]).difference(&glass).is_some());
     }
 
     #[test]
@@ -266,7 +307,7 @@ mod tests {
         let scene = "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
         let id = |o: &Options| {
             let loaded = crate::app::load_toml_str(scene, "id.toml", Path::new("."), o).unwrap();
-            RenderId::new(&[], &[], &loaded.integrator, &loaded.settings).unwrap()
+            RenderId::new(&[], &LoadOptions::default(), &loaded.integrator, &loaded.settings).unwrap()
         };
         // A value for every option, none of them the scene's: built and destructured without
         // `..`, so a new option does not compile until it is tried here too.

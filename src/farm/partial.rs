@@ -401,7 +401,7 @@ mod tests {
             aovs: AovList::default(),
         });
         settings.layers = layers;
-        let id = RenderId::new(&[], &[], &IntegratorDesc::default(), &settings).unwrap();
+        let id = RenderId::new(&[], &Default::default(), &IntegratorDesc::default(), &settings).unwrap();
         PartialHeader {
             id,
             shard: Shard { index: 1, count: 3 },

@@ -23,7 +23,6 @@ use crate::options::IntegratorKind;
 use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays_from};
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
-use std::sync::atomic::AtomicBool;
 
 /// One of caustic's integrators, ready to render.
 pub enum Integrator {
@@ -47,13 +46,13 @@ impl Integrator {
         }
     }
 
-    /// Makes the integrator `desc` asks for (photon maps are traced and built here, with their
-    /// progress shown when `settings.progress`); `Err(Cancelled)` soon after `cancel` is set.
+    /// Makes the integrator `desc` asks for (photon maps are traced and built here, each phase
+    /// reported to `control.progress`); `Err(Cancelled)` soon after `control.cancel` is set.
     pub fn new(
         desc: &IntegratorDesc,
         scene: &Scene,
         settings: &RenderSettings,
-        cancel: &AtomicBool,
+        control: &RenderControl,
     ) -> Result<Self, Cancelled> {
         let depth = desc.depth_limit(desc.kind);
         Ok(match desc.kind {
@@ -61,7 +60,8 @@ impl Integrator {
             IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
-                let pm = PhotonIntegrator::build_watched(scene, config, cancel, settings.progress).ok_or(Cancelled)?;
+                let pm = PhotonIntegrator::build_watched(scene, config, control.cancel, control.progress)
+                    .ok_or(Cancelled)?;
                 Integrator::Photon(Box::new(pm))
             }
             IntegratorKind::Light => {
@@ -111,6 +111,29 @@ impl Integrator {
         };
         crate::render::aov::add_first_hits(scene, settings, &mut out.film, &before);
         out
+    }
+}
+
+/// The phases making the integrator `desc` asks for and rendering with `settings` go through, in
+/// the order they run and named as they report themselves to the progress display, each with
+/// its cost estimated in a unit common to them (about a ray traced), for the display's ETA
+/// (`progress::Display::plan`). Only the ratios between a render's phases matter: the display
+/// prices them with the seconds per unit the finished phases took.
+pub fn plan(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Vec<(&'static str, f64)> {
+    // A time budget without a sample count renders until the budget, however long that is.
+    let samples = if settings.spp == u32::MAX {
+        f64::INFINITY
+    } else {
+        f64::from(settings.spp.saturating_sub(settings.first_sample))
+    };
+    let camera_samples = settings.pixels() as f64 * samples;
+    match desc.kind {
+        IntegratorKind::Whitted | IntegratorKind::Path => vec![("render", camera_samples)],
+        IntegratorKind::Light => vec![("light", camera_samples)],
+        IntegratorKind::Sppm => vec![("sppm", camera_samples)],
+        IntegratorKind::Photon => {
+            photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed).plan(scene, camera_samples)
+        }
     }
 }
 

@@ -33,7 +33,7 @@ use crate::math::{Color, Vec3};
 use crate::options::PhotonOptions;
 use crate::photon::trace::{self, PhotonPass, Watch};
 use crate::photon::{Gathered, Photon, PhotonMap};
-use crate::progress::Progress;
+use crate::progress::Display;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::sampling::warp::cosine_hemisphere;
@@ -117,6 +117,40 @@ impl PhotonConfig {
     }
 }
 
+impl PhotonConfig {
+    /// The phases of `build_watched` and the render, each with its cost in about rays traced
+    /// (`integrator::plan`), for `camera_samples` samples. The factors are rough, set from the
+    /// phases' times on the walkthrough's scene (`scenes/14-first-scene.toml`): a global photon
+    /// traces about two rays, an emitted caustic photon three; a map costs about a ray per photon
+    /// and an irradiance record (one per four stored photons) about twelve; a cache record's
+    /// rays cost about three each (each reads the irradiance records where it lands), and a
+    /// render sample its camera ray, most of its shadow rays and, without the cache, its gather
+    /// rays.
+    pub fn plan(&self, scene: &Scene, camera_samples: f64) -> Vec<(&'static str, f64)> {
+        let (photons, caustic) = (self.photons as f64, self.caustic_photons as f64);
+        let mut phases = vec![
+            ("photons", 2.0 * photons),
+            ("caustics", 3.0 * caustic),
+            ("maps", photons + caustic),
+            ("gather", 3.0 * photons),
+        ];
+        let cached = self.cache_error > 0.0 && self.gather_rays > 0;
+        let pixels = f64::from(scene.camera.width) * f64::from(scene.camera.height);
+        if cached {
+            // Records cover a disc whose radius scales with the threshold: about 27 pixels each
+            // at the default 0.25 on the walkthrough's scene, at most one per pixel.
+            let records = (pixels * 0.0023 / (self.cache_error * self.cache_error) as f64).min(pixels);
+            phases.push(("cache", 3.0 * records * f64::from(self.cache_rays)));
+        }
+        let per_light = f64::from(self.light_samples);
+        let shadow: f64 =
+            scene.lights.iter().map(|l| if l.is_delta() { 1.0 } else { per_light }).sum::<f64>().min(4.0 * per_light);
+        let gather = if cached { 0.0 } else { 2.0 * f64::from(self.gather_rays) };
+        phases.push(("render", camera_samples * (1.0 + 0.7 * shadow + gather)));
+        phases
+    }
+}
+
 /// Default irradiance cache error threshold (`--irradiance-cache`; 0 turns the cache off).
 pub const DEFAULT_CACHE_ERROR: f32 = 0.25;
 /// Default final-gather rays per irradiance record (`--cache-rays`).
@@ -184,23 +218,23 @@ impl PhotonIntegrator {
     /// Traces both photon passes and builds the maps (no progress shown, never cancelled).
     pub fn build(scene: &Scene, config: PhotonConfig) -> Self {
         let never = AtomicBool::new(false);
-        Self::build_watched(scene, config, &never, false).unwrap_or_else(|| unreachable!("not cancelled"))
+        Self::build_watched(scene, config, &never, &Display::hidden()).unwrap_or_else(|| unreachable!("not cancelled"))
     }
 
-    /// Traces both photon passes and builds the maps, showing each phase's progress when
-    /// `progress` and stopping soon after `cancel` is set (then `None`): photon tracing between
-    /// chunks of 4096 photons, the maps between levels of the tree, the irradiance records
-    /// between chunks.
-    pub fn build_watched(scene: &Scene, config: PhotonConfig, cancel: &AtomicBool, progress: bool) -> Option<Self> {
+    /// Traces both photon passes and builds the maps, reporting each phase to `progress` (the
+    /// phases `plan` lists) and stopping soon after `cancel` is set (then `None`): photon tracing
+    /// between chunks of 4096 photons, the maps between levels of the tree, the irradiance
+    /// records between chunks.
+    pub fn build_watched(scene: &Scene, config: PhotonConfig, cancel: &AtomicBool, progress: &Display) -> Option<Self> {
         let t0 = Instant::now();
-        let bar = Progress::new(progress, "photons", config.photons, None);
+        let bar = progress.phase("photons", config.photons);
         let watch = Watch { cancel, progress: Some(&bar) };
         let global = trace::trace_global(scene, config.photons, config.seed, config.ray_bias, watch);
         bar.finish(&format!("{} global photons traced, {} stored", global.emitted, global.hits.len()));
         if global.cancelled {
             return None;
         }
-        let bar = Progress::new(progress, "caustics", config.caustic_cap, None);
+        let bar = progress.phase("caustics", config.caustic_cap);
         let caustic = trace::trace_caustic(
             scene,
             &trace::specular_targets(scene),
@@ -216,14 +250,14 @@ impl PhotonIntegrator {
         }
         let trace_time = t0.elapsed();
         let t1 = Instant::now();
-        let bar = Progress::new(progress, "maps", 0, None);
+        let bar = progress.phase("maps", 0);
         let (gp, cp) = rayon::join(|| to_photons(&global), || to_photons(&caustic));
         let (global_map, caustic_map) =
             rayon::join(|| PhotonMap::build_cancellable(gp, cancel), || PhotonMap::build_cancellable(cp, cancel));
         let (global_map, caustic_map) = (global_map?, caustic_map?);
         bar.finish("photon maps built");
         let records = global.hits.len().div_ceil(IRRADIANCE_STRIDE) as u64;
-        let bar = Progress::new(progress, "gather", records, None);
+        let bar = progress.phase("gather", records);
         let (irradiance, irradiance_levels) = precompute_irradiance(
             &global.hits,
             &global_map,

@@ -50,7 +50,7 @@ impl<'a> Driver<'a> {
         let first = first.min(settings.spp);
         let total =
             if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul((settings.spp - first) as u64) };
-        let progress = Progress::new(settings.progress, phase, total, settings.time_limit);
+        let progress = control.progress.phase(phase, total);
         Driver {
             settings,
             control,

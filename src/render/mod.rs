@@ -15,6 +15,7 @@ use crate::film::aov::AovList;
 use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
+use crate::progress::Display;
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::scene::desc::Sampling;
@@ -51,7 +52,6 @@ pub struct RenderSettings {
     pub time_limit: Option<Duration>,
     /// Call the checkpoint callback at least this often.
     pub checkpoint: Option<Duration>,
-    pub progress: bool,
     /// Also accumulate the direct, specular, caustic and indirect layers.
     pub layers: bool,
     /// The AOVs to write beside the image (`film::aov`).
@@ -59,8 +59,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// Settings for a scene's resolved sampling, with no time limit, checkpoints, progress or
-    /// layers.
+    /// Settings for a scene's resolved sampling, with no time limit, checkpoints or layers.
     pub fn new(s: &Sampling) -> Self {
         let c = s.crop;
         let window = if s.sample_border {
@@ -82,7 +81,6 @@ impl RenderSettings {
             antialias: s.antialias,
             time_limit: None,
             checkpoint: None,
-            progress: false,
             layers: false,
             aovs: s.aovs.clone(),
         }
@@ -221,12 +219,15 @@ pub struct RenderControl<'a> {
     pub cancel: &'a AtomicBool,
     /// Receives the current image every `checkpoint` interval.
     pub on_checkpoint: Option<CheckpointFn<'a>>,
+    /// Where the phases (making the integrator, the passes) report their progress.
+    pub progress: &'a Display,
 }
 
 impl<'a> RenderControl<'a> {
-    /// No cancellation (the flag is never set) and no checkpoints.
+    /// No cancellation (the flag is never set), no checkpoints, no progress shown.
     pub fn uncancelled() -> RenderControl<'static> {
         static NEVER: AtomicBool = AtomicBool::new(false);
-        RenderControl { cancel: &NEVER, on_checkpoint: None }
+        static HIDDEN: Display = Display::hidden();
+        RenderControl { cancel: &NEVER, on_checkpoint: None, progress: &HIDDEN }
     }
 }

@@ -149,11 +149,15 @@ pub struct Sampling {
     pub aovs: crate::film::aov::AovList,
 }
 
-/// How a file is read (not part of the scene): Mitsuba parameters and strictness.
+/// How a file is read: parameters, values put in place of the file's, strictness.
 #[derive(Clone, Debug, Default)]
 pub struct LoadOptions {
-    /// `-D name=value`: values of `$name` parameters in Mitsuba scenes (they win over `<default>`).
+    /// `-D name=value`: values of `$name` parameters (they win over a Mitsuba `<default>` or a
+    /// TOML `[parameters]` default).
     pub defines: Vec<(String, String)>,
+    /// `--set KEY=VALUE`: values put in place of the scene's, by key path (`render.spp`,
+    /// `materials.glass.ior`; `scene::native::set`), in the order given.
+    pub sets: Vec<(String, String)>,
     /// Unsupported parts of a Mitsuba scene are errors instead of warnings.
     pub strict: bool,
 }

@@ -46,13 +46,23 @@ pub fn load_scene_within(
     let text = std::fs::read_to_string(path)
         .map_err(|source| SceneError::Read { path: path.display().to_string(), source })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    native::load_toml_str(&text, &path.display().to_string(), &base, files, &options.defines)
+    native::load_toml_str(&text, &path.display().to_string(), &base, files, &options.defines, &options.sets)
 }
 
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
 /// paths resolve against `base`.
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
-    native::load_toml_str(text, name, base, &FileBudget::unlimited(), &[])
+    load_scene_str_with(text, name, base, &LoadOptions::default())
+}
+
+/// `load_scene_str` with `-D` parameters and `--set` values.
+pub fn load_scene_str_with(
+    text: &str,
+    name: &str,
+    base: &Path,
+    options: &LoadOptions,
+) -> Result<SceneDescription, SceneError> {
+    native::load_toml_str(text, name, base, &FileBudget::unlimited(), &options.defines, &options.sets)
 }
 
 pub struct Scene {

@@ -61,7 +61,7 @@ impl References {
     pub fn load(&self, case: &str, res: u32, spp: u32, o: &Options) -> LoadedScene {
         let defines = vec![("res".to_string(), res.to_string()), ("spp".to_string(), spp.to_string())];
         let path = self.dir.join(format!("{case}.xml"));
-        caustic::app::load(&path, &LoadOptions { defines, strict: true }, o)
+        caustic::app::load(&path, &LoadOptions { defines, strict: true, ..Default::default() }, o)
             .unwrap_or_else(|e| panic!("{case} failed to load: {e}"))
     }
 

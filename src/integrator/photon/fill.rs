@@ -18,7 +18,7 @@ use crate::material::bxdf::Transport;
 use crate::math::{Color, Frame, Vec2};
 use crate::photon::Gathered;
 use crate::photon::trace::Watch;
-use crate::progress::Progress;
+use crate::progress::Display;
 use crate::render::RayStats;
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
@@ -107,11 +107,16 @@ impl PhotonIntegrator {
     }
 
     /// Fills the irradiance cache (see the module docs); `None` when cancelled.
-    pub(super) fn fill_cache(&self, scene: &Scene, cancel: &AtomicBool, progress: bool) -> Option<IrradianceCache> {
+    pub(super) fn fill_cache(&self, scene: &Scene, cancel: &AtomicBool, progress: &Display) -> Option<IrradianceCache> {
         let (w, h) = (scene.camera.width, scene.camera.height);
         let a = self.config.cache_error;
         let seed = self.config.seed;
-        let bar = Progress::new(progress, "cache", u64::from(w) * u64::from(h), None);
+        // Progress counts each grid level alike: the coarse levels have few candidates, but
+        // nearly each makes a record (hundreds of rays), and the finest has most of the pixels,
+        // nearly all of them covered already (one camera ray each). Counted in pixels, the bar
+        // stood at a few percent with most of the time gone.
+        const LEVEL_UNITS: u64 = 1 << 20;
+        let bar = progress.phase("cache", STRIDES.len() as u64 * LEVEL_UNITS);
         let watch = Watch { cancel, progress: Some(&bar) };
         let mut records: Vec<Record> = Vec::new();
         let mut cache = IrradianceCache::empty(a);
@@ -140,7 +145,7 @@ impl PhotonIntegrator {
                             Some(self.record_at(scene, &c, &mut rng, &mut scratch))
                         })
                         .collect();
-                    watch.advance(chunk.len() as u64);
+                    watch.advance(chunk.len() as u64 * LEVEL_UNITS / cands.len() as u64);
                     out
                 })
                 .collect();

@@ -19,6 +19,7 @@ mod emitters;
 mod plugins;
 mod props;
 mod sensor;
+mod set;
 mod shapes;
 mod spectrum;
 mod texture;
@@ -66,8 +67,15 @@ fn load_mitsuba_text(
     options: &LoadOptions,
     files: &FileBudget,
 ) -> Result<SceneDescription, SceneError> {
-    let mut srcs = vec![Src { name: name.to_string(), text: text.to_string(), resolver: Resolver::for_scene(base) }];
-    let root = xml::parse_source(&mut srcs, 0, 0, files)?;
+    let mut srcs = vec![Src {
+        name: name.to_string(),
+        text: text.to_string(),
+        resolver: Resolver::for_scene(base),
+        from_set: false,
+    }];
+    let mut root = xml::parse_source(&mut srcs, 0, 0, files)?;
+    set::apply(&mut root, &mut srcs, &options.sets)?;
+    let root = root;
     let mut cx = Cx {
         srcs: &srcs,
         defines: HashMap::new(),

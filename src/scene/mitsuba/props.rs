@@ -103,12 +103,18 @@ impl<'a> Cx<'a> {
     }
 
     pub(super) fn err(&self, el: &El, message: impl Into<String>) -> SceneError {
-        let s = self.src(el);
-        SceneError::at(&s.name, &s.text, el.span.clone(), message)
+        self.err_span(el, el.span.clone(), message)
     }
 
     pub(super) fn err_span(&self, el: &El, span: Range<usize>, message: impl Into<String>) -> SceneError {
         let s = self.src(el);
+        if s.from_set {
+            // A `--set` value has no line: the error names the `--set` (the source's name).
+            return SceneError::File {
+                path: self.srcs[0].name.clone(),
+                message: format!("{}: {}", s.name, message.into()),
+            };
+        }
         SceneError::at(&s.name, &s.text, span, message)
     }
 
@@ -142,6 +148,10 @@ impl<'a> Cx<'a> {
     pub(super) fn note(&mut self, el: &El, message: impl Into<String>) {
         let message = message.into();
         let s = self.src(el);
+        if s.from_set {
+            self.warnings.push(format!("{}: {}: {message}", self.srcs[0].name, s.name));
+            return;
+        }
         let (line, column) = crate::scene::error::line_column(&s.text, el.span.start);
         self.warnings.push(format!("{}:{line}:{column}: {message}", s.name));
     }
@@ -301,6 +311,11 @@ impl<'a> Cx<'a> {
                         ),
                     };
                     drop(asked);
+                    if self.src(el).from_set {
+                        // Asked for on the command line: reading nothing would say nothing.
+                        let message = message.trim_end_matches("; it is ignored").trim_end_matches(" and is ignored");
+                        return Err(self.err(el, format!("{message}, so this --set would change nothing")));
+                    }
                     self.warn(el, message)?;
                 }
                 Entry::Object { el, at, .. } => {

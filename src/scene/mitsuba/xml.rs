@@ -20,6 +20,9 @@ pub(super) struct Src {
     /// The folders relative names in this file are looked up in while it is parsed: its own
     /// folder, its `<path>`s and those of the files that include it.
     pub resolver: Resolver,
+    /// A `--set` value (`name` is the `--set`, `text` its value) rather than a file: errors about
+    /// it name the `--set` and have no line.
+    pub from_set: bool,
 }
 
 /// Mitsuba 3's file resolver: an ordered list of folders, the first that holds a relative name
@@ -209,7 +212,7 @@ fn expand_includes(
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             own.prepend(dir.to_path_buf());
         }
-        srcs.push(Src { name: path.display().to_string(), text, resolver: own });
+        srcs.push(Src { name: path.display().to_string(), text, resolver: own, from_set: false });
         let id = srcs.len() - 1;
         let included = parse_source(srcs, id, depth + 1, files)?;
         el.children.extend(included.children);

@@ -47,7 +47,13 @@ impl FilterKeys {
     fn filter<E: Error>(self) -> Result<Filter, E> {
         let Some((kind, allowed)) = FILTER_KEYS.iter().find(|k| k.0 == self.kind) else {
             let names: Vec<&str> = FILTER_KEYS.iter().map(|k| k.0).collect();
-            return Err(E::custom(format!("unknown filter `{}`; expected one of: {}", self.kind, names.join(", "))));
+            let hint = crate::scene::mitsuba::closest(&self.kind, names.iter().copied())
+                .map_or(String::new(), |k| format!(" (did you mean `{k}`?)"));
+            return Err(E::custom(format!(
+                "unknown filter `{}`{hint}; expected one of: {}",
+                self.kind,
+                names.join(", ")
+            )));
         };
         let given = [
             ("radius", self.radius.is_some()),
@@ -86,6 +92,10 @@ impl<'de> Deserialize<'de> for FilterSpec {
                 )
             }
             fn visit_str<E: Error>(self, name: &str) -> Result<FilterSpec, E> {
+                // Parameters after a colon, as `--filter` takes them (`gaussian:stddev=0.3`).
+                if name.contains(':') {
+                    return Filter::parse(name).map(FilterSpec).map_err(E::custom);
+                }
                 let keys =
                     FilterKeys { kind: name.to_string(), radius: None, stddev: None, b: None, c: None, lobes: None };
                 keys.filter().map(FilterSpec)

@@ -151,10 +151,8 @@ impl<'a> Cx<'a> {
                 return Err(if all.contains(&r.get_ref().as_str()) {
                     self.at(r.span(), format!("materials refer to each other in a cycle: {}", all.join(", ")))
                 } else {
-                    let mut known: Vec<&str> =
-                        all.iter().copied().chain(names.names.iter().map(String::as_str)).collect();
-                    known.sort();
-                    self.at(r.span(), format!("no material named `{}` (defined: {})", r.get_ref(), known.join(", ")))
+                    let known = all.iter().copied().chain(names.names.iter().map(String::as_str)).collect();
+                    self.at(r.span(), super::no_such("material", r.get_ref(), known))
                 });
             }
             pending = rest;
@@ -175,15 +173,7 @@ impl<'a> Cx<'a> {
         span: Range<usize>,
     ) -> Result<u32, SceneError> {
         textures.get(name).copied().ok_or_else(|| {
-            let mut known: Vec<&str> = textures.keys().map(String::as_str).collect();
-            known.sort();
-            self.at(
-                span,
-                format!(
-                    "no texture named `{name}` (defined: {})",
-                    if known.is_empty() { "none".into() } else { known.join(", ") }
-                ),
-            )
+            self.at(span, super::no_such("texture", name, textures.keys().map(String::as_str).collect()))
         })
     }
 

@@ -13,6 +13,9 @@ mod materials;
 mod objects;
 mod params;
 mod schema;
+mod set;
+
+pub use set::{ALIASES, key_path, parse_set};
 
 use super::SceneError;
 use super::builder::SceneBuilder;
@@ -29,23 +32,31 @@ use std::path::Path;
 use toml::Spanned;
 use toml::de::{DeString, DeTable, DeValue, ValueDeserializer};
 
+/// The top-level sections of a scene file.
+const SECTION_NAMES: &[&str] =
+    &["parameters", "render", "camera", "textures", "materials", "lights", "groups", "objects"];
+
 /// Default image size when the file gives none.
 const DEFAULT_SIZE: (u32, u32) = (640, 480);
 
 /// Loads a TOML scene from `text`; `name` is used in messages and mesh paths resolve against
-/// `base`; `defines` are the `-D name=value` given for its `$name` parameters. Every mesh and
-/// image is reported to `files` before it is read.
+/// `base`; `defines` are the `-D name=value` given for its `$name` parameters and `sets` the
+/// `--set KEY=VALUE` put in place of its keys' values. Every mesh and image is reported to
+/// `files` before it is read.
 pub fn load_toml_str<'a>(
     text: &'a str,
     name: &'a str,
     base: &'a Path,
     files: &'a FileBudget,
     defines: &'a [(String, String)],
+    sets: &'a [(String, String)],
 ) -> Result<SceneDescription, SceneError> {
-    let plain = Cx { path: name, text, base, files, substituted: &[] };
+    let plain = Cx { path: name, text, base, files, substituted: &[], placed: &[] };
     let mut sections = plain.sections()?;
     let substituted = params::substitute(&plain, &mut sections, defines)?;
-    let cx = Cx { substituted: &substituted, ..plain };
+    // After the parameters: a --set value is taken as written, and wins over a `$name` there.
+    let placed = set::apply(&plain, &mut sections, sets)?;
+    let cx = Cx { substituted: &substituted, placed: &placed, ..plain };
     let render: RenderDesc = match sections.remove("render") {
         Some(v) => cx.de(v)?,
         None => RenderDesc::default(),
@@ -108,10 +119,16 @@ struct Cx<'a> {
     files: &'a FileBudget,
     /// Where `$name` parameters were put, so that an error about one names it.
     substituted: &'a [(Range<usize>, String)],
+    /// Where `--set` values were put (past the end of the text) and the `--set` each was.
+    placed: &'a [(Range<usize>, String)],
 }
 
 impl<'a> Cx<'a> {
     fn at(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
+        // A --set value has no line: the error names the --set instead.
+        if let Some((_, set)) = self.placed.iter().find(|(s, _)| s.contains(&span.start)) {
+            return SceneError::File { path: self.path.to_string(), message: format!("{set}: {}", message.into()) };
+        }
         SceneError::at(self.path, self.text, span, message)
     }
 
@@ -146,15 +163,13 @@ impl<'a> Cx<'a> {
         let mut sections = HashMap::new();
         for (key, value) in doc.into_inner() {
             let k: &str = key.get_ref();
-            let known = ["parameters", "render", "camera", "textures", "materials", "lights", "groups", "objects"]
-                .into_iter()
-                .find(|s| *s == k);
+            let known = SECTION_NAMES.iter().copied().find(|s| *s == k);
             let Some(section) = known else {
+                let hint = crate::scene::mitsuba::closest(k, SECTION_NAMES.iter().copied())
+                    .map_or(String::new(), |near| format!(" (did you mean `{near}`?)"));
                 return Err(self.at(
                     key.span(),
-                    format!(
-                        "unknown section `{k}`; expected one of parameters, render, camera, textures, materials, lights, groups, objects"
-                    ),
+                    format!("unknown section `{k}`{hint}; expected one of {}", SECTION_NAMES.join(", ")),
                 ));
             };
             sections.insert(section, value);
@@ -186,16 +201,22 @@ impl<'a> Cx<'a> {
             return Err(self.at(ty_span, format!("`type` must be a string, one of: {}", names.join(", "))));
         };
         let Some((kind, allowed)) = kinds.iter().find(|k| k.0 == ty_str) else {
-            return Err(
-                self.at(ty_span, format!("unknown {what} type `{ty_str}`; expected one of: {}", names.join(", ")))
-            );
+            let hint = crate::scene::mitsuba::closest(ty_str, names.iter().copied())
+                .map_or(String::new(), |near| format!(" (did you mean `{near}`?)"));
+            return Err(self
+                .at(ty_span, format!("unknown {what} type `{ty_str}`{hint}; expected one of: {}", names.join(", "))));
         };
         for key in table.keys() {
             let k: &DeString = key.get_ref();
             if !allowed.contains(&k.as_ref()) {
+                let hint = crate::scene::mitsuba::closest(k, allowed.iter().copied())
+                    .map_or(String::new(), |near| format!(" (did you mean `{near}`?)"));
                 return Err(self.at(
                     key.span(),
-                    format!("unknown key `{k}` for a {kind} {what}; expected one of: type, {}", allowed.join(", ")),
+                    format!(
+                        "unknown key `{k}` for a {kind} {what}{hint}; expected one of: type, {}",
+                        allowed.join(", ")
+                    ),
                 ));
             }
         }
@@ -218,18 +239,20 @@ impl<'a> Cx<'a> {
             return Ok(i);
         };
         names.index.get(name.get_ref().as_str()).copied().ok_or_else(|| {
-            let mut known: Vec<&str> = names.names.iter().map(String::as_str).collect();
-            known.sort();
-            self.at(
-                name.span(),
-                format!(
-                    "no material named `{}` (defined: {})",
-                    name.get_ref(),
-                    if known.is_empty() { "none".into() } else { known.join(", ") }
-                ),
-            )
+            let known = names.names.iter().map(String::as_str).collect();
+            self.at(name.span(), no_such("material", name.get_ref(), known))
         })
     }
+}
+
+/// `no material named `glas` (defined: glass, mirror); did you mean `glass`?`: a name that refers
+/// to nothing the file defines.
+fn no_such(kind: &str, name: &str, mut known: Vec<&str>) -> String {
+    known.sort();
+    let hint = crate::scene::mitsuba::closest(name, known.iter().copied())
+        .map_or(String::new(), |k| format!("; did you mean `{k}`?"));
+    let defined = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+    format!("no {kind} named `{name}` (defined: {defined}){hint}")
 }
 
 /// A serde or TOML message in the scene's words rather than Rust's: `invalid type: string "16",
@@ -270,11 +293,27 @@ fn plain_words(message: &str) -> String {
             return format!("expected {}, found {}", kind(expected), found(what));
         }
     }
-    message.replacen("unknown field", "unknown key", 1).replacen("unknown variant", "unknown value", 1).replacen(
-        "missing field",
-        "missing key",
-        1,
-    )
+    let message = message
+        .replacen("unknown field", "unknown key", 1)
+        .replacen("unknown variant", "unknown value", 1)
+        .replacen("missing field", "missing key", 1);
+    with_did_you_mean(&message)
+}
+
+/// serde's `unknown key `spq`, expected one of `width`, `spp`, ...` with the nearest name after
+/// the unknown one: `unknown key `spq` (did you mean `spp`?), expected one of ...`.
+fn with_did_you_mean(message: &str) -> String {
+    for word in ["unknown key `", "unknown value `"] {
+        let Some(start) = message.find(word).map(|i| i + word.len()) else { continue };
+        let Some(len) = message[start..].find('`') else { continue };
+        let name = &message[start..start + len];
+        let rest = &message[start + len + 1..];
+        let known = rest.split('`').skip(1).step_by(2);
+        if let Some(k) = crate::scene::mitsuba::closest(name, known) {
+            return format!("{}`{name}` (did you mean `{k}`?){rest}", &message[..start - 1]);
+        }
+    }
+    message.to_string()
 }
 
 #[cfg(test)]
@@ -297,5 +336,14 @@ mod message_tests {
         assert!(plain_words("unknown field `spq`, expected one of `spp`").starts_with("unknown key `spq`"));
         assert!(plain_words("unknown variant `pth`, expected one of `path`").starts_with("unknown value `pth`"));
         assert_eq!(plain_words("missing field `type`"), "missing key `type`");
+        // The nearest accepted name, when one is near.
+        assert_eq!(
+            plain_words("unknown field `spq`, expected one of `width`, `spp`"),
+            "unknown key `spq` (did you mean `spp`?), expected one of `width`, `spp`"
+        );
+        assert_eq!(
+            plain_words("unknown field `zzz`, expected one of `width`, `spp`"),
+            "unknown key `zzz`, expected one of `width`, `spp`"
+        );
     }
 }

@@ -274,16 +274,8 @@ impl<'a> Cx<'a> {
             return Err(self.at(span, "an instance needs `group`, the name of a [groups.NAME] table"));
         };
         let Some(&g) = groups.get(name.get_ref().as_str()) else {
-            let mut known: Vec<&str> = groups.keys().map(String::as_str).collect();
-            known.sort();
-            return Err(self.at(
-                name.span(),
-                format!(
-                    "no group named `{}` (defined: {})",
-                    name.get_ref(),
-                    if known.is_empty() { "none".into() } else { known.join(", ") }
-                ),
-            ));
+            let known = groups.keys().map(String::as_str).collect();
+            return Err(self.at(name.span(), super::no_such("group", name.get_ref(), known)));
         };
         geometry.add_instance(g, transform).map_err(|e| e.placed(|m| self.at(span, m)))
     }

@@ -168,7 +168,7 @@ fn walk<'a>(
 }
 
 /// `v` with every position in it set to `span` (the use site), so errors point there.
-fn respan<'a>(v: DeValue<'a>, span: &Range<usize>) -> DeValue<'a> {
+pub(super) fn respan<'a>(v: DeValue<'a>, span: &Range<usize>) -> DeValue<'a> {
     match v {
         DeValue::Array(a) => {
             let mut out = toml::de::DeArray::new();
