@@ -87,6 +87,9 @@ impl RenderId {
             time_limit: _,
             checkpoint: _,
             progress: _,
+            // Where the picture is shown while it renders (`--display-server`): the viewer
+            // receives copies of the film, which it never changes.
+            display: _,
             layers,
         } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
@@ -278,6 +281,7 @@ mod tests {
             sampler: Some(SamplerKind::Sobol),
             antialias: Some(false),
             light_samples: Some(3),
+            display_server: Some("127.0.0.1:14158".into()),
             photon: PhotonOptions {
                 photons: Some(1000),
                 caustic_photons: Some(500),
@@ -304,6 +308,7 @@ mod tests {
             sampler,
             antialias,
             light_samples,
+            display_server,
             photon,
         } = every.clone();
         let PhotonOptions {
@@ -357,5 +362,11 @@ mod tests {
             seen.push(other);
         }
         assert_ne!(base.difference(&id(&every)), None);
+        // Where the picture is shown as it renders changes none of its samples: a shard watched
+        // in tev merges with one that was not.
+        let shown = Options { display_server, ..none() };
+        let loaded = crate::app::load_toml_str(scene, "id.toml", Path::new("."), &shown).unwrap();
+        assert!(loaded.settings.display.is_some(), "the display server reaches the render settings");
+        assert_eq!(id(&shown), base);
     }
 }

@@ -10,13 +10,14 @@ mod tiles;
 pub use driver::{Driver, PassOutcome};
 pub use tiles::{render_rays, render_rays_from};
 
+use crate::display::DisplayTarget;
 use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::scene::desc::Sampling;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 /// How a render runs: the image and its sampling (from the scene description, with overrides)
@@ -50,6 +51,8 @@ pub struct RenderSettings {
     /// Call the checkpoint callback at least this often.
     pub checkpoint: Option<Duration>,
     pub progress: bool,
+    /// Show the picture in this image viewer as it renders (`--display-server`).
+    pub display: Option<DisplayTarget>,
     /// Also accumulate the direct, specular, caustic and indirect layers.
     pub layers: bool,
 }
@@ -79,6 +82,7 @@ impl RenderSettings {
             time_limit: None,
             checkpoint: None,
             progress: false,
+            display: None,
             layers: false,
         }
     }
@@ -211,12 +215,39 @@ pub struct RenderControl<'a> {
     pub cancel: &'a AtomicBool,
     /// Receives the current image every `checkpoint` interval.
     pub on_checkpoint: Option<CheckpointFn<'a>>,
+    /// Counts the render's work for a watcher outside it (the Python module's progress bar).
+    pub meter: Option<&'a Meter>,
 }
 
 impl<'a> RenderControl<'a> {
-    /// No cancellation (the flag is never set) and no checkpoints.
+    /// No cancellation (the flag is never set), checkpoints or meter.
     pub fn uncancelled() -> RenderControl<'static> {
         static NEVER: AtomicBool = AtomicBool::new(false);
-        RenderControl { cancel: &NEVER, on_checkpoint: None }
+        RenderControl { cancel: &NEVER, on_checkpoint: None, meter: None }
+    }
+}
+
+/// The work a render's passes have done and have to do, in the units of its progress bar (pixel
+/// samples), readable from another thread while it runs.
+#[derive(Debug, Default)]
+pub struct Meter {
+    done: AtomicU64,
+    total: AtomicU64,
+}
+
+impl Meter {
+    /// (units done, units in all); the total is 0 before the passes start and when only a time
+    /// budget ends the render.
+    pub fn read(&self) -> (u64, u64) {
+        (self.done.load(Ordering::Relaxed), self.total.load(Ordering::Relaxed))
+    }
+
+    fn start(&self, total: u64) {
+        self.done.store(0, Ordering::Relaxed);
+        self.total.store(total, Ordering::Relaxed);
+    }
+
+    fn add(&self, units: u64) {
+        self.done.fetch_add(units, Ordering::Relaxed);
     }
 }

@@ -156,6 +156,7 @@ pub struct LoadOptions {
 }
 
 /// Everything a scene file describes.
+#[derive(Clone)]
 pub struct SceneDescription {
     /// The file, for messages.
     pub name: String,
@@ -234,6 +235,9 @@ impl SceneDescription {
             sampler,
             antialias,
             light_samples,
+            // Not part of the scene: `app` gives it to the render settings (where to show the
+            // picture changes nothing in it).
+            display_server: _,
             photon,
         } = o.clone();
         let PhotonOptions {

@@ -165,6 +165,9 @@ impl RenderDesc {
             sampler: *sampler,
             antialias: *antialias,
             light_samples: *light_samples,
+            // Where a render is shown is the user's choice, not the scene's: a scene file from
+            // elsewhere does not open network connections.
+            display_server: None,
             photon: photon.clone(),
         }
     }
