@@ -58,6 +58,37 @@ pub fn load_scene_within(
     native::load_toml_str(&text, &path.display().to_string(), &base, files)
 }
 
+/// The two scene formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneFormat {
+    /// caustic's own (docs/scene-format.md).
+    Toml,
+    /// Mitsuba 3 XML.
+    Mitsuba,
+}
+
+/// `load_scene_within` for a scene given as `text` in `format` (the Python module's
+/// `load_string`): `name` is used in messages and the files it names resolve against `base`.
+pub fn load_scene_text_within(
+    text: &str,
+    format: SceneFormat,
+    name: &str,
+    base: &Path,
+    options: &LoadOptions,
+    files: &FileBudget,
+) -> Result<SceneDescription, SceneError> {
+    match format {
+        SceneFormat::Mitsuba => mitsuba::load_mitsuba_text(text, name, base, options, files),
+        SceneFormat::Toml => match options.defines.first() {
+            Some((k, _)) => Err(SceneError::File {
+                path: name.to_string(),
+                message: format!("-D {k}=... sets a `$name` parameter of a Mitsuba XML scene; TOML scenes have none"),
+            }),
+            None => native::load_toml_str(text, name, base, files),
+        },
+    }
+}
+
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
 /// paths resolve against `base`.
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {
