@@ -23,13 +23,16 @@ fn scene(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
 }
 
+/// An image the viewer holds: width, height and each channel's plane of row-major values.
+type Held = (u32, u32, HashMap<String, Vec<f32>>);
+
 /// What the stand-in viewer was told.
 #[derive(Default, Debug)]
 struct Viewer {
     /// (name, width, height, channels) of each image created.
     created: Vec<(String, u32, u32, Vec<String>)>,
-    /// Each image's channels, as planes of row-major values.
-    images: HashMap<String, (u32, u32, HashMap<String, Vec<f32>>)>,
+    /// Each image by name.
+    images: HashMap<String, Held>,
     /// Update messages received, and how many of them started at the image's top-left corner
     /// (one per picture sent: a picture is one message here unless it is very large).
     updates: usize,

@@ -115,7 +115,12 @@ fn app_error(py: Python<'_>, e: AppError) -> PyErr {
     }
 }
 
-fn scene_of(py: Python<'_>, desc: Result<SceneDescription, LoadError>, files: &FileBudget, load: LoadOptions) -> PyResult<Scene> {
+fn scene_of(
+    py: Python<'_>,
+    desc: Result<SceneDescription, LoadError>,
+    files: &FileBudget,
+    load: LoadOptions,
+) -> PyResult<Scene> {
     match desc {
         Ok(mut desc) => {
             // Said once, at load, rather than at every render of a sweep.
@@ -213,9 +218,8 @@ fn render<'py>(
         Some(s) if s.is_finite() && s > 0.0 && s < 1e9 => Some(Duration::from_secs_f64(s)),
         Some(s) => return Err(PyValueError::new_err(format!("time must be a positive number of seconds, got {s}"))),
     };
-    let shard = shard
-        .map(|s| s.parse().map_err(|e: String| PyValueError::new_err(format!("shard: {e}"))))
-        .transpose()?;
+    let shard =
+        shard.map(|s| s.parse().map_err(|e: String| PyValueError::new_err(format!("shard: {e}")))).transpose()?;
     let scene = scene.get();
     let opts = RenderOptions {
         scene: PathBuf::from(&scene.desc.name),
@@ -261,7 +265,8 @@ fn write(py: Python<'_>, path: PathBuf, width: u32, height: u32, pixels: &Bound<
         return Err(PyValueError::new_err("the pixel buffer does not hold width x height RGB float32 values"));
     }
     let f = |k: usize| f32::from_ne_bytes(bytes[4 * k..4 * k + 4].try_into().expect("four bytes"));
-    let pixels = (0..width as usize * height as usize).map(|p| Color::new(f(3 * p), f(3 * p + 1), f(3 * p + 2))).collect();
+    let pixels =
+        (0..width as usize * height as usize).map(|p| Color::new(f(3 * p), f(3 * p + 1), f(3 * p + 2))).collect();
     let img = Image { width, height, pixels };
     py.detach(|| write_image(&img, &path)).map_err(|e| CausticError::new_err(e.to_string()))
 }

@@ -105,7 +105,10 @@ pub fn options(function: &str, given: &Bound<'_, PyDict>) -> PyResult<Options> {
         // Checked one at a time first, so that a bad value's message names its option.
         let alone = if names.photon.contains(&name) {
             photon.insert(name.clone(), v.clone());
-            toml::Table::from_iter([("photon".to_string(), toml::Value::Table(toml::Table::from_iter([(name.clone(), v)])))])
+            toml::Table::from_iter([(
+                "photon".to_string(),
+                toml::Value::Table(toml::Table::from_iter([(name.clone(), v)])),
+            )])
         } else {
             top.insert(name.clone(), v.clone());
             toml::Table::from_iter([(name.clone(), v)])

@@ -6,8 +6,8 @@
 use caustic::render::Meter;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::Duration;
 
@@ -39,7 +39,7 @@ pub fn run<T: Send>(
         let stop = |e: PyErr| {
             cancel.store(true, Ordering::SeqCst);
             // The render stops after the work in flight (tiles, a photon chunk).
-            let _ = py.detach(|| worker_join(&done_rx));
+            py.detach(|| worker_join(&done_rx));
             Err(e)
         };
         loop {
