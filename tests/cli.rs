@@ -47,6 +47,7 @@ fn help_documents_every_option() {
         "--light-samples",
         "--caustic-k",
         "--caustic-radius",
+        "--display-server",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }
