@@ -263,6 +263,8 @@ def test_display_server_from_python_receives_the_returned_image():
     listener = socket.socket()
     listener.bind(("127.0.0.1", 0))
     listener.listen(1)
+    # Never waits forever: a render that did not connect fails the test below.
+    listener.settimeout(60)
     got = {}
 
     def serve():
@@ -270,13 +272,14 @@ def test_display_server_from_python_receives_the_returned_image():
         with conn:
             got["messages"] = read_tev_messages(conn)
 
-    server = threading.Thread(target=serve)
+    server = threading.Thread(target=serve, daemon=True)
     server.start()
     address = "%s:%d" % listener.getsockname()
     scene = caustic.load_file(BOX)
     image = caustic.render(scene, spp=2, integrator="path", display_server=address, **SMALL)
     server.join(timeout=30)
     listener.close()
+    assert "messages" in got, "the viewer received nothing"
     messages = got["messages"]
     # Create (type 4): focus, name, width, height, channels, channel names.
     assert messages[0][0] == 4
