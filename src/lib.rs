@@ -10,6 +10,8 @@ pub mod accel;
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod cli;
+pub mod display;
 pub mod farm;
 pub mod film;
 pub mod geometry;

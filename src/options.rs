@@ -132,6 +132,12 @@ pub struct Options {
     #[arg(long, value_name = "LIST", value_parser = AovList::parse)]
     #[serde(deserialize_with = "deserialize_aovs")]
     pub aov: Option<AovList>,
+    /// Show the render as it progresses in the tev image viewer listening at HOST:PORT (tev's
+    /// default is 127.0.0.1:14158); an unreachable or lost viewer is a warning, not an error.
+    #[arg(long, value_name = "HOST:PORT", value_parser = parse_display_server)]
+    #[serde(deserialize_with = "deserialize_display_server")]
+    pub display_server: Option<String>,
+
     /// Photon-mapping and SPPM settings (`[render.photon]` in a TOML scene).
     #[command(flatten)]
     pub photon: PhotonOptions,
@@ -231,6 +237,19 @@ fn deserialize_filter<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Filter>,
 
 fn deserialize_aovs<'de, D: Deserializer<'de>>(d: D) -> Result<Option<AovList>, D::Error> {
     AovList::parse(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
+}
+
+/// A display server's address: `HOST:PORT` with a port from 1 to 65535 (`[::1]:14158` for an
+/// IPv6 address). The host is looked up when the render starts.
+pub fn parse_display_server(s: &str) -> Result<String, String> {
+    match s.rsplit_once(':') {
+        Some((host, port)) if !host.is_empty() && port.parse::<u16>().is_ok_and(|p| p > 0) => Ok(s.to_string()),
+        _ => Err(format!("expected HOST:PORT (such as 127.0.0.1:14158), found `{s}`")),
+    }
+}
+
+fn deserialize_display_server<'de, D: Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
+    parse_display_server(&String::deserialize(d)?).map(Some).map_err(serde::de::Error::custom)
 }
 
 fn deserialize_unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {

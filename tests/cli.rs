@@ -49,6 +49,7 @@ fn help_documents_every_option() {
         "--caustic-radius",
         "--filter",
         "--set",
+        "--display-server",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }

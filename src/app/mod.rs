@@ -7,16 +7,18 @@ mod shard;
 
 pub use farm::{SlurmOptions, farm_slurm, merge_files};
 
+use crate::display::DisplayTarget;
 use crate::farm::FarmError;
-use crate::farm::shard::ShardSpec;
+use crate::farm::shard::{Shard, ShardSpec};
 use crate::film::aov::AovKind;
 use crate::film::output::{Format, OutputError, aov_path, check_writable, layer_path, write_exr_channels, write_image};
 use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
 use crate::options::{IntegratorKind, Options};
 use crate::progress::Display;
-use crate::render::{CheckpointFn, RenderControl, RenderSettings, RenderStats};
+use crate::render::{CheckpointFn, Meter, RenderControl, RenderSettings, RenderStats};
 use crate::scene::desc::{IntegratorDesc, LoadInfo};
+use crate::scene::footprint::Footprint;
 use crate::scene::{FileBudget, LoadOptions, Scene, SceneDescription, SceneError, load_scene, load_scene_within};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -83,6 +85,9 @@ pub enum AppError {
         if *existed { " and is left as it was" } else { "" }
     )]
     InterruptedEarly { path: String, existed: bool },
+    /// A render kept in memory (not written to a file) was stopped before a complete pass.
+    #[error("interrupted before the first complete pass")]
+    Cancelled,
 }
 
 impl From<SceneError> for AppError {
@@ -101,8 +106,11 @@ impl From<SceneError> for AppError {
 
 /// What a finished render reports.
 pub struct Summary {
-    pub output: PathBuf,
+    /// The file written (a shard's partial image), or `None` for a render kept in memory.
+    pub output: Option<PathBuf>,
     pub stats: RenderStats,
+    /// The render itself, when it was kept in memory rather than written.
+    pub render: Option<crate::render::RenderOutput>,
 }
 
 /// Default output path for a scene file: its stem with `.png`, in the current folder.
@@ -137,9 +145,11 @@ pub fn load_toml_str(text: &str, name: &str, base: &Path, overrides: &Options) -
 pub fn prepare(mut desc: SceneDescription, overrides: &Options) -> Result<LoadedScene, SceneError> {
     desc.apply(overrides);
     let warnings = std::mem::take(&mut desc.warnings);
+    // Shown under the scene's name unless the render names it after its output.
+    let display = overrides.display_server.clone().map(|address| DisplayTarget { address, name: desc.name.clone() });
     let built = desc.build()?;
     Ok(LoadedScene {
-        settings: RenderSettings::new(&built.sampling),
+        settings: RenderSettings { display, ..RenderSettings::new(&built.sampling) },
         scene: built.scene,
         integrator: built.integrator,
         info: built.info,
@@ -200,30 +210,81 @@ fn say(display: &Display, msg: std::fmt::Arguments) {
     }
 }
 
+/// Reads `opts.scene` and renders it to `opts.output` (or, with `opts.shard`, renders that shard
+/// to its partial image): `caustic render`.
 pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary, AppError> {
     let output = opts.output.clone().unwrap_or_else(|| default_output(&opts.scene));
     // Fail on an unusable output before spending any time.
     let format = check_writable(&output)?;
-    let shard = match opts.shard {
-        Some(spec) => Some(spec.resolve(|k| std::env::var(k).ok()).map_err(AppError::Shard)?),
+    let shard = resolve_shard(opts, format)?;
+    thread_pool(opts.threads)?.install(|| {
+        // The loaders report each file (and the builder each generated mesh and instance) to the
+        // budget before reading it, and the load stops at the first that would not fit.
+        let files = FileBudget::new(memory_limit(opts));
+        // The summary reports every phase, so its total is the wall time a user measures.
+        let started = std::time::Instant::now();
+        // One display for the whole run: the load, the integrator's preparation and the passes
+        // are its phases, and `--time` counts from here as the bar does.
+        let display = Display::new(!opts.quiet, opts.time_limit);
+        let load = display.phase("load", 0);
+        let desc = load_scene_within(&opts.scene, &opts.load, &files)?;
+        load.end();
+        let job =
+            Job { output: Some(&output), shard, started, footprint: files.footprint(), meter: None, display: &display };
+        render_description(desc, opts, job, cancel)
+    })
+}
+
+/// Renders a scene already read (`footprint`: what reading it counted), as `render_file` renders
+/// a file: the Python module's `render` and `render_shard`. With `opts.output` the image (or the
+/// shard's partial image) is written there; without, it is returned in the summary. `meter`
+/// counts the passes' work while they run.
+pub fn render_scene(
+    desc: &SceneDescription,
+    footprint: Footprint,
+    opts: &RenderOptions,
+    cancel: &AtomicBool,
+    meter: Option<&Meter>,
+) -> Result<Summary, AppError> {
+    let shard = match &opts.output {
+        Some(output) => resolve_shard(opts, check_writable(output)?)?,
+        None if opts.shard.is_some() => {
+            return Err(AppError::Shard("a shard is written to a partial image: give its path".into()));
+        }
         None => None,
     };
-    if shard.is_some() {
-        if format != Format::Exr {
-            return Err(AppError::Shard(format!(
-                "a shard writes a partial image, which is OpenEXR: give an output ending in .exr, not `{}`",
-                output.display()
-            )));
-        }
-        if opts.time_limit.is_some() {
-            return Err(AppError::Shard(
-                "--time cannot be combined with --shard: a shard renders a fixed block of samples (a shard that is \
-                 stopped saves what it finished and resumes when run again)"
-                    .into(),
-            ));
-        }
+    thread_pool(opts.threads)?.install(|| {
+        let started = std::time::Instant::now();
+        let display = Display::new(!opts.quiet, opts.time_limit);
+        let job = Job { output: opts.output.as_deref(), shard, started, footprint, meter, display: &display };
+        render_description(desc.clone(), opts, job, cancel)
+    })
+}
+
+/// The shard `opts` asks for, checked against the output's format and the other options.
+fn resolve_shard(opts: &RenderOptions, format: Format) -> Result<Option<Shard>, AppError> {
+    let Some(spec) = opts.shard else { return Ok(None) };
+    let shard = spec.resolve(|k| std::env::var(k).ok()).map_err(AppError::Shard)?;
+    if format != Format::Exr {
+        let output = opts.output.clone().unwrap_or_else(|| default_output(&opts.scene));
+        return Err(AppError::Shard(format!(
+            "a shard writes a partial image, which is OpenEXR: give an output ending in .exr, not `{}`",
+            output.display()
+        )));
     }
-    let threads = opts.threads.or_else(scheduler_cpus);
+    if opts.time_limit.is_some() {
+        return Err(AppError::Shard(
+            "--time cannot be combined with --shard: a shard renders a fixed block of samples (a shard that is \
+             stopped saves what it finished and resumes when run again)"
+                .into(),
+        ));
+    }
+    Ok(Some(shard))
+}
+
+/// The worker pool a render runs on: `threads` workers, or the scheduler's CPUs, or all cores.
+fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, AppError> {
+    let threads = threads.or_else(scheduler_cpus);
     if threads == Some(0) {
         return Err(AppError::ZeroThreads);
     }
@@ -231,256 +292,296 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     if let Some(n) = threads {
         builder = builder.num_threads(n);
     }
-    let pool =
-        builder.build().map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })?;
-    pool.install(|| {
-        // The loaders report each file (and the builder each generated mesh and instance) to the
-        // budget before reading it, and the load stops at the first that would not fit.
-        let limit = opts.max_memory.unwrap_or_else(|| system_memory() / 2);
-        let files = FileBudget::new(limit);
-        // The summary reports every phase, so its total is the wall time a user measures.
-        let started = std::time::Instant::now();
-        // One display for the whole run: the load, the integrator's preparation and the passes
-        // are its phases, and `--time` counts from here as the bar does.
-        let display = Display::new(!opts.quiet, opts.time_limit);
-        let load = display.phase("load", 0);
-        let loaded = prepare(load_scene_within(&opts.scene, &opts.load, &files)?, &opts.overrides)?;
-        load.end();
-        let loaded_at = started.elapsed();
-        let footprint = files.footprint();
-        if footprint.total() > 0 {
-            say(
-                &display,
-                format_args!(
-                    "scene files: about {} MiB (meshes {} MiB, textures {} MiB, instances {} MiB)",
-                    footprint.total().div_ceil(1 << 20),
-                    footprint.meshes.div_ceil(1 << 20),
-                    footprint.textures.div_ceil(1 << 20),
-                    footprint.instances.div_ceil(1 << 20)
-                ),
-            );
-        }
-        for w in &loaded.warnings {
-            display.warn(w);
-        }
-        for w in opts.overrides.unused_by(loaded.integrator.kind) {
-            display.warn(&w);
-        }
-        let info = &loaded.info;
-        for m in &info.meshes {
-            let (lo, hi) = (m.bounds.min, m.bounds.max);
-            let size = hi - lo;
-            say(
-                &display,
-                format_args!(
-                    "mesh {}: {} triangles, bounds ({:.4}, {:.4}, {:.4}) to ({:.4}, {:.4}, {:.4}), size {:.4} x {:.4} x {:.4}",
-                    m.name, m.triangles, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z
-                ),
-            );
-        }
+    builder.build().map_err(|e| AppError::Threads { threads: threads.unwrap_or(0), message: e.to_string() })
+}
+
+/// The memory a render may use, in bytes: `--max-memory`, or half of the machine's.
+pub fn memory_limit(opts: &RenderOptions) -> u64 {
+    opts.max_memory.unwrap_or_else(|| system_memory() / 2)
+}
+
+/// Where a render goes and what it has done so far.
+struct Job<'a> {
+    /// The image file (a shard's partial image), or `None` to return the render in memory.
+    output: Option<&'a Path>,
+    shard: Option<Shard>,
+    /// When loading began: `--time` and the summary count from there.
+    started: std::time::Instant,
+    /// What loading the scene counted.
+    footprint: Footprint,
+    meter: Option<&'a Meter>,
+    /// Where the run's phases and log lines are shown.
+    display: &'a Display,
+}
+
+/// Everything after loading: applies the options, builds the scene, checks memory, prepares the
+/// integrator, renders, and writes (or returns) the image.
+fn render_description(
+    desc: SceneDescription,
+    opts: &RenderOptions,
+    job: Job,
+    cancel: &AtomicBool,
+) -> Result<Summary, AppError> {
+    let Job { output, shard, started, footprint, meter, display } = job;
+    let limit = memory_limit(opts);
+    let loaded = prepare(desc, &opts.overrides)?;
+    let loaded_at = started.elapsed();
+    if footprint.total() > 0 {
         say(
-            &display,
+            display,
             format_args!(
-                "scene {}: {} primitives ({} triangles{}){}, {} planes, {} lights; BVH {} nodes in {:.1} ms",
-                opts.scene.display(),
-                info.primitives,
-                info.triangles,
-                if info.degenerate_triangles > 0 {
-                    format!(", {} degenerate skipped", info.degenerate_triangles)
-                } else {
-                    String::new()
-                },
-                if info.instances > 0 {
-                    format!(", {} instances of {} groups", info.instances, info.instance_groups)
-                } else {
-                    String::new()
-                },
-                loaded.scene.bvh.unbounded_len(),
-                loaded.scene.lights.len(),
-                info.bvh_nodes,
-                info.bvh_build.as_secs_f64() * 1e3,
-            ),
-        );
-        let mut settings: RenderSettings = loaded.settings.clone();
-        if settings.aovs.has(AovKind::Variance)
-            && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
-        {
-            // Their pixels are not means of samples: there is no sample variance to give.
-            display.warn(&format!(
-                "the variance AOV is not written with the {} integrator (its pixels are not means of \
-                 camera samples); it is written with whitted, path and photon",
-                loaded.integrator.kind.name()
-            ));
-            settings.aovs = settings.aovs.without(AovKind::Variance);
-        }
-        settings.time_limit = opts.time_limit;
-        settings.checkpoint = opts.checkpoint;
-        settings.layers = opts.layers;
-        if opts.time_limit.is_some() && opts.overrides.spp.is_none() && opts.overrides.spp_axis.is_none() {
-            // A time budget without a sample count renders until the time is up.
-            settings.spp = u32::MAX;
-        }
-        let say_line = |m: &str| display.say(m);
-        let job = match shard {
-            Some(s) => Some(shard::ShardJob::prepare(&loaded, &opts.load, &mut settings, s, &output, &say_line)?),
-            None => None,
-        };
-        if let Some(job) = &job
-            && job.complete()
-        {
-            if output.exists() {
-                say(&display, format_args!("shard {} is already complete in `{}`", job.header.shard, output.display()));
-            } else {
-                // A shard of a render with fewer samples than shards has none to take.
-                job.save(&job.prior)?;
-                say(&display, format_args!("shard {} has no samples to take; wrote an empty part", job.header.shard));
-            }
-            let stats = RenderStats { samples_per_pixel: job.prior.min_samples(), ..RenderStats::default() };
-            return Ok(Summary { output: output.clone(), stats });
-        }
-        // The phases to come and their estimated costs, for the progress bar's ETA.
-        display.plan(&crate::integrator::plan(&loaded.integrator, &loaded.scene, &settings));
-        let checkpoint_image = |film: &Film| match write_image(&film.image(), &output) {
-            Ok(()) => say(
-                &display,
-                format_args!("checkpoint: wrote {} ({} spp)", output.display(), film.min_samples()),
-            ),
-            Err(e) => display.warn(&format!("checkpoint failed: {e}")),
-        };
-        let checkpoint_partial = |film: &Film| {
-            if let Some(job) = &job {
-                match job.save(film) {
-                    Ok(()) => say(
-                        &display,
-                        format_args!("checkpoint: saved samples {} in {}", job.held(film), output.display()),
-                    ),
-                    Err(e) => display.warn(&format!("checkpoint failed: {e}")),
-                }
-            }
-        };
-        let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
-        let control = RenderControl { cancel, on_checkpoint: Some(on_checkpoint), progress: &display };
-        // Everything big the render will allocate, estimated before any of it is.
-        let mut need = estimate_render_bytes(&loaded, &settings) + loaded.scene.geometry_bytes();
-        if job.is_some() {
-            // A shard keeps its earlier run's film and writes its partial image from columns.
-            let partial = 64 + if settings.layers { 240 } else { 0 };
-            need += settings.pixels() * (crate::film::BYTES_PER_PIXEL + partial);
-        }
-        // Loading peaks higher than the loaded scene (the BVH's build temporaries): the larger
-        // of the footprint counted while loading and what rendering holds is the peak.
-        say(
-            &display,
-            format_args!(
-                "memory: about {} MiB at peak (loading {} MiB; rendering {} MiB, of which the loaded geometry {} MiB; limit {} MiB)",
-                need.max(footprint.total()).div_ceil(1 << 20),
+                "scene files: about {} MiB (meshes {} MiB, textures {} MiB, instances {} MiB)",
                 footprint.total().div_ceil(1 << 20),
-                need.div_ceil(1 << 20),
-                loaded.scene.geometry_bytes().div_ceil(1 << 20),
-                limit >> 20
+                footprint.meshes.div_ceil(1 << 20),
+                footprint.textures.div_ceil(1 << 20),
+                footprint.instances.div_ceil(1 << 20)
             ),
         );
-        if need > limit {
-            return Err(AppError::Memory { need_mib: need.div_ceil(1 << 20), limit_mib: limit >> 20 });
-        }
-        if loaded.integrator.kind == IntegratorKind::Photon {
-            let c = crate::integrator::photon::PhotonConfig::new(
-                &loaded.integrator.photon,
-                &loaded.integrator,
-                &loaded.scene,
-                settings.seed,
-            );
-            say(
-                &display,
-                format_args!(
-                    "photon maps: {} photons emitted for the global map (stored at each diffuse bounce); caustic \
-                     photons emitted until {} are stored (at most {} emitted)",
-                    c.photons, c.caustic_photons, c.caustic_cap
-                ),
-            );
-        }
-        let early = || AppError::InterruptedEarly { path: output.display().to_string(), existed: output.exists() };
-        let prepare_from = started.elapsed();
-        let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, &control) else {
-            return Err(early());
-        };
-        let prepared = started.elapsed() - prepare_from;
-        if let Integrator::Photon(pm) = &integrator {
-            let s = &pm.stats;
-            say(&display, format_args!(
-                "photon maps ready: global {1} stored from {0} emitted ({2:.1} MiB); caustic {4} stored from {3} emitted ({5:.1} MiB){6}; traced in {7:.2} s, maps built in {8:.2} s",
-                s.global_emitted, s.global_stored, s.global_bytes as f64 / 1048576.0,
-                s.caustic_emitted, s.caustic_stored, s.caustic_bytes as f64 / 1048576.0,
-                if s.caustic_capped { " (emission cap reached)" } else { "" },
-                s.trace_time.as_secs_f64(), s.build_time.as_secs_f64()));
-        }
-        let film = match &job {
-            Some(job) => job.prior.clone(),
-            None => settings.new_film(),
-        };
-        // `--time` counts from the start of the load, so it bounds the whole run: what is left
-        // after loading and preparation goes to the render (at least one pass is rendered).
-        let mut render_settings = settings.clone();
-        if let Some(limit) = opts.time_limit {
-            render_settings.time_limit = Some(limit.saturating_sub(started.elapsed()).max(Duration::from_millis(1)));
-        }
-        let out = integrator.render_from(&loaded.scene, &render_settings, &control, film);
-        let stats = out.stats;
-        if let Integrator::Sppm(sppm) = &integrator {
-            say(
-                &display,
-                format_args!(
-                    "sppm took {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
-                    stats.samples_per_pixel,
-                    sppm.config.photons_per_iter,
-                    stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
-                    stats.memory_bytes as f64 / 1048576.0
-                ),
-            );
-        }
-        if let Some(job) = &job {
-            return finish_shard(job, &out.film, &stats, &display);
-        }
-        // An image with fewer than one sample in some pixel is not worth keeping, and must never
-        // replace an earlier image: stop without writing.
-        if stats.interrupted && stats.samples_per_pixel == 0 {
-            return Err(early());
-        }
-        for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
-            write_image(img, &layer_path(&output, name))?;
-        }
-        write_outputs(&out.image, &out.film, &output)?;
-        if stats.nonfinite_samples > 0 {
-            display.warn(&format!("{} samples were NaN or infinite and counted as black", stats.nonfinite_samples));
-        }
-        // Preparation: photon maps and their irradiance cache, SPPM's and the light tracer's
-        // set-up; nothing for the other integrators.
-        let preparation = if prepared.as_secs_f64() >= 0.005 {
-            format!(", {} {:.2} s", integrator.preparation_name(), prepared.as_secs_f64())
-        } else {
-            String::new()
-        };
+    }
+    for w in &loaded.warnings {
+        display.warn(w);
+    }
+    for w in opts.overrides.unused_by(loaded.integrator.kind) {
+        display.warn(&w);
+    }
+    let info = &loaded.info;
+    for m in &info.meshes {
+        let (lo, hi) = (m.bounds.min, m.bounds.max);
+        let size = hi - lo;
         say(
-            &display,
+            display,
             format_args!(
-                "rendered {}x{} at {} spp in {:.2} s (load {:.2} s{preparation}, render {:.2} s): {} rays ({} shadow), {:.2} Mrays/s -> {}",
-                settings.width,
-                settings.height,
-                stats.samples_per_pixel,
-                started.elapsed().as_secs_f64(),
-                loaded_at.as_secs_f64(),
-                stats.wall.as_secs_f64(),
-                stats.rays.total(),
-                stats.rays.shadow_rays,
-                stats.mrays_per_second(),
-                output.display()
+                "mesh {}: {} triangles, bounds ({:.4}, {:.4}, {:.4}) to ({:.4}, {:.4}, {:.4}), size {:.4} x {:.4} x {:.4}",
+                m.name, m.triangles, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, size.x, size.y, size.z
             ),
         );
-        if stats.interrupted {
-            return Err(AppError::Interrupted { path: output.display().to_string(), samples: stats.samples_per_pixel });
+    }
+    say(
+        display,
+        format_args!(
+            "scene {}: {} primitives ({} triangles{}){}, {} planes, {} lights; BVH {} nodes in {:.1} ms",
+            opts.scene.display(),
+            info.primitives,
+            info.triangles,
+            if info.degenerate_triangles > 0 {
+                format!(", {} degenerate skipped", info.degenerate_triangles)
+            } else {
+                String::new()
+            },
+            if info.instances > 0 {
+                format!(", {} instances of {} groups", info.instances, info.instance_groups)
+            } else {
+                String::new()
+            },
+            loaded.scene.bvh.unbounded_len(),
+            loaded.scene.lights.len(),
+            info.bvh_nodes,
+            info.bvh_build.as_secs_f64() * 1e3,
+        ),
+    );
+    let mut settings: RenderSettings = loaded.settings.clone();
+    if settings.aovs.has(AovKind::Variance)
+        && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
+    {
+        // Their pixels are not means of samples: there is no sample variance to give.
+        display.warn(&format!(
+            "the variance AOV is not written with the {} integrator (its pixels are not means of \
+             camera samples); it is written with whitted, path and photon",
+            loaded.integrator.kind.name()
+        ));
+        settings.aovs = settings.aovs.without(AovKind::Variance);
+    }
+    settings.time_limit = opts.time_limit;
+    settings.checkpoint = opts.checkpoint;
+    settings.layers = opts.layers;
+    if let (Some(viewer), Some(path)) = (&mut settings.display, output) {
+        // The viewer shows the render under its file's name, as a viewer opening the file would.
+        viewer.name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+    }
+    if opts.time_limit.is_some() && opts.overrides.spp.is_none() && opts.overrides.spp_axis.is_none() {
+        // A time budget without a sample count renders until the time is up.
+        settings.spp = u32::MAX;
+    }
+    let say_line = |m: &str| display.say(m);
+    let job = match (shard, output) {
+        (Some(s), Some(output)) => {
+            Some(shard::ShardJob::prepare(&loaded, &opts.load, &mut settings, s, output, &say_line)?)
         }
-        Ok(Summary { output: output.clone(), stats })
-    })
+        _ => None,
+    };
+    if let Some(job) = &job
+        && job.complete()
+    {
+        if job.output.exists() {
+            say(display, format_args!("shard {} is already complete in `{}`", job.header.shard, job.output.display()));
+        } else {
+            // A shard of a render with fewer samples than shards has none to take.
+            job.save(&job.prior)?;
+            say(display, format_args!("shard {} has no samples to take; wrote an empty part", job.header.shard));
+        }
+        let stats = RenderStats { samples_per_pixel: job.prior.min_samples(), ..RenderStats::default() };
+        return Ok(Summary { output: Some(job.output.clone()), stats, render: None });
+    }
+    // The phases to come and their estimated costs, for the progress bar's ETA.
+    display.plan(&crate::integrator::plan(&loaded.integrator, &loaded.scene, &settings));
+    let checkpoint_image = |film: &Film| {
+        let Some(output) = output else { return };
+        match write_image(&film.image(), output) {
+            Ok(()) => say(display, format_args!("checkpoint: wrote {} ({} spp)", output.display(), film.min_samples())),
+            Err(e) => display.warn(&format!("checkpoint failed: {e}")),
+        }
+    };
+    let checkpoint_partial = |film: &Film| {
+        if let Some(job) = &job {
+            match job.save(film) {
+                Ok(()) => say(
+                    display,
+                    format_args!("checkpoint: saved samples {} in {}", job.held(film), job.output.display()),
+                ),
+                Err(e) => display.warn(&format!("checkpoint failed: {e}")),
+            }
+        }
+    };
+    let on_checkpoint: CheckpointFn = if job.is_some() { &checkpoint_partial } else { &checkpoint_image };
+    let control = RenderControl { cancel, on_checkpoint: output.map(|_| on_checkpoint), progress: display, meter };
+    // Everything big the render will allocate, estimated before any of it is.
+    let mut need = estimate_render_bytes(&loaded, &settings) + loaded.scene.geometry_bytes();
+    if job.is_some() {
+        // A shard keeps its earlier run's film and writes its partial image from columns.
+        let partial = 64 + if settings.layers { 240 } else { 0 };
+        need += settings.pixels() * (crate::film::BYTES_PER_PIXEL + partial);
+    }
+    // Loading peaks higher than the loaded scene (the BVH's build temporaries): the larger
+    // of the footprint counted while loading and what rendering holds is the peak.
+    say(
+        display,
+        format_args!(
+            "memory: about {} MiB at peak (loading {} MiB; rendering {} MiB, of which the loaded geometry {} MiB; limit {} MiB)",
+            need.max(footprint.total()).div_ceil(1 << 20),
+            footprint.total().div_ceil(1 << 20),
+            need.div_ceil(1 << 20),
+            loaded.scene.geometry_bytes().div_ceil(1 << 20),
+            limit >> 20
+        ),
+    );
+    if need > limit {
+        return Err(AppError::Memory { need_mib: need.div_ceil(1 << 20), limit_mib: limit >> 20 });
+    }
+    if loaded.integrator.kind == IntegratorKind::Photon {
+        let c = crate::integrator::photon::PhotonConfig::new(
+            &loaded.integrator.photon,
+            &loaded.integrator,
+            &loaded.scene,
+            settings.seed,
+        );
+        say(
+            display,
+            format_args!(
+                "photon maps: {} photons emitted for the global map (stored at each diffuse bounce); caustic \
+                 photons emitted until {} are stored (at most {} emitted)",
+                c.photons, c.caustic_photons, c.caustic_cap
+            ),
+        );
+    }
+    let early = || match output {
+        Some(path) => AppError::InterruptedEarly { path: path.display().to_string(), existed: path.exists() },
+        None => AppError::Cancelled,
+    };
+    let prepare_from = started.elapsed();
+    let Ok(integrator) = Integrator::new(&loaded.integrator, &loaded.scene, &settings, &control) else {
+        return Err(early());
+    };
+    let prepared = started.elapsed() - prepare_from;
+    if let Integrator::Photon(pm) = &integrator {
+        let s = &pm.stats;
+        say(
+            display,
+            format_args!(
+                "photon maps ready: global {1} stored from {0} emitted ({2:.1} MiB); caustic {4} stored from {3} emitted ({5:.1} MiB){6}; traced in {7:.2} s, maps built in {8:.2} s",
+                s.global_emitted,
+                s.global_stored,
+                s.global_bytes as f64 / 1048576.0,
+                s.caustic_emitted,
+                s.caustic_stored,
+                s.caustic_bytes as f64 / 1048576.0,
+                if s.caustic_capped { " (emission cap reached)" } else { "" },
+                s.trace_time.as_secs_f64(),
+                s.build_time.as_secs_f64()
+            ),
+        );
+    }
+    let film = match &job {
+        Some(job) => job.prior.clone(),
+        None => settings.new_film(),
+    };
+    // `--time` counts from the start of the load, so it bounds the whole run: what is left
+    // after loading and preparation goes to the render (at least one pass is rendered).
+    let mut render_settings = settings.clone();
+    if let Some(limit) = opts.time_limit {
+        render_settings.time_limit = Some(limit.saturating_sub(started.elapsed()).max(Duration::from_millis(1)));
+    }
+    let out = integrator.render_from(&loaded.scene, &render_settings, &control, film);
+    let stats = out.stats.clone();
+    if let Integrator::Sppm(sppm) = &integrator {
+        say(
+            display,
+            format_args!(
+                "sppm took {} iterations of {} photons, {:.1} iterations/s, working memory {:.1} MiB",
+                stats.samples_per_pixel,
+                sppm.config.photons_per_iter,
+                stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
+                stats.memory_bytes as f64 / 1048576.0
+            ),
+        );
+    }
+    if let Some(job) = &job {
+        return finish_shard(job, &out.film, &stats, display);
+    }
+    // An image with fewer than one sample in some pixel is not worth keeping, and must never
+    // replace an earlier image: stop without writing.
+    if stats.interrupted && stats.samples_per_pixel == 0 {
+        return Err(early());
+    }
+    if let Some(output) = output {
+        for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
+            write_image(img, &layer_path(output, name))?;
+        }
+        write_outputs(&out.image, &out.film, output)?;
+    }
+    if stats.nonfinite_samples > 0 {
+        display.warn(&format!("{} samples were NaN or infinite and counted as black", stats.nonfinite_samples));
+    }
+    // Preparation: photon maps and their irradiance cache, SPPM's and the light tracer's
+    // set-up; nothing for the other integrators.
+    let preparation = if prepared.as_secs_f64() >= 0.005 {
+        format!(", {} {:.2} s", integrator.preparation_name(), prepared.as_secs_f64())
+    } else {
+        String::new()
+    };
+    say(
+        display,
+        format_args!(
+            "rendered {}x{} at {} spp in {:.2} s (load {:.2} s{preparation}, render {:.2} s): {} rays ({} shadow), {:.2} Mrays/s -> {}",
+            settings.width,
+            settings.height,
+            stats.samples_per_pixel,
+            started.elapsed().as_secs_f64(),
+            loaded_at.as_secs_f64(),
+            stats.wall.as_secs_f64(),
+            stats.rays.total(),
+            stats.rays.shadow_rays,
+            stats.mrays_per_second(),
+            output.map_or_else(|| "memory".to_string(), |p| p.display().to_string())
+        ),
+    );
+    match output {
+        Some(path) if stats.interrupted => {
+            Err(AppError::Interrupted { path: path.display().to_string(), samples: stats.samples_per_pixel })
+        }
+        Some(path) => Ok(Summary { output: Some(path.to_path_buf()), stats, render: None }),
+        // Kept in memory: the caller sees `stats.interrupted` and decides.
+        None => Ok(Summary { output: None, stats, render: Some(out) }),
+    }
 }
 
 /// Writes the image to `output` and, when the render has AOVs, their channels: in the same file
@@ -537,5 +638,5 @@ fn finish_shard(
             stats.mrays_per_second()
         ),
     );
-    Ok(Summary { output: job.output.clone(), stats: stats.clone() })
+    Ok(Summary { output: Some(job.output.clone()), stats: stats.clone(), render: None })
 }

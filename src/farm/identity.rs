@@ -92,6 +92,10 @@ impl RenderId {
             // a time limit).
             time_limit: _,
             checkpoint: _,
+            // Where the picture is shown while it renders (`--display-server`): the viewer
+            // receives copies of the film, which it never changes.
+            display: _,
+
             layers,
             aovs,
         } = settings;
@@ -325,6 +329,8 @@ mod tests {
             light_samples: Some(3),
             filter: Some(crate::film::filter::Filter::Gaussian { stddev: 0.3 }),
             aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
+            display_server: Some("127.0.0.1:14158".into()),
+
             photon: PhotonOptions {
                 photons: Some(1000),
                 caustic_photons: Some(500),
@@ -353,6 +359,8 @@ mod tests {
             light_samples,
             filter,
             aov,
+            display_server,
+
             photon,
         } = every.clone();
         let PhotonOptions {
@@ -408,5 +416,11 @@ mod tests {
             seen.push(other);
         }
         assert_ne!(base.difference(&id(&every)), None);
+        // Where the picture is shown as it renders changes none of its samples: a shard watched
+        // in tev merges with one that was not.
+        let shown = Options { display_server, ..none() };
+        let loaded = crate::app::load_toml_str(scene, "id.toml", Path::new("."), &shown).unwrap();
+        assert!(loaded.settings.display.is_some(), "the display server reaches the render settings");
+        assert_eq!(id(&shown), base);
     }
 }

@@ -1,10 +1,13 @@
 //! The progressive loop every integrator runs in: passes of sample indices until the sample
 //! count is reached, the time budget is used or the render is cancelled, with checkpoints and
 //! progress in between. A pass is whatever the integrator does for a range of sample indices
-//! over the whole image (camera samples over tiles, or SPPM iterations).
+//! over the whole image (camera samples over tiles, or SPPM iterations). With a display server
+//! the picture goes to the image viewer after the first pass, every `display::INTERVAL` after
+//! that and at the end, so every integrator can be watched as it converges.
 
 use super::{RayStats, RenderControl, RenderSettings, RenderStats};
-use crate::film::Film;
+use crate::display::{Frame, Viewer};
+use crate::film::{Film, LAYER_NAMES};
 use crate::progress::Progress;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -32,6 +35,8 @@ pub struct Driver<'a> {
     samples: &'static str,
     /// The sample index the first pass starts at.
     first: u32,
+    /// Sends the picture to the image viewer (`--display-server`).
+    viewer: Option<Viewer>,
 }
 
 impl<'a> Driver<'a> {
@@ -51,6 +56,10 @@ impl<'a> Driver<'a> {
         let total =
             if settings.spp == u32::MAX { 0 } else { units_per_sample.saturating_mul((settings.spp - first) as u64) };
         let progress = control.progress.phase(phase, total);
+        if let Some(m) = control.meter {
+            m.start(total);
+        }
+
         Driver {
             settings,
             control,
@@ -61,6 +70,7 @@ impl<'a> Driver<'a> {
             nonfinite: AtomicU64::new(0),
             samples,
             first,
+            viewer: settings.display.as_ref().map(Viewer::start),
         }
     }
 
@@ -84,6 +94,9 @@ impl<'a> Driver<'a> {
         }
         if units > 0 {
             self.progress.inc(units);
+            if let Some(m) = self.control.meter {
+                m.add(units);
+            }
         }
     }
 
@@ -101,9 +114,11 @@ impl<'a> Driver<'a> {
         let mut passes = 0u32;
         let mut interrupted = false;
         let mut last_checkpoint = Instant::now();
-        // Pass sizes grow until a pass takes about `target`, so a stop request, a checkpoint or
-        // the end of a time budget is never more than about that far away.
-        let progressive = settings.time_limit.is_some() || settings.checkpoint.is_some();
+        let mut last_shown: Option<Instant> = None;
+        // Pass sizes grow until a pass takes about `target`, so a stop request, a checkpoint, a
+        // picture for the viewer or the end of a time budget is never more than about that far
+        // away.
+        let progressive = settings.time_limit.is_some() || settings.checkpoint.is_some() || self.viewer.is_some();
         let target = Duration::from_millis(if progressive { 500 } else { 2000 });
         let mut pass_size = 1u32;
         while done < settings.spp {
@@ -141,6 +156,19 @@ impl<'a> Driver<'a> {
                 snapshot(&mut |film| cb(film));
                 last_checkpoint = Instant::now();
             }
+            if let Some(viewer) = &self.viewer
+                && last_shown.is_none_or(|t| t.elapsed() >= crate::display::INTERVAL)
+                && done < settings.spp
+            {
+                snapshot(&mut |film| viewer.show(frame(film)));
+                last_shown = Some(Instant::now());
+            }
+        }
+        if let Some(viewer) = self.viewer.take() {
+            // The last picture is the image the render returns; it is sent before the render
+            // ends, so the viewer holds what is written.
+            snapshot(&mut |film| viewer.show(frame(film)));
+            viewer.finish();
         }
         self.progress.finish(&format!("{} {} in {passes} passes", done - self.first, self.samples));
         RenderStats {
@@ -156,4 +184,26 @@ impl<'a> Driver<'a> {
             memory_bytes: 0,
         }
     }
+}
+
+/// The film's picture as the viewer's channels: R, G, B, then each layer's (`direct.R`, ...).
+fn frame(film: &Film) -> Frame {
+    let mut images = vec![film.image()];
+    if film.has_layers() {
+        images.extend((0..LAYER_NAMES.len()).map(|k| film.layer_image(k)));
+    }
+    let names = std::iter::once("").chain(LAYER_NAMES);
+    let channels = names
+        .take(images.len())
+        .flat_map(|layer| {
+            ["R", "G", "B"].map(|c| if layer.is_empty() { c.to_string() } else { format!("{layer}.{c}") })
+        })
+        .collect();
+    let mut planes = Vec::with_capacity(images.len() * 3 * (film.width * film.height) as usize);
+    for img in &images {
+        for c in 0..3 {
+            planes.extend(img.pixels.iter().map(|p| p.to_array()[c]));
+        }
+    }
+    Frame { width: film.width, height: film.height, channels, planes }
 }

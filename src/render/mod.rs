@@ -11,7 +11,9 @@ mod tiles;
 pub use driver::{Driver, PassOutcome};
 pub use tiles::{render_rays, render_rays_from};
 
+use crate::display::DisplayTarget;
 use crate::film::aov::AovList;
+
 use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
@@ -19,7 +21,7 @@ use crate::progress::Display;
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::scene::desc::Sampling;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 /// How a render runs: the image and its sampling (from the scene description, with overrides)
@@ -52,6 +54,9 @@ pub struct RenderSettings {
     pub time_limit: Option<Duration>,
     /// Call the checkpoint callback at least this often.
     pub checkpoint: Option<Duration>,
+    /// Show the picture in this image viewer as it renders (`--display-server`).
+    pub display: Option<DisplayTarget>,
+
     /// Also accumulate the direct, specular, caustic and indirect layers.
     pub layers: bool,
     /// The AOVs to write beside the image (`film::aov`).
@@ -81,6 +86,8 @@ impl RenderSettings {
             antialias: s.antialias,
             time_limit: None,
             checkpoint: None,
+            display: None,
+
             layers: false,
             aovs: s.aovs.clone(),
         }
@@ -221,13 +228,40 @@ pub struct RenderControl<'a> {
     pub on_checkpoint: Option<CheckpointFn<'a>>,
     /// Where the phases (making the integrator, the passes) report their progress.
     pub progress: &'a Display,
+    /// Counts the render's work for a watcher outside it (the Python module's progress bar).
+    pub meter: Option<&'a Meter>,
 }
 
 impl<'a> RenderControl<'a> {
-    /// No cancellation (the flag is never set), no checkpoints, no progress shown.
+    /// No cancellation (the flag is never set), no checkpoints, no progress shown, no meter.
     pub fn uncancelled() -> RenderControl<'static> {
         static NEVER: AtomicBool = AtomicBool::new(false);
         static HIDDEN: Display = Display::hidden();
-        RenderControl { cancel: &NEVER, on_checkpoint: None, progress: &HIDDEN }
+        RenderControl { cancel: &NEVER, on_checkpoint: None, progress: &HIDDEN, meter: None }
+    }
+}
+
+/// The work a render's passes have done and have to do, in the units of its progress bar (pixel
+/// samples), readable from another thread while it runs.
+#[derive(Debug, Default)]
+pub struct Meter {
+    done: AtomicU64,
+    total: AtomicU64,
+}
+
+impl Meter {
+    /// (units done, units in all); the total is 0 before the passes start and when only a time
+    /// budget ends the render.
+    pub fn read(&self) -> (u64, u64) {
+        (self.done.load(Ordering::Relaxed), self.total.load(Ordering::Relaxed))
+    }
+
+    fn start(&self, total: u64) {
+        self.done.store(0, Ordering::Relaxed);
+        self.total.store(total, Ordering::Relaxed);
+    }
+
+    fn add(&self, units: u64) {
+        self.done.fetch_add(units, Ordering::Relaxed);
     }
 }

@@ -20,7 +20,7 @@ use crate::texture::Texture;
 use std::time::Instant;
 
 /// Geometry, materials and lights collected while a scene file is read.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct SceneBuilder {
     materials: Vec<Material>,
     material_names: Vec<String>,

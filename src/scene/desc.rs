@@ -163,6 +163,7 @@ pub struct LoadOptions {
 }
 
 /// Everything a scene file describes.
+#[derive(Clone)]
 pub struct SceneDescription {
     /// The file, for messages.
     pub name: String,
@@ -243,6 +244,10 @@ impl SceneDescription {
             light_samples,
             filter,
             aov,
+            // Not part of the scene: `app` gives it to the render settings (where to show the
+            // picture changes nothing in it).
+            display_server: _,
+
             photon,
         } = o.clone();
         let PhotonOptions {

@@ -49,6 +49,31 @@ pub fn load_scene_within(
     native::load_toml_str(&text, &path.display().to_string(), &base, files, &options.defines, &options.sets)
 }
 
+/// The two scene formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneFormat {
+    /// caustic's own (docs/scene-format.md).
+    Toml,
+    /// Mitsuba 3 XML.
+    Mitsuba,
+}
+
+/// `load_scene_within` for a scene given as `text` in `format` (the Python module's
+/// `load_string`): `name` is used in messages and the files it names resolve against `base`.
+pub fn load_scene_text_within(
+    text: &str,
+    format: SceneFormat,
+    name: &str,
+    base: &Path,
+    options: &LoadOptions,
+    files: &FileBudget,
+) -> Result<SceneDescription, SceneError> {
+    match format {
+        SceneFormat::Mitsuba => mitsuba::load_mitsuba_text(text, name, base, options, files),
+        SceneFormat::Toml => native::load_toml_str(text, name, base, files, &options.defines, &options.sets),
+    }
+}
+
 /// Reads a scene in caustic's TOML format from `text`; `name` is used in messages and mesh
 /// paths resolve against `base`.
 pub fn load_scene_str(text: &str, name: &str, base: &Path) -> Result<SceneDescription, SceneError> {

@@ -60,7 +60,7 @@ pub fn load_mitsuba_str(
 }
 
 /// `load_mitsuba_str` reporting every file it reads (includes, meshes, images) to `files`.
-fn load_mitsuba_text(
+pub fn load_mitsuba_text(
     text: &str,
     name: &str,
     base: &Path,

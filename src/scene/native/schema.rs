@@ -171,6 +171,10 @@ impl RenderDesc {
             filter: filter.as_ref().map(|f| f.0),
             // Read (with its position for errors) by the loader: `aovs`.
             aov: None,
+            // Where a render is shown is the user's choice, not the scene's: a scene file from
+            // elsewhere does not open network connections.
+            display_server: None,
+
             photon: photon.clone(),
         }
     }
