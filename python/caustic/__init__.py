@@ -19,7 +19,7 @@ import os
 import sys
 import time as _time
 import warnings
-from typing import Any, Callable, Dict, Iterable, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Iterable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -77,18 +77,27 @@ def _warn(scene: Scene) -> Scene:
     return scene
 
 
-def load_file(path: PathLike, *, strict: bool = False, max_memory: Optional[int] = None, **defines: Any) -> Scene:
+def load_file(
+    path: PathLike,
+    *,
+    strict: bool = False,
+    max_memory: Optional[int] = None,
+    set: Optional[Mapping[str, Any]] = None,
+    **defines: Any,
+) -> Scene:
     """Read a scene file: caustic's TOML format, or Mitsuba 3 XML for ``.xml``.
 
-    Keywords other than these set the Mitsuba scene's ``$name`` parameters, as ``-D name=value``
-    does on the command line (they win over the file's ``<default>``; a name the scene does not
-    use is an error). ``strict=True`` makes every unsupported part of a Mitsuba scene an error;
-    ``max_memory`` (MiB) stops a load that would need more (default: half of the machine's).
+    Keywords other than these set the scene's ``$name`` parameters, as ``-D name=value`` does on
+    the command line (they win over the file's ``<default>`` or ``[parameters]``; a name the scene
+    does not use is an error). ``set`` maps key paths to values as ``--set KEY=VALUE`` does
+    (``set={"render.spp": 4, "materials.glass.ior": 1.6}``). ``strict=True`` makes every
+    unsupported part of a Mitsuba scene an error; ``max_memory`` (MiB) stops a load that would need
+    more (default: half of the machine's).
 
     Raises ``SceneError`` (with ``file``, ``line``, ``column`` and ``message``) for a scene that
     cannot be read; warnings about parts rendered approximately are ``CausticWarning``\\ s.
     """
-    return _warn(_native.load_file(os.fspath(path), _defines(defines), strict, max_memory))
+    return _warn(_native.load_file(os.fspath(path), _defines(defines), strict, max_memory, _defines(set or {})))
 
 
 def load_string(
@@ -99,6 +108,7 @@ def load_string(
     name: Optional[str] = None,
     strict: bool = False,
     max_memory: Optional[int] = None,
+    set: Optional[Mapping[str, Any]] = None,
     **defines: Any,
 ) -> Scene:
     """Read a scene from ``text``: ``format`` is ``"mitsuba"`` (XML) or ``"toml"``.
@@ -108,7 +118,9 @@ def load_string(
     ``load_file``.
     """
     label = name if name is not None else "<string>"
-    scene = _native.load_string(text, format, label, os.fspath(base), _defines(defines), strict, max_memory)
+    scene = _native.load_string(
+        text, format, label, os.fspath(base), _defines(defines), strict, max_memory, _defines(set or {})
+    )
     return _warn(scene)
 
 

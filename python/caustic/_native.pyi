@@ -41,7 +41,11 @@ class Scene:
     def warnings(self) -> List[str]: ...
 
 def load_file(
-    path: _Path, defines: Sequence[Tuple[str, str]], strict: bool = False, max_memory: Optional[int] = None
+    path: _Path,
+    defines: Sequence[Tuple[str, str]],
+    strict: bool = False,
+    max_memory: Optional[int] = None,
+    sets: Sequence[Tuple[str, str]] = ...,
 ) -> Scene: ...
 def load_string(
     text: str,
@@ -51,6 +55,7 @@ def load_string(
     defines: Sequence[Tuple[str, str]],
     strict: bool = False,
     max_memory: Optional[int] = None,
+    sets: Sequence[Tuple[str, str]] = ...,
 ) -> Scene: ...
 def render(
     scene: Scene,

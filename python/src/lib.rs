@@ -137,22 +137,23 @@ fn budget(max_memory_mib: Option<u64>) -> FileBudget {
 }
 
 #[pyfunction]
-#[pyo3(signature = (path, defines, strict = false, max_memory = None))]
+#[pyo3(signature = (path, defines, strict = false, max_memory = None, sets = Vec::new()))]
 fn load_file(
     py: Python<'_>,
     path: PathBuf,
     defines: Vec<(String, String)>,
     strict: bool,
     max_memory: Option<u64>,
+    sets: Vec<(String, String)>,
 ) -> PyResult<Scene> {
-    let load = LoadOptions { defines, strict };
+    let load = LoadOptions { defines, sets, strict };
     let files = budget(max_memory);
     let desc = py.detach(|| caustic::scene::load_scene_within(&path, &load, &files));
     scene_of(py, desc, &files, load)
 }
 
 #[pyfunction]
-#[pyo3(signature = (text, format, name, base, defines, strict = false, max_memory = None))]
+#[pyo3(signature = (text, format, name, base, defines, strict = false, max_memory = None, sets = Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 fn load_string(
     py: Python<'_>,
@@ -163,13 +164,14 @@ fn load_string(
     defines: Vec<(String, String)>,
     strict: bool,
     max_memory: Option<u64>,
+    sets: Vec<(String, String)>,
 ) -> PyResult<Scene> {
     let format = match format {
         "toml" => SceneFormat::Toml,
         "mitsuba" | "xml" => SceneFormat::Mitsuba,
         other => return Err(PyValueError::new_err(format!("format must be \"mitsuba\" or \"toml\", not {other:?}"))),
     };
-    let load = LoadOptions { defines, strict };
+    let load = LoadOptions { defines, sets, strict };
     let files = budget(max_memory);
     let desc = py.detach(|| caustic::scene::load_scene_text_within(text, format, name, &base, &load, &files));
     scene_of(py, desc, &files, load)

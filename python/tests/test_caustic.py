@@ -82,6 +82,17 @@ def test_defines_override_the_scenes_defaults_as_dash_d_does(tmp_path):
         caustic.load_file(MITSUBA_BOX, rse=24)
 
 
+def test_set_replaces_scene_keys_as_dash_dash_set_does(tmp_path):
+    toml = os.path.join(ROOT, "scenes", "11-cornell-area.toml")
+    scene = caustic.load_file(toml, set={"render.width": 20, "render.height": 16, "render.spp": 2})
+    assert (scene.width, scene.height) == (20, 16)
+    image = caustic.render(scene)
+    out = cli_render(tmp_path, toml, "--set", "render.width=20", "--set", "render.height=16", "--set", "render.spp=2")
+    np.testing.assert_array_equal(image, caustic.read(out))
+    with pytest.raises(caustic.SceneError, match="widht"):
+        caustic.load_file(toml, set={"render.widht": 20})
+
+
 def test_load_string_errors_carry_file_line_and_column(tmp_path):
     toml = '[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n[[objects]]\ntype = "sphere"\nradius = -1\n'
     with pytest.raises(caustic.SceneError) as e:
