@@ -42,6 +42,8 @@ integrator_kinds! {
     Whitted,
     /// Path tracing with next-event estimation and MIS: unbiased reference, noisy caustics
     Path,
+    /// Volumetric path tracing: the path tracer through participating media (fog, smoke); `path` switches to it when the scene has media
+    Volpath,
     /// Photon mapping (Jensen): caustic and global maps, final gathering; caustics from point lights
     Photon,
     /// Stochastic progressive photon mapping: converges to the exact image, caustics included
@@ -56,6 +58,7 @@ impl IntegratorKind {
         match self {
             IntegratorKind::Whitted => "whitted",
             IntegratorKind::Path => "path",
+            IntegratorKind::Volpath => "volpath",
             IntegratorKind::Photon => "photon",
             IntegratorKind::Sppm => "sppm",
             IntegratorKind::Light => "light",
@@ -293,7 +296,7 @@ mod tests {
             assert_eq!(toml.integrator, Some(k));
         }
         let e = "vcm".parse::<IntegratorKind>().unwrap_err();
-        assert_eq!(e, "unknown integrator `vcm` (expected whitted, path, photon, sppm or light)");
+        assert_eq!(e, "unknown integrator `vcm` (expected whitted, path, volpath, photon, sppm or light)");
     }
 
     #[test]

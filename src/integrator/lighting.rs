@@ -114,20 +114,104 @@ pub fn light_sample(
     mis: bool,
     stats: &mut RayStats,
 ) -> Color {
-    let Some(ls) = light.sample(hit.p, u, scene.textures()) else { return Color::ZERO };
+    light_sample_at(
+        scene,
+        light,
+        p_pick,
+        hit.p,
+        u,
+        mis,
+        |wi, mis| bsdf_scatter(bsdf, wo, wi, mis),
+        |wi, dist| (visibility(scene, hit.origin(), wi, dist, bias, stats), Color::ONE),
+    )
+}
+
+/// What a BSDF scatters from `wi` towards `wo`, in the form `light_sample_at` takes: its
+/// value, the cosine, and its density when weighted by MIS.
+#[inline(always)]
+pub fn bsdf_scatter(bsdf: &Bsdf, wo: Vec3, wi: Vec3, mis: bool) -> (Color, f32, f32) {
+    let (f, pdf) =
+        if mis { bsdf.eval(wo, wi, Transport::Radiance) } else { (bsdf.f(wo, wi, Transport::Radiance), 0.0) };
+    (f, wi.dot(bsdf.normal()).abs(), pdf)
+}
+
+/// The one light-sample estimator at a point `p`, a surface's or a medium's: `u` picks a point
+/// on `light`; `scatter(wi, mis)` gives what the point scatters from `wi` towards the viewer (a
+/// value, a cosine factor, and the density its own sampler would have chosen `wi` with, when
+/// `mis`), and `visible(wi, dist)` what reaches it from the light (a fraction and a per-channel
+/// transmittance through media). Area and environment lights are weighted against the point's
+/// own sampling by the power heuristic when `mis`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn light_sample_at(
+    scene: &Scene,
+    light: &Light,
+    p_pick: f32,
+    p: Vec3,
+    u: Vec2,
+    mis: bool,
+    scatter: impl FnOnce(Vec3, bool) -> (Color, f32, f32),
+    visible: impl FnOnce(Vec3, f32) -> (f32, Color),
+) -> Color {
+    let Some(ls) = light.sample(p, u, scene.textures()) else { return Color::ZERO };
     let mis = mis && !ls.delta;
-    let (f, bsdf_pdf) =
-        if mis { bsdf.eval(wo, ls.wi, Transport::Radiance) } else { (bsdf.f(wo, ls.wi, Transport::Radiance), 0.0) };
+    let (f, cos, scatter_pdf) = scatter(ls.wi, mis);
     if f == Color::ZERO {
         return Color::ZERO;
     }
-    let cos = ls.wi.dot(bsdf.normal()).abs();
-    let visible = visibility(scene, hit.origin(), ls.wi, ls.dist, bias, stats);
-    if !(visible > 0.0) {
+    let (visible, tr) = visible(ls.wi, ls.dist);
+    if !(visible > 0.0) || tr == Color::ZERO {
         return Color::ZERO;
     }
-    let w = if mis { power_heuristic(ls.pdf * p_pick, bsdf_pdf) } else { 1.0 };
-    f * ls.weight() * (cos * w * visible / p_pick)
+    let w = if mis { power_heuristic(ls.pdf * p_pick, scatter_pdf) } else { 1.0 };
+    f * ls.weight() * (cos * w * visible / p_pick) * tr
+}
+
+/// The transmittance from `from` a distance `dist` along unit `wi` (infinite for lights at
+/// infinity) for a ray starting in medium `medium`: the product of each medium's transmittance
+/// over the segments between surfaces, and of what each surface crossed passes (a `null`
+/// boundary or a mask's transparent part; anything else blocks), the medium changing at each
+/// crossing of an interface. Surfaces are met one closest hit at a time, since the segments
+/// between them must be known in order; at most `MAX_CROSSINGS` of them.
+#[allow(clippy::too_many_arguments)]
+pub fn transmittance_through_media(
+    scene: &Scene,
+    from: RayOrigin,
+    wi: Vec3,
+    dist: f32,
+    medium: u32,
+    bias: f32,
+    stats: &mut RayStats,
+) -> Color {
+    let mut ray = from.spawn(wi, bias);
+    ray.medium = medium;
+    let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
+    let target = from.p + wi * dist;
+    let mut tr = Color::ONE;
+    for _ in 0..=MAX_CROSSINGS {
+        stats.shadow_rays += 1;
+        let t_max = if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
+        if !(t_max > 0.0) {
+            return tr;
+        }
+        let hit = scene.intersect(&ray, t_max);
+        if ray.medium != crate::geometry::NO_MEDIUM {
+            tr *= scene.media[ray.medium as usize].transmittance(hit.as_ref().map_or(t_max, |h| h.t));
+            if tr == Color::ZERO {
+                return tr;
+            }
+        }
+        let Some(h) = hit else { return tr };
+        let pass = scene.materials.transparency(&h, h.is_front(-wi));
+        if !(pass > 0.0) {
+            return Color::ZERO;
+        }
+        tr *= pass;
+        let next = scene.medium_after(&h, wi, ray.medium);
+        ray = h.spawn(wi, bias);
+        ray.medium = next;
+    }
+    Color::ZERO
 }
 
 /// Direct light at a hit by one light sample: a light chosen by power (`u_pick`), a point on it

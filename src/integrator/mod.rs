@@ -10,12 +10,14 @@ pub mod lighting;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+pub mod volpath;
 pub mod whitted;
 
 pub use light::LightTracer;
 pub use path::PathTracer;
 pub use photon::PhotonIntegrator;
 pub use sppm::Sppm;
+pub use volpath::VolPathTracer;
 pub use whitted::Whitted;
 
 use crate::film::Film;
@@ -28,6 +30,7 @@ use crate::scene::desc::IntegratorDesc;
 pub enum Integrator {
     Whitted(Whitted),
     Path(PathTracer),
+    VolPath(VolPathTracer),
     Photon(Box<PhotonIntegrator>),
     Sppm(Sppm),
     Light(LightTracer),
@@ -42,7 +45,11 @@ impl Integrator {
     pub fn preparation_name(&self) -> &'static str {
         match self {
             Integrator::Photon(_) => "photon maps",
-            Integrator::Whitted(_) | Integrator::Path(_) | Integrator::Sppm(_) | Integrator::Light(_) => "set-up",
+            Integrator::Whitted(_)
+            | Integrator::Path(_)
+            | Integrator::VolPath(_)
+            | Integrator::Sppm(_)
+            | Integrator::Light(_) => "set-up",
         }
     }
 
@@ -57,7 +64,13 @@ impl Integrator {
         let depth = desc.depth_limit(desc.kind);
         Ok(match desc.kind {
             IntegratorKind::Whitted => Integrator::Whitted(Whitted::new(scene, desc)),
-            IntegratorKind::Path => Integrator::Path(PathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
+            // The path tracer knows no media: a scene with media is the volumetric one's.
+            IntegratorKind::Path if !scene.has_media() => {
+                Integrator::Path(PathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
+            }
+            IntegratorKind::Path | IntegratorKind::Volpath => {
+                Integrator::VolPath(VolPathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
+            }
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
                 let pm = PhotonIntegrator::build_watched(scene, config, control.cancel, control.progress)
@@ -77,6 +90,7 @@ impl Integrator {
         match self {
             Integrator::Whitted(_) => IntegratorKind::Whitted,
             Integrator::Path(_) => IntegratorKind::Path,
+            Integrator::VolPath(_) => IntegratorKind::Volpath,
             Integrator::Photon(_) => IntegratorKind::Photon,
             Integrator::Sppm(_) => IntegratorKind::Sppm,
             Integrator::Light(_) => IntegratorKind::Light,
@@ -105,6 +119,7 @@ impl Integrator {
         let mut out = match self {
             Integrator::Whitted(i) => return render_rays_from(scene, i, settings, control, film),
             Integrator::Path(i) => return render_rays_from(scene, i, settings, control, film),
+            Integrator::VolPath(i) => return render_rays_from(scene, i, settings, control, film),
             Integrator::Photon(i) => return render_rays_from(scene, i.as_ref(), settings, control, film),
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
             Integrator::Light(i) => i.render(scene, settings, control, film),
@@ -128,7 +143,7 @@ pub fn plan(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> 
     };
     let camera_samples = settings.pixels() as f64 * samples;
     match desc.kind {
-        IntegratorKind::Whitted | IntegratorKind::Path => vec![("render", camera_samples)],
+        IntegratorKind::Whitted | IntegratorKind::Path | IntegratorKind::Volpath => vec![("render", camera_samples)],
         IntegratorKind::Light => vec![("light", camera_samples)],
         IntegratorKind::Sppm => vec![("sppm", camera_samples)],
         IntegratorKind::Photon => {
@@ -141,7 +156,7 @@ pub fn plan(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> 
 /// SPPM state), estimated before any of it is; the film is not included.
 pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> u64 {
     match desc.kind {
-        IntegratorKind::Whitted | IntegratorKind::Path => 0,
+        IntegratorKind::Whitted | IntegratorKind::Path | IntegratorKind::Volpath => 0,
         IntegratorKind::Photon => {
             let c = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
             // Up to four stored bounces per global photon, plus the irradiance records (one per

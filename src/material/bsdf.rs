@@ -253,6 +253,13 @@ impl<'a> Bsdf<'a> {
         self.frame.z
     }
 
+    /// True when light passes straight through everywhere (a `null` boundary, a mask of
+    /// opacity 0): the surface scatters nothing.
+    #[inline]
+    pub fn is_invisible(&self) -> bool {
+        self.opacity == 0.0
+    }
+
     /// The geometric normal on the viewer's side.
     #[inline]
     pub fn geometric_normal(&self) -> Vec3 {

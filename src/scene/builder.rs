@@ -13,8 +13,9 @@ use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{EmissionTexture, Environment, Light, LightPicker, PhotonDisk};
-use crate::material::{Material, Materials};
+use crate::material::{Material, Materials, Param, Wrapper};
 use crate::math::{Color, Vec2, Vec3};
+use crate::medium::{Medium, MediumInterface};
 use crate::shape::{Plane, Primitive, Primitives, Shape, TRIANGLE_UV, Triangle, TriangleMesh};
 use crate::texture::Texture;
 use std::time::Instant;
@@ -48,6 +49,16 @@ pub struct SceneBuilder {
     /// The group objects and meshes go to (between `begin_group` and `end_group`).
     open_group: Option<usize>,
     instances: Vec<Instance>,
+    /// Participating media, referred to by index from interfaces and the camera.
+    media: Vec<Medium>,
+    /// The media interface of each material (`None`: crossing it keeps the ray's medium).
+    interfaces: Vec<Option<MediumInterface>>,
+    /// The materials made by `with_interface`: (material, interface) to the copy's index.
+    interface_copies: Vec<((u32, MediumInterface), u32)>,
+    /// The index of the invisible boundary material (`null_material`), once made.
+    null_material: Option<u32>,
+    /// The medium the camera sits in (vacuum when `None`).
+    camera_medium: Option<u32>,
 }
 
 impl SceneBuilder {
@@ -75,7 +86,49 @@ impl SceneBuilder {
     pub fn add_material(&mut self, name: impl Into<String>, m: Material) -> u32 {
         self.materials.push(m);
         self.material_names.push(name.into());
+        self.interfaces.push(None);
         (self.materials.len() - 1) as u32
+    }
+
+    /// Adds a participating medium; returns its index (what interfaces and the camera name).
+    pub fn add_medium(&mut self, m: Medium) -> u32 {
+        self.media.push(m);
+        (self.media.len() - 1) as u32
+    }
+
+    pub fn media(&self) -> &[Medium] {
+        &self.media
+    }
+
+    /// Material `material` with media `interface` on its two sides: a copy of it that carries
+    /// the interface (media belong to shapes, materials are shared, so each (material,
+    /// interface) pair is one material of the scene).
+    pub fn with_interface(&mut self, material: u32, interface: MediumInterface) -> u32 {
+        if let Some(&(_, m)) = self.interface_copies.iter().find(|(k, _)| *k == (material, interface)) {
+            return m;
+        }
+        let name = self.material_names[material as usize].clone();
+        let copy = self.add_material(name, self.materials[material as usize]);
+        self.interfaces[copy as usize] = Some(interface);
+        self.interface_copies.push(((material, interface), copy));
+        copy
+    }
+
+    /// The invisible surface (Mitsuba's `null` BSDF): light passes straight through it, so it
+    /// only bounds a medium. A mask of opacity 0, made once.
+    pub fn null_material(&mut self) -> u32 {
+        if let Some(m) = self.null_material {
+            return m;
+        }
+        let inner = self.add_material("(null inside)", Material::black());
+        let m = self.add_material("null", Material::two_sided(Wrapper::Mask { opacity: Param::Const(0.0), inner }));
+        self.null_material = Some(m);
+        m
+    }
+
+    /// Places the camera in medium `m`.
+    pub fn set_camera_medium(&mut self, m: u32) {
+        self.camera_medium = Some(m);
     }
 
     /// Adds a texture; returns its index.
@@ -361,6 +414,9 @@ impl SceneBuilder {
             camera,
             environment,
             objects: self.objects,
+            interfaces: if self.interfaces.iter().any(Option::is_some) { self.interfaces } else { Vec::new() },
+            media: self.media,
+            camera_medium: self.camera_medium.unwrap_or(crate::geometry::NO_MEDIUM),
         };
         Ok((scene, info))
     }

@@ -109,6 +109,14 @@ pub struct Scene {
     /// The objects the loaders added outside instanced groups (a sphere, a box, a mesh), with
     /// their bounding spheres and materials, for methods that aim at objects (caustic photons).
     pub objects: Vec<SceneObject>,
+    /// Participating media (`Ray::medium` indexes them).
+    pub media: Vec<crate::medium::Medium>,
+    /// The media interface of each material, by material index (empty when no surface bounds
+    /// a medium): crossing a surface whose material has one moves a ray into the medium on the
+    /// side it leaves towards; crossing any other keeps its medium.
+    pub interfaces: Vec<Option<crate::medium::MediumInterface>>,
+    /// The medium the camera sits in (`NO_MEDIUM`: vacuum).
+    pub camera_medium: u32,
 }
 
 /// An object of a scene as its file gave it: the bounding sphere of its primitives and its
@@ -121,6 +129,21 @@ pub struct SceneObject {
 }
 
 impl Scene {
+    /// True when the scene has participating media (rendered by the volumetric path tracer).
+    #[inline]
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
+    }
+
+    /// The medium a ray in medium `current` is in after leaving surface `h` in direction `d`.
+    #[inline]
+    pub fn medium_after(&self, h: &Hit, d: Vec3, current: u32) -> u32 {
+        match self.interfaces.get(h.material as usize) {
+            Some(Some(i)) => i.toward(d, h.ng),
+            _ => current,
+        }
+    }
+
     /// The textures materials and lights read.
     #[inline(always)]
     pub fn textures(&self) -> &[crate::texture::Texture] {

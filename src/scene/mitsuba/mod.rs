@@ -16,6 +16,7 @@
 
 mod bsdf;
 mod emitters;
+mod media;
 mod plugins;
 mod props;
 mod sensor;
@@ -151,6 +152,8 @@ struct Build {
     default_emitter_material: Option<u32>,
     /// Group index of each `shapegroup` element already built (by address).
     group_cache: HashMap<usize, u32>,
+    /// Medium index of each `<medium>` element already built (by address).
+    medium_cache: HashMap<usize, u32>,
 }
 
 impl<'a> Cx<'a> {
@@ -165,6 +168,7 @@ impl<'a> Cx<'a> {
             default_material: None,
             default_emitter_material: None,
             group_cache: HashMap::new(),
+            medium_cache: HashMap::new(),
         };
         let mut sensor: Option<&'a El> = None;
         let mut integrator: Option<&'a El> = None;
@@ -197,20 +201,23 @@ impl<'a> Cx<'a> {
                 "film" | "sampler" | "rfilter" => {
                     self.warn(child, format!("a top-level <{}> is ignored: put it inside the <sensor>", child.tag))?;
                 }
-                "medium" | "phase" | "volume" => {
+                // Media are used through references (from shapes and the sensor); an unreferenced
+                // one is built anyway, so that its errors are reported.
+                "medium" => {
+                    if self.attr(child, "id")?.is_none() {
+                        self.warn(child, "a top-level <medium> without an id is never used")?;
+                    }
+                    self.medium(child, &mut b)?;
+                }
+                "phase" | "volume" => {
                     let kind = self.attr(child, "type")?.map_or(String::new(), |t| t.0);
-                    let plugins = match child.tag.as_str() {
-                        "medium" => PluginKind::Medium,
-                        "phase" => PluginKind::Phase,
-                        _ => PluginKind::Volume,
-                    };
+                    let plugins = if child.tag == "phase" { PluginKind::Phase } else { PluginKind::Volume };
                     if let Some(message) = plugins::unknown(plugins, &kind) {
                         return Err(self.err(child, message));
                     }
-                    self.warn(
-                        child,
-                        format!("participating media are not supported: <{} type=\"{kind}\"> is ignored", child.tag),
-                    )?;
+                    if self.attr(child, "id")?.is_none() {
+                        self.warn(child, format!("a top-level <{}> without an id is never used", child.tag))?;
+                    }
                 }
                 other => {
                     return Err(self.err(
@@ -226,6 +233,10 @@ impl<'a> Cx<'a> {
         };
         let max_depth = self.caustic_max_depth(depth)?;
         let sensor = self.sensor(sensor, root)?;
+        if let Some(el) = sensor.medium {
+            let m = self.medium(el, &mut b)?;
+            b.geometry.set_camera_medium(m);
+        }
         Ok(SceneDescription {
             name: self.srcs[0].name.clone(),
             geometry: b.geometry,
@@ -286,7 +297,11 @@ impl<'a> Cx<'a> {
                 if self.boolean(&p, "hide_emitters")? == Some(true) {
                     self.warn(el, "hide_emitters is not supported: emitters seen directly are rendered")?;
                 }
-                let kind = if p.kind == "ptracer" { IntegratorKind::Light } else { IntegratorKind::Path };
+                let kind = match p.kind.as_str() {
+                    "ptracer" => IntegratorKind::Light,
+                    "volpath" | "volpathmis" | "prbvolpath" => IntegratorKind::Volpath,
+                    _ => IntegratorKind::Path,
+                };
                 (kind, depth)
             }
             "direct" => {

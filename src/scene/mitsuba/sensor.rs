@@ -14,8 +14,10 @@ use crate::scene::SceneError;
 use crate::scene::desc::{FilmDesc, MAX_SIDE, SamplerDesc};
 
 /// What the sensor, its film and its sampler describe.
-pub(super) struct SensorOut {
+pub(super) struct SensorOut<'a> {
     pub camera: CameraDesc,
+    /// The medium the sensor sits in, built by the caller.
+    pub medium: Option<&'a El>,
     pub width: u32,
     pub height: u32,
     pub film: FilmDesc,
@@ -23,7 +25,7 @@ pub(super) struct SensorOut {
 }
 
 impl<'a> Cx<'a> {
-    pub(super) fn sensor(&mut self, sensor: Option<&'a El>, root: &'a El) -> Result<SensorOut, SceneError> {
+    pub(super) fn sensor(&mut self, sensor: Option<&'a El>, root: &'a El) -> Result<SensorOut<'a>, SceneError> {
         let Some(el) = sensor else {
             return Err(self
                 .err(root, "the scene has no <sensor>: add <sensor type=\"perspective\"> with a to_world transform"));
@@ -125,6 +127,7 @@ impl<'a> Cx<'a> {
             self.float(&p, "principal_point_offset_x")?.unwrap_or(0.0),
             self.float(&p, "principal_point_offset_y")?.unwrap_or(0.0),
         );
+        let medium = self.sensor_medium(&p)?;
         self.finish(&p)?;
         let camera = CameraDesc {
             placement,
@@ -133,13 +136,19 @@ impl<'a> Cx<'a> {
             focal_distance: focus,
             principal_point,
         };
-        Ok(SensorOut { camera, width, height, film, sampler })
+        Ok(SensorOut { camera, medium, width, height, film, sampler })
+    }
+
+    /// The `<medium>` nested in (or referenced by) the sensor.
+    fn sensor_medium(&self, p: &Props<'a>) -> Result<Option<&'a El>, SceneError> {
+        let media = self.object(p, None, "medium");
+        Ok(media.first().map(|m| m.0))
     }
 
     /// Mitsuba's `orthographic` sensor: its view is [-1, 1] across the film's width in the
     /// `to_world` frame, whose scale (allowed here, unlike for the other sensors) sets the
     /// extent. Rays start on the camera's plane (Mitsuba: on the near-clip plane).
-    fn orthographic(&mut self, el: &'a El, p: &Props<'a>) -> Result<SensorOut, SceneError> {
+    fn orthographic(&mut self, el: &'a El, p: &Props<'a>) -> Result<SensorOut<'a>, SceneError> {
         let (width, height, film) = self.film(p)?;
         let sampler = self.sampler(p)?;
         for name in ["near_clip", "far_clip", "shutter_open", "shutter_close"] {
@@ -157,6 +166,7 @@ impl<'a> Cx<'a> {
                 Placement::Frame { origin: t.point(Vec3::ZERO), x, y, z }
             }
         };
+        let medium = self.sensor_medium(p)?;
         self.finish(p)?;
         let camera = CameraDesc {
             placement,
@@ -165,7 +175,7 @@ impl<'a> Cx<'a> {
             focal_distance: 1.0,
             principal_point: Vec2::ZERO,
         };
-        Ok(SensorOut { camera, width, height, film, sampler })
+        Ok(SensorOut { camera, medium, width, height, film, sampler })
     }
 
     /// The film's size (Mitsuba's default 768 x 576), crop window and reconstruction filter

@@ -70,12 +70,19 @@ impl<'a> Cx<'a> {
             Some(bel) => self.attr(bel, "type")?.is_some_and(|t| t.0 == "null"),
             None => false,
         };
+        // The media inside and outside the shape: its material carries them. A `null` shape
+        // that bounds a medium is an invisible surface; without media it is left out.
+        let interface = self.medium_interface(&p, b)?;
         let material = match bsdf_el {
-            _ if is_null => None,
+            _ if is_null => interface.map(|_| b.geometry.null_material()),
             Some(bel) => Some(self.material(bel, b)?),
             None => Some(self.default_material(b, radiance.is_some())),
         };
-        // Other nested objects (media etc.) are reported by `finish`.
+        let material = match (material, interface) {
+            (Some(m), Some(i)) => Some(b.geometry.with_interface(m, i)),
+            (m, _) => m,
+        };
+        // Other nested objects are reported by `finish`.
 
         let kind = p.kind.clone();
         // Shapes that can emit (a light each when the shape has an area emitter).

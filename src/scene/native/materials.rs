@@ -134,8 +134,13 @@ impl<'a> Cx<'a> {
             let mut rest = Vec::new();
             for p in pending {
                 if self.references(&p).iter().all(|r| names.index.contains_key(r.get_ref())) {
-                    let m = self.material(&p, textures, &names, geometry)?;
-                    let i = geometry.add_material(p.name.clone(), m);
+                    // The invisible surface that bounds a medium: one for the scene.
+                    let i = if p.kind == "null" {
+                        geometry.null_material()
+                    } else {
+                        let m = self.material(&p, textures, &names, geometry)?;
+                        geometry.add_material(p.name.clone(), m)
+                    };
                     names.index.insert(p.name.clone(), i);
                     names.names.push(p.name);
                 } else {

@@ -10,6 +10,7 @@
 
 mod camera;
 mod materials;
+mod media;
 mod objects;
 mod params;
 mod schema;
@@ -34,7 +35,7 @@ use toml::de::{DeString, DeTable, DeValue, ValueDeserializer};
 
 /// The top-level sections of a scene file.
 const SECTION_NAMES: &[&str] =
-    &["parameters", "render", "camera", "textures", "materials", "lights", "groups", "objects"];
+    &["parameters", "render", "camera", "textures", "materials", "media", "lights", "groups", "objects"];
 
 /// Default image size when the file gives none.
 const DEFAULT_SIZE: (u32, u32) = (640, 480);
@@ -61,10 +62,22 @@ pub fn load_toml_str<'a>(
         Some(v) => cx.de(v)?,
         None => RenderDesc::default(),
     };
-    let camera = cx.camera(sections.remove("camera"))?;
+    let mut camera_section = sections.remove("camera");
+    let camera_medium = take_key(&mut camera_section, "medium");
+    let camera = cx.camera(camera_section)?;
     let mut geometry = SceneBuilder::with_files(files.clone());
     let textures = cx.textures(sections.remove("textures"), &mut geometry)?;
     let materials = cx.materials(sections.remove("materials"), &textures, &mut geometry)?;
+    let media = cx.media(sections.remove("media"), &mut geometry)?;
+    if let Some(v) = camera_medium {
+        let span = v.span();
+        let name = match v.into_inner() {
+            DeValue::String(n) => Spanned::new(span, n.to_string()),
+            _ => return Err(cx.at(span, "`medium` must be the name of a [media.NAME] table")),
+        };
+        let m = cx.medium_named(&media, &name)?;
+        geometry.set_camera_medium(m);
+    }
     if let Some(v) = sections.remove("lights") {
         cx.lights(v, &mut geometry)?;
     }
@@ -76,11 +89,11 @@ pub fn load_toml_str<'a>(
         })?;
     }
     let groups = match sections.remove("groups") {
-        Some(v) => cx.groups(v, &materials, &mut geometry)?,
+        Some(v) => cx.groups(v, &materials, &media, &mut geometry)?,
         None => Default::default(),
     };
     if let Some(v) = sections.remove("objects") {
-        cx.objects(v, &materials, &textures, &groups, &mut geometry)?;
+        cx.objects(v, &materials, &textures, &media, &groups, &mut geometry)?;
     }
     let mut options = render.options();
     if let Some(a) = &render.aov {
@@ -242,6 +255,14 @@ impl<'a> Cx<'a> {
             let known = names.names.iter().map(String::as_str).collect();
             self.at(name.span(), no_such("material", name.get_ref(), known))
         })
+    }
+}
+
+/// Takes key `key` out of a section's table (a key read before the rest of the section).
+fn take_key<'a>(section: &mut Option<Spanned<DeValue<'a>>>, key: &str) -> Option<Spanned<DeValue<'a>>> {
+    match section.as_mut().map(|s| s.get_mut()) {
+        Some(DeValue::Table(t)) => t.remove(key),
+        _ => None,
     }
 }
 

@@ -3,6 +3,7 @@
 
 use super::Cx;
 use super::materials::{MaterialNames, TextureNames};
+use super::media::MediumNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
 use crate::geometry::Transform;
 use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
@@ -163,6 +164,7 @@ impl<'a> Cx<'a> {
         &self,
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
+        media: &MediumNames,
         geometry: &mut SceneBuilder,
     ) -> Result<HashMap<String, u32>, SceneError> {
         let span = value.span();
@@ -188,7 +190,7 @@ impl<'a> Cx<'a> {
             };
             let index = geometry.begin_group().map_err(|e| self.at(span.clone(), e))?;
             for value in self.array(objects, "objects")? {
-                self.object_entry(value, names, &TextureNames::new(), None, geometry)?;
+                self.object_entry(value, names, &TextureNames::new(), media, None, geometry)?;
             }
             geometry.end_group();
             if geometry.group_len(index) == 0 {
@@ -205,11 +207,12 @@ impl<'a> Cx<'a> {
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
         textures: &TextureNames,
+        media: &MediumNames,
         groups: &HashMap<String, u32>,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
         for value in self.array(value, "objects")? {
-            self.object_entry(value, names, textures, Some(groups), geometry)?;
+            self.object_entry(value, names, textures, media, Some(groups), geometry)?;
         }
         Ok(())
     }
@@ -221,6 +224,7 @@ impl<'a> Cx<'a> {
         value: Spanned<DeValue<'a>>,
         names: &MaterialNames,
         textures: &TextureNames,
+        media: &MediumNames,
         groups: Option<&HashMap<String, u32>>,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
@@ -237,6 +241,11 @@ impl<'a> Cx<'a> {
             _ => {}
         }
         let material = self.material_of(d.material.as_ref(), names, geometry)?;
+        // An object bounding media carries them on its material.
+        let material = match self.interface(media, d.interior.as_ref(), d.exterior.as_ref())? {
+            Some(i) => geometry.with_interface(material, i),
+            None => material,
+        };
         let emission = self.emission(&d, textures)?;
         if emission.is_some() && groups.is_none() {
             return Err(self.at(

@@ -26,6 +26,7 @@ pub const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("mask", &["material", "opacity"]),
     ("blend", &["first", "second", "weight"]),
     ("twosided", &["front", "back"]),
+    ("null", &[]),
     (
         "principled",
         &[
@@ -79,17 +80,52 @@ pub const AREA_QUAD_KEYS: &[&str] = &["corner", "edge1", "edge2"];
 pub const AREA_SPHERE_KEYS: &[&str] = &["center", "radius"];
 
 pub const OBJECT_KINDS: &[(&str, &[&str])] = &[
-    ("sphere", &["material", "transform", "emission", "emission_texture", "center", "radius"]),
-    ("plane", &["material", "transform", "point", "normal"]),
-    ("quad", &["material", "transform", "emission", "emission_texture", "corner", "edge1", "edge2"]),
-    ("box", &["material", "transform", "emission", "emission_texture", "min", "max"]),
-    ("mesh", &["material", "transform", "emission", "emission_texture", "file", "face_normals"]),
+    ("sphere", &["material", "interior", "exterior", "transform", "emission", "emission_texture", "center", "radius"]),
+    ("plane", &["material", "interior", "exterior", "transform", "point", "normal"]),
+    (
+        "quad",
+        &["material", "interior", "exterior", "transform", "emission", "emission_texture", "corner", "edge1", "edge2"],
+    ),
+    ("box", &["material", "interior", "exterior", "transform", "emission", "emission_texture", "min", "max"]),
+    (
+        "mesh",
+        &["material", "interior", "exterior", "transform", "emission", "emission_texture", "file", "face_normals"],
+    ),
     (
         "torus_knot",
-        &["material", "transform", "emission", "emission_texture", "p", "q", "radius", "tube", "segments", "sides"],
+        &[
+            "material",
+            "interior",
+            "exterior",
+            "transform",
+            "emission",
+            "emission_texture",
+            "p",
+            "q",
+            "radius",
+            "tube",
+            "segments",
+            "sides",
+        ],
     ),
-    ("cylinder", &["material", "transform", "emission", "emission_texture", "p0", "p1", "radius"]),
-    ("disk", &["material", "transform", "emission", "emission_texture", "center", "normal", "radius"]),
+    (
+        "cylinder",
+        &["material", "interior", "exterior", "transform", "emission", "emission_texture", "p0", "p1", "radius"],
+    ),
+    (
+        "disk",
+        &[
+            "material",
+            "interior",
+            "exterior",
+            "transform",
+            "emission",
+            "emission_texture",
+            "center",
+            "normal",
+            "radius",
+        ],
+    ),
     ("instance", &["group", "transform"]),
 ];
 
@@ -297,6 +333,9 @@ pub struct Rotation {
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
     pub material: Option<Spanned<String>>,
+    /// The media inside and outside the object (names of `[media.NAME]` tables).
+    pub interior: Option<Spanned<String>>,
+    pub exterior: Option<Spanned<String>>,
     pub transform: Option<Vec<TransformOp>>,
     /// Radiance the object's surface emits (W/(m^2 sr)) from its outer side: it becomes an area
     /// light that also reflects with its material.

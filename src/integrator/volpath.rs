@@ -1,0 +1,221 @@
+//! Volumetric path tracing: the path tracer with participating media (Mitsuba 3's `volpath` /
+//! `volpathmis`, pbrt-v4's `VolPathIntegrator`).
+//!
+//! Each segment of a path through a medium is sampled for a free flight (`Medium::
+//! sample_distance`: a colour channel chosen by the throughput, the distance by that channel's
+//! exponential, weighted by the mixture over channels, so RGB extinction stays unbiased). A
+//! scattering point in a medium is a vertex like a surface's, with the phase function for a
+//! BSDF: next-event estimation there and at surfaces goes through `lighting::light_sample_at`
+//! with the shadow ray's transmittance through media and `null` boundaries
+//! (`lighting::transmittance_through_media`), weighted against phase or BSDF sampling by the
+//! power heuristic on the directional densities (the two strategies' weights sum to one for
+//! every path, so the estimate is unbiased; the free-flight probabilities are left out of the
+//! weights). Invisible surfaces (`null` BSDFs, masks' transparent parts) are passed without
+//! counting as a bounce and without forgetting the last vertex, whose density the MIS weight of
+//! an emitter met after them needs. Russian roulette after three bounces, as the path tracer.
+
+use super::layers::LayerPath;
+use super::lighting::{bsdf_scatter, light_sample_at, power_heuristic, transmittance_through_media, visibility};
+use crate::film::Layers;
+use crate::geometry::{NO_MEDIUM, Ray, RayOrigin};
+use crate::material::bxdf::Transport;
+use crate::math::{Color, Vec2, Vec3};
+use crate::medium::Phase;
+use crate::render::{RayIntegrator, RayStats};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+pub struct VolPathTracer {
+    /// Longest path in bounces, medium scattering included (0 = emitters only).
+    pub max_depth: u32,
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
+}
+
+impl VolPathTracer {
+    /// One light sample at a point `p` of medium `medium` scattering by `phase` towards `wo`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn medium_direct(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        wo: Vec3,
+        medium: u32,
+        phase: &Phase,
+        u_pick: f32,
+        u: Vec2,
+        stats: &mut RayStats,
+    ) -> Color {
+        let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
+        let from = RayOrigin { p, p_error: Vec3::ZERO, ng: Vec3::ZERO };
+        light_sample_at(
+            scene,
+            &scene.lights[li],
+            p_pick,
+            p,
+            u,
+            true,
+            |wi, _| {
+                let v = phase.p(wo, wi);
+                (Color::splat(v), 1.0, v)
+            },
+            |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, medium, 0.0, stats)),
+        )
+    }
+}
+
+impl RayIntegrator for VolPathTracer {
+    type Scratch = ();
+
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
+        let mut layers = [Color::ZERO; 4];
+        let mut beta = Color::ONE;
+        let mut ray = *ray;
+        if ray.medium == NO_MEDIUM {
+            ray.medium = scene.camera_medium;
+        }
+        let mut specular_bounce = true;
+        let mut prev_pdf = 0.0f32;
+        let mut prev_p = ray.o;
+        let mut depth = 0;
+        let mut layer = LayerPath::CAMERA;
+        let has_media = scene.has_media();
+        loop {
+            stats.rays += 1;
+            let hit = scene.intersect(&ray, f32::INFINITY);
+            if ray.medium != NO_MEDIUM {
+                let medium = &scene.media[ray.medium as usize];
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                let ms = medium.sample_distance(t_max, beta, sampler.next_1d(), sampler.next_1d());
+                beta *= ms.weight;
+                if beta == Color::ZERO || !beta.is_finite() {
+                    break;
+                }
+                if ms.scattered {
+                    if depth >= self.max_depth {
+                        break;
+                    }
+                    let p = ray.at(ms.t);
+                    let wo = -ray.d;
+                    let phase = *medium.phase();
+                    let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+                    layers[layer.direct()] +=
+                        beta * self.medium_direct(scene, p, wo, ray.medium, &phase, u_pick, u, stats);
+                    let s = phase.sample(wo, sampler.next_2d());
+                    layer.bounce(false);
+                    specular_bounce = false;
+                    prev_pdf = s.pdf;
+                    prev_p = p;
+                    depth += 1;
+                    if !self.survives(&mut beta, depth, sampler) {
+                        break;
+                    }
+                    ray = Ray { o: p, d: s.wi, medium: ray.medium };
+                    continue;
+                }
+            }
+            let Some(hit) = hit else {
+                // The ray leaves the scene: the environment, weighted against its light samples.
+                if let Some(env) = scene.environment {
+                    let le = scene.lights[env as usize].environment_radiance(ray.d);
+                    let w = if specular_bounce {
+                        1.0
+                    } else {
+                        let light_pdf = scene.direct_picker.prob(env as usize)
+                            * scene.lights[env as usize].pdf_li(prev_p, prev_p, ray.d, ray.d);
+                        power_heuristic(prev_pdf, light_pdf)
+                    };
+                    layers[layer.emitted()] += beta * le * w;
+                }
+                break;
+            };
+            let wo = -ray.d;
+            if hit.is_emitter() && hit.is_front(ray.d) {
+                let le = scene.emitted(&hit, wo);
+                let k = layer.emitted();
+                if specular_bounce {
+                    layers[k] += beta * le;
+                } else {
+                    let light = &scene.lights[hit.light as usize];
+                    let light_pdf =
+                        scene.direct_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
+                    layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
+                }
+            }
+            let bsdf = scene.bsdf(&hit, wo);
+            if bsdf.is_invisible() {
+                // A medium's boundary: straight on, into the medium beyond, not a bounce.
+                let medium = scene.medium_after(&hit, ray.d, ray.medium);
+                ray = hit.spawn(ray.d, self.ray_bias);
+                ray.medium = medium;
+                continue;
+            }
+            if depth >= self.max_depth {
+                break;
+            }
+            if !bsdf.is_specular_only() {
+                let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+                if let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) {
+                    let light = &scene.lights[li];
+                    let bias = self.ray_bias;
+                    let direct = light_sample_at(
+                        scene,
+                        light,
+                        p_pick,
+                        hit.p,
+                        u,
+                        true,
+                        |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
+                        |wi, dist| {
+                            if has_media {
+                                let medium = scene.medium_after(&hit, wi, ray.medium);
+                                (1.0, transmittance_through_media(scene, hit.origin(), wi, dist, medium, bias, stats))
+                            } else {
+                                (visibility(scene, hit.origin(), wi, dist, bias, stats), Color::ONE)
+                            }
+                        },
+                    );
+                    layers[layer.direct()] += beta * direct;
+                }
+            }
+            let uc = sampler.next_1d();
+            let u = sampler.next_2d();
+            let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
+            beta *= s.weight;
+            let medium = scene.medium_after(&hit, s.wi, ray.medium);
+            if s.flags.is_null() {
+                // A mask's transparent part: passed like a null boundary.
+                ray = hit.spawn(s.wi, self.ray_bias);
+                ray.medium = medium;
+                continue;
+            }
+            specular_bounce = s.flags.is_specular();
+            layer.bounce(specular_bounce);
+            prev_pdf = s.pdf;
+            prev_p = hit.p;
+            depth += 1;
+            if !self.survives(&mut beta, depth, sampler) {
+                break;
+            }
+            ray = hit.spawn(s.wi, self.ray_bias);
+            ray.medium = medium;
+        }
+        layers
+    }
+}
+
+impl VolPathTracer {
+    /// Russian roulette after three bounces on the throughput; false when the path ends.
+    #[inline]
+    fn survives(&self, beta: &mut Color, depth: u32, sampler: &mut Sampler) -> bool {
+        if depth >= 3 {
+            let survive = beta.max_element().min(0.95);
+            if sampler.rng().uniform() >= survive {
+                return false;
+            }
+            *beta /= survive;
+        }
+        beta.is_finite() && *beta != Color::ZERO
+    }
+}
