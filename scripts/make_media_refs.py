@@ -108,8 +108,9 @@ def scene(comment, body, fov=28, origin="0, -5.5, 1.8", target="0, 0, -0.2", sen
 
 SCENES = {
     "cube_area": scene(
-        "a null-bounded cube of fog (side 2, resting on the floor) under a rectangular area light.",
+        "a null-bounded cube of fog (side 1.96, just above the floor: a face on the floor would make the\n     boundary and the floor coplanar) under a rectangular area light.",
         f"""    <shape type="cube">
+        <transform name="to_world"><scale value="0.98"/></transform>
         <bsdf type="null"/>
         {fog("interior")}
     </shape>
@@ -127,6 +128,7 @@ SCENES = {
         "a small glowing sphere inside a null-bounded cube of fog, on a floor, nothing else lit.",
         f"""    {fog(id="fog", sigma_t="0.8, 0.6, 0.4", albedo="0.8, 0.8, 0.8")}
     <shape type="cube">
+        <transform name="to_world"><scale value="0.98"/></transform>
         <bsdf type="null"/>
         <ref name="interior" id="fog"/>
     </shape>
@@ -151,6 +153,7 @@ SCENES = {
         "an orange diffuse sphere (radius 0.6) inside a null-bounded cube of fog, under an area light.",
         f"""    {fog(id="fog", sigma_t="0.6, 0.6, 0.6", albedo="0.9, 0.9, 0.9")}
     <shape type="cube">
+        <transform name="to_world"><scale value="0.98"/></transform>
         <bsdf type="null"/>
         <ref name="interior" id="fog"/>
     </shape>
