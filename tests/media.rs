@@ -333,3 +333,31 @@ fn media_match_mitsuba_volpath() {
     let cases = ["cube_area", "dielectric_envmap", "emitter_inside", "null_envmap", "opaque_inside", "camera_in_fog"];
     REFS.check_all(&cases.map(|c| (c, 256)), 64);
 }
+
+/// SPPM with volume photons (a volume radiance estimate at the camera path's scattering point,
+/// its radius shrinking with the iterations) agrees with volpath's image (Mitsuba's, which
+/// ours matches within 1%) within 3% on the area-lit media scenes and the emitter inside fog
+/// (256 iterations of 20,000 photons: measured -0.5%, -0.7% and -0.8%). Fewer photons make the
+/// volume estimate's distribution heavy-tailed (most gathering spheres hold no photon), so a
+/// finite run's mean falls short; the thin fog of `camera_in_fog` needs more than this test
+/// affords.
+#[test]
+fn sppm_agrees_with_volpath_in_media() {
+    let mut failures = Vec::new();
+    for case in ["cube_area", "opaque_inside", "emitter_inside"] {
+        let o = Options {
+            seed: Some(1),
+            integrator: Some(IntegratorKind::Sppm),
+            photon: caustic::options::PhotonOptions { photons_per_iter: Some(20_000), ..Default::default() },
+            ..Default::default()
+        };
+        let ours = common::mitsuba_refs::mean_luminance(&REFS.load(case, 64, 256, &o).render().image);
+        let theirs = common::mitsuba_refs::mean_luminance(&REFS.reference(case));
+        let rel = ours / theirs - 1.0;
+        eprintln!("{case:20} SPPM {ours:.5} vs volpath {theirs:.5} ({:+.2}%)", rel * 100.0);
+        if rel.abs() >= 0.03 {
+            failures.push(format!("{case}: {ours:.5} vs {theirs:.5} ({:+.2}%)", rel * 100.0));
+        }
+    }
+    assert!(failures.is_empty(), "SPPM differs from volpath:\n{}", failures.join("\n"));
+}

@@ -28,6 +28,9 @@ pub struct MediumSample {
     /// The factor the path throughput is multiplied by: sigma_s T(t) / pdf(t) at a scattering
     /// point, T(t_max) / P(no collision before t_max) when the segment is passed.
     pub weight: Color,
+    /// The weight without the scattering coefficient: T(t) / pdf(t) at a scattering point (what
+    /// a density estimate of in-scattered light there is multiplied by), `weight` otherwise.
+    pub tr_over_pdf: Color,
 }
 
 impl Homogeneous {
@@ -84,13 +87,14 @@ impl Homogeneous {
             let tr = self.transmittance(t);
             let pdf = (p * self.sigma_t * tr).sum();
             if pdf > 0.0 {
-                return MediumSample { t, scattered: true, weight: self.sigma_s() * tr / pdf };
+                let tr_over_pdf = tr / pdf;
+                return MediumSample { t, scattered: true, weight: self.sigma_s() * tr_over_pdf, tr_over_pdf };
             }
         }
         let tr = self.transmittance(t_max);
         let prob = (p * tr).sum();
         let weight = if prob > 0.0 { tr / prob } else { Color::ZERO };
-        MediumSample { t: t_max, scattered: false, weight }
+        MediumSample { t: t_max, scattered: false, weight, tr_over_pdf: weight }
     }
 }
 

@@ -31,6 +31,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub const DIRECT: u8 = 1;
 /// Flag: the photon came from the light only through specular bounces (L S+ D).
 pub const CAUSTIC: u8 = 2;
+/// Flag: a scattering event in a participating medium (`Store::Media` only; never in a packed
+/// photon map).
+pub const VOLUME: u8 = 4;
 
 /// Photon depths are stored up to this (a photon scatters at most `MAX_BOUNCES` times, and a
 /// map keeps six bits of it).
@@ -121,6 +124,9 @@ pub enum Store {
     Indirect,
     /// Hits after mirrors and glass only, and no further bounce (the caustic map).
     Caustic,
+    /// `Indirect`, and every scattering event in a medium, the first included (flagged
+    /// `VOLUME`): SPPM in a scene with media, whose in-scattered light comes from them.
+    Media,
 }
 
 const CHUNK: u64 = 4096;
@@ -155,7 +161,10 @@ pub fn trace_global_into(
             let light = &scene.lights[li];
             let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
             let e = light.sample_le(u_pos, u_dir, scene.textures())?;
-            let ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+            let mut ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+            if scene.has_media() {
+                ray.medium = scene.medium_at(ray.o, ray.d);
+            }
             Some((Emitted { ray, flux: e.flux }, p, rng))
         },
         scene,
@@ -275,6 +284,7 @@ fn run_chunks(
             let mut out = Vec::with_capacity(match store {
                 Store::All => 2 * CHUNK as usize,
                 Store::Indirect => CHUNK as usize,
+                Store::Media => 4 * CHUNK as usize,
                 Store::Caustic => 0,
             });
             let mut sources = Vec::new();
@@ -325,7 +335,42 @@ pub fn trace_photon(
     // Scattering events so far (passing through a mask is none).
     let mut depth = 0;
     for _ in 0..MAX_BOUNCES {
-        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { return };
+        let hit = scene.intersect(&ray, f32::INFINITY);
+        if ray.medium != crate::geometry::NO_MEDIUM {
+            // Through a medium: a free flight, which may end in a scattering event first.
+            let medium = &scene.media[ray.medium as usize];
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            let ms = medium.sample_distance(t_max, flux, rng.uniform(), rng.uniform());
+            let before = flux;
+            flux *= ms.weight;
+            if ms.scattered {
+                if caustic_only {
+                    return;
+                }
+                let p = ray.at(ms.t);
+                if store == Store::Media {
+                    out.push(PhotonHit { p, dir: ray.d, flux, flags: VOLUME, depth: depth as u8, n: Vec3::ZERO });
+                }
+                let s = medium.phase().sample(-ray.d, rng.uniform2());
+                // Roulette keeps the photon's power as at a surface (`scatter_photon`).
+                let q = (flux.sum() / before.sum()).min(1.0);
+                if !(q > 0.0) || rng.uniform() >= q {
+                    return;
+                }
+                flux /= q;
+                if !flux.is_finite() {
+                    return;
+                }
+                depth += 1;
+                only_specular = false;
+                ray = Ray { o: p, d: s.wi, medium: ray.medium };
+                continue;
+            }
+            if !(flux.max_element() > 0.0) || !flux.is_finite() {
+                return;
+            }
+        }
+        let Some(hit) = hit else { return };
         let wo = -ray.d;
         let bsdf = scene.bsdf(&hit, wo);
         // Plain emitters absorb; a reflecting emitter (one with a BSDF) scatters like any surface.
@@ -353,6 +398,7 @@ pub fn trace_photon(
                     0
                 };
                 if depth > 0 || store == Store::All {
+                    // (`Store::Indirect` and `Store::Media` leave the first hit to direct light.)
                     out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
                 }
             }
@@ -368,7 +414,9 @@ pub fn trace_photon(
             }
         }
         flux = scattered;
+        let medium = scene.medium_after(&hit, wi, ray.medium);
         ray = hit.spawn(wi, bias);
+        ray.medium = medium;
     }
 }
 

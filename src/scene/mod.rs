@@ -144,6 +144,22 @@ impl Scene {
         }
     }
 
+    /// The medium at point `p`, found from the first surface bounding a medium that a ray from
+    /// `p` along `d` meets (inside it when the ray leaves through it); where no boundary is in
+    /// the way, the camera's medium (a scene filled with the medium the camera sits in). Photons
+    /// start from lights in the medium this gives.
+    pub fn medium_at(&self, p: Vec3, d: Vec3) -> u32 {
+        let mut ray = Ray::new(p, d);
+        for _ in 0..16 {
+            let Some(h) = self.intersect(&ray, f32::INFINITY) else { break };
+            if let Some(Some(i)) = self.interfaces.get(h.material as usize) {
+                return if d.dot(h.ng) > 0.0 { i.inside } else { i.outside };
+            }
+            ray = h.spawn(d, 0.0);
+        }
+        self.camera_medium
+    }
+
     /// The textures materials and lights read.
     #[inline(always)]
     pub fn textures(&self) -> &[crate::texture::Texture] {

@@ -21,6 +21,7 @@
 //! sampled lobes as in every integrator (`integrator::layers`).
 
 mod grid;
+mod media;
 
 use super::camera_walk::CameraWalk;
 use super::layers::LayerPath;
@@ -263,11 +264,16 @@ impl Sppm {
         let seed = hash_seed(&[settings.seed, it as u64]);
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
         let mut hits = std::mem::take(&mut state.hits);
-        let store = trace::Store::Indirect;
+        let store = if scene.has_media() { trace::Store::Media } else { trace::Store::Indirect };
         trace::trace_global_into(scene, config.photons_per_iter, seed, config.ray_bias, store, watch, &mut hits);
         if watch.cancelled() {
             return false;
         }
+        // With media, the photons scattered in them, gathered by the camera samples below.
+        let volume = scene.has_media().then(|| {
+            let r1 = config.initial_radius.unwrap_or(VOLUME_RADIUS * diag);
+            media::VolumePhotons::split(&mut hits, r1, config.alpha, it, scene.bounds().min.min(Vec3::ZERO))
+        });
         // Pass 2: each pixel's camera sample: its emitted and direct light goes into the pixel,
         // and its visible point (a new one gets a radius) into a buffer kept between iterations.
         state.points.resize(n_pixels, None);
@@ -281,7 +287,11 @@ impl Sppm {
             .with_min_len(64)
             .map(|(k, ((px, layers), point))| {
                 let mut stats = RayStats::default();
-                let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
+                let xy = (k as u32 % w, k as u32 / w);
+                let sample = match &volume {
+                    None => self.camera_sample(scene, settings, xy, it, &mut stats),
+                    Some(v) => self.camera_sample_media(scene, settings, xy, it, v, &mut stats),
+                };
                 let mut nonfinite = 0u64;
                 if sample.ld.is_finite() {
                     px.ld += sample.ld;
@@ -510,6 +520,10 @@ impl State {
         Film::from_means(&self.image(settings, iterations), &layers, iterations)
     }
 }
+
+/// The first iteration's volume radius, as a fraction of the scene's size (without
+/// `initial_radius`).
+const VOLUME_RADIUS: f32 = 0.0015;
 
 /// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
 /// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.

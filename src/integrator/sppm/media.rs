@@ -1,0 +1,188 @@
+//! SPPM in scenes with participating media: photons scatter in media and are stored there too
+//! (`trace::Store::Media`), and a camera path that scatters in a medium estimates the light
+//! scattered towards the camera there from the volume photons around it (Jensen and
+//! Christensen 1998's volume radiance estimate: the sum of the photons' flux times the phase
+//! function over the sphere's volume), with a radius that shrinks with the iteration as
+//! r_i = r_1 i^((alpha - 1) / 3) (Knaus and Zwicker 2011's progressive photon mapping, for a
+//! three-dimensional kernel), so the estimate converges to the exact in-scattered light. Every
+//! iteration's estimate is independent and goes into the pixel's sum of emitted and direct
+//! light, which is averaged over iterations.
+//!
+//! The camera path is a free flight through media (`Medium::sample_distance`, as the volumetric
+//! path tracer samples it): it ends in the medium with the probability of a collision there,
+//! or reaches a surface with its throughput weighted by the transmittance, where the visible
+//! point is made as without media (direct light by a light sample through media and `null`
+//! boundaries; mirrors and glass followed). Volume photons include the first scattering of
+//! light from the lights: direct in-scattering comes from them, not from light samples.
+
+use super::grid::PhotonGrid;
+use super::{CameraSample, Shading, Sppm, VisiblePoint};
+use crate::geometry::NO_MEDIUM;
+use crate::integrator::layers::LayerPath;
+use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_through_media};
+use crate::material::bxdf::Transport;
+use crate::math::{Color, Vec3};
+use crate::photon::trace::{self, PhotonHit};
+use crate::render::{RayStats, RenderSettings};
+use crate::scene::Scene;
+use std::f32::consts::PI;
+
+/// One iteration's volume photons and the radius they are gathered within.
+pub(super) struct VolumePhotons {
+    pub grid: PhotonGrid,
+    pub hits: Vec<PhotonHit>,
+    pub r: f32,
+}
+
+impl VolumePhotons {
+    /// Moves the volume photons out of `hits` (which keeps the surface ones) into a grid for
+    /// iteration `it` (from 0), whose radius is `r1` shrunk by Knaus and Zwicker's schedule.
+    pub fn split(hits: &mut Vec<PhotonHit>, r1: f32, alpha: f32, it: u32, origin: Vec3) -> Self {
+        let mut volume = Vec::new();
+        hits.retain(|h| {
+            let v = h.flags & trace::VOLUME != 0;
+            if v {
+                volume.push(*h);
+            }
+            !v
+        });
+        let r = r1 * ((it + 1) as f32).powf((alpha - 1.0) / 3.0);
+        let grid = PhotonGrid::build(&volume, 2.0 * r, origin);
+        VolumePhotons { grid, hits: volume, r }
+    }
+
+    /// The light scattered towards `wo` at `p` in a medium of phase function `phase`, from
+    /// photons of at most `max_depth` scattering events.
+    fn estimate(&self, phase: &crate::medium::Phase, p: Vec3, wo: Vec3, max_depth: u32) -> Color {
+        let mut sum = Color::ZERO;
+        self.grid.for_each_within(p, self.r, |i| {
+            let ph = &self.hits[i as usize];
+            if u32::from(ph.depth) <= max_depth {
+                sum += ph.flux * phase.p(wo, -ph.dir);
+            }
+        });
+        sum / (4.0 / 3.0 * PI * self.r * self.r * self.r)
+    }
+}
+
+impl Sppm {
+    /// `camera_sample` in a scene with media: see the module's notes.
+    pub(super) fn camera_sample_media(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        (x, y): (u32, u32),
+        it: u32,
+        volume: &VolumePhotons,
+        stats: &mut RayStats,
+    ) -> CameraSample {
+        let config = &self.config;
+        let bias = config.ray_bias;
+        let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
+        if ray.medium == NO_MEDIUM {
+            ray.medium = scene.camera_medium;
+        }
+        let mut beta = Color::splat(weight);
+        let mut ld = Color::ZERO;
+        let mut ld_layers = [Color::ZERO; 4];
+        let mut layer = LayerPath::CAMERA;
+        let mut depth = 0u32;
+        let mut dist = 0.0f32;
+        let mut add = |k: usize, l: Color| {
+            ld += l;
+            ld_layers[k] += l;
+        };
+        for _ in 0..trace::MAX_BOUNCES * 2 {
+            stats.rays += 1;
+            let hit = scene.intersect(&ray, f32::INFINITY);
+            if ray.medium != NO_MEDIUM {
+                let medium = &scene.media[ray.medium as usize];
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                let ms = medium.sample_distance(t_max, beta, sampler.next_1d(), sampler.next_1d());
+                if ms.scattered {
+                    // This scattering event is bounce depth + 1.
+                    let Some(limit) = trace::photon_depth_limit(config.max_depth, depth + 1) else { break };
+                    let l = volume.estimate(medium.phase(), ray.at(ms.t), -ray.d, limit);
+                    add(layer.other_photons(), beta * ms.tr_over_pdf * l);
+                    break;
+                }
+                beta *= ms.weight;
+                if beta == Color::ZERO || !beta.is_finite() {
+                    break;
+                }
+            }
+            let Some(hit) = hit else {
+                add(layer.emitted(), beta * scene.environment(ray.d));
+                break;
+            };
+            dist += hit.t;
+            let wo = -ray.d;
+            if hit.is_emitter() && hit.is_front(ray.d) {
+                add(layer.emitted(), beta * scene.emitted(&hit, wo));
+            }
+            let bsdf = scene.bsdf(&hit, wo);
+            if bsdf.is_invisible() {
+                let medium = scene.medium_after(&hit, ray.d, ray.medium);
+                ray = hit.spawn(ray.d, bias);
+                ray.medium = medium;
+                continue;
+            }
+            if bsdf.is_black() || depth >= config.max_depth {
+                break;
+            }
+            let last = depth + 1 >= config.max_depth;
+            if bsdf.has_smooth() {
+                let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+                if let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) {
+                    let direct = light_sample_at(
+                        scene,
+                        &scene.lights[li],
+                        p_pick,
+                        hit.p,
+                        u,
+                        false,
+                        |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
+                        |wi, d| {
+                            let m = scene.medium_after(&hit, wi, ray.medium);
+                            (1.0, transmittance_through_media(scene, hit.origin(), wi, d, m, bias, stats))
+                        },
+                    );
+                    add(layer.direct(), beta * direct);
+                }
+            }
+            let q = if !bsdf.has_smooth() {
+                0.0
+            } else if bsdf.has_delta() && !last {
+                bsdf.smooth_fraction(wo)
+            } else {
+                1.0
+            };
+            if sampler.next_1d() < q {
+                let photon_depth = trace::photon_depth_limit(config.max_depth, depth + 1).unwrap_or(0);
+                let point = VisiblePoint {
+                    at: Shading::of(&hit),
+                    wo,
+                    beta: beta / q,
+                    layer,
+                    photon_depth: photon_depth.min(u8::MAX.into()) as u8,
+                };
+                return CameraSample { ld, ld_layers, point: Some((point, dist)) };
+            }
+            if last {
+                break;
+            }
+            let Some(s) = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
+                break;
+            };
+            beta *= s.weight / (1.0 - q);
+            let medium = scene.medium_after(&hit, s.wi, ray.medium);
+            if !s.flags.is_null() {
+                depth += 1;
+                layer.bounce(true);
+            }
+            ray = hit.spawn(s.wi, bias);
+            ray.medium = medium;
+        }
+        CameraSample { ld, ld_layers, point: None }
+    }
+}
