@@ -48,6 +48,8 @@ integrator_kinds! {
     Sppm,
     /// Light tracing (Mitsuba's ptracer): paths from the lights connected to the camera; caustics on diffuse surfaces, nothing seen in mirrors or glass
     Light,
+    /// Bidirectional path tracing: camera and light paths joined by every technique with MIS; caustics on diffuse surfaces, glossy paths
+    Bdpt,
 }
 
 impl IntegratorKind {
@@ -59,6 +61,7 @@ impl IntegratorKind {
             IntegratorKind::Photon => "photon",
             IntegratorKind::Sppm => "sppm",
             IntegratorKind::Light => "light",
+            IntegratorKind::Bdpt => "bdpt",
         }
     }
 }
@@ -273,8 +276,8 @@ mod tests {
             let toml: Options = toml::from_str(&format!("integrator = \"{}\"", k.name())).unwrap();
             assert_eq!(toml.integrator, Some(k));
         }
-        let e = "vcm".parse::<IntegratorKind>().unwrap_err();
-        assert_eq!(e, "unknown integrator `vcm` (expected whitted, path, photon, sppm or light)");
+        let e = "mlt".parse::<IntegratorKind>().unwrap_err();
+        assert_eq!(e, "unknown integrator `mlt` (expected whitted, path, photon, sppm, light or bdpt)");
     }
 
     #[test]

@@ -290,7 +290,7 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
         );
         let mut settings: RenderSettings = loaded.settings.clone();
         if settings.aovs.has(AovKind::Variance)
-            && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
+            && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light | IntegratorKind::Bdpt)
         {
             // Their pixels are not means of samples: there is no sample variance to give.
             eprintln!(

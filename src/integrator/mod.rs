@@ -3,6 +3,7 @@
 //! multi-pass method with its own passes in the same driver. [`Integrator::new`] is the one place
 //! an integrator is made from the scene's description.
 
+pub mod bdpt;
 pub mod camera_walk;
 pub mod layers;
 pub mod light;
@@ -12,6 +13,7 @@ pub mod photon;
 pub mod sppm;
 pub mod whitted;
 
+pub use bdpt::Bdpt;
 pub use light::LightTracer;
 pub use path::PathTracer;
 pub use photon::PhotonIntegrator;
@@ -32,6 +34,7 @@ pub enum Integrator {
     Photon(Box<PhotonIntegrator>),
     Sppm(Sppm),
     Light(LightTracer),
+    Bdpt(Bdpt),
 }
 
 /// The render was stopped (Ctrl-C) while an integrator was being made.
@@ -43,7 +46,11 @@ impl Integrator {
     pub fn preparation_name(&self) -> &'static str {
         match self {
             Integrator::Photon(_) => "photon maps",
-            Integrator::Whitted(_) | Integrator::Path(_) | Integrator::Sppm(_) | Integrator::Light(_) => "set-up",
+            Integrator::Whitted(_)
+            | Integrator::Path(_)
+            | Integrator::Sppm(_)
+            | Integrator::Light(_)
+            | Integrator::Bdpt(_) => "set-up",
         }
     }
 
@@ -70,6 +77,7 @@ impl Integrator {
             IntegratorKind::Sppm => {
                 Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, scene, settings.pixels()) })
             }
+            IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
         })
     }
 
@@ -80,6 +88,7 @@ impl Integrator {
             Integrator::Photon(_) => IntegratorKind::Photon,
             Integrator::Sppm(_) => IntegratorKind::Sppm,
             Integrator::Light(_) => IntegratorKind::Light,
+            Integrator::Bdpt(_) => IntegratorKind::Bdpt,
         }
     }
 
@@ -99,8 +108,9 @@ impl Integrator {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        // SPPM's and the light tracer's pixels are not sums of camera samples: their first-hit
-        // AOVs are added afterwards, for the sample indices the render took.
+        // The pixels of SPPM, the light tracer and bidirectional path tracing are not sums of
+        // camera samples alone: their first-hit AOVs are added afterwards, for the sample
+        // indices the render took.
         let before: Vec<Vec<u32>> = film.tiles.iter().map(|t| t.count.clone()).collect();
         let mut out = match self {
             Integrator::Whitted(i) => return render_rays_from(scene, i, settings, control, film),
@@ -108,6 +118,7 @@ impl Integrator {
             Integrator::Photon(i) => return render_rays_from(scene, i.as_ref(), settings, control, film),
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
             Integrator::Light(i) => i.render(scene, settings, control, film),
+            Integrator::Bdpt(i) => i.render(scene, settings, control, film),
         };
         crate::render::aov::add_first_hits(scene, settings, &mut out.film, &before);
         out
@@ -128,6 +139,7 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
                 + photon::estimated_map_bytes(c.caustic_photons)
         }
         IntegratorKind::Light => light::estimated_bytes(settings.pixels(), settings.layers),
+        IntegratorKind::Bdpt => bdpt::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
             sppm::estimated_bytes(settings.pixels(), c.photons_per_iter, settings.layers)
