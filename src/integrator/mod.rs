@@ -11,6 +11,7 @@ pub mod lighting;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+pub mod vcm;
 pub mod whitted;
 
 pub use bdpt::Bdpt;
@@ -18,6 +19,7 @@ pub use light::LightTracer;
 pub use path::PathTracer;
 pub use photon::PhotonIntegrator;
 pub use sppm::Sppm;
+pub use vcm::Vcm;
 pub use whitted::Whitted;
 
 use crate::film::Film;
@@ -35,6 +37,7 @@ pub enum Integrator {
     Sppm(Sppm),
     Light(LightTracer),
     Bdpt(Bdpt),
+    Vcm(Vcm),
 }
 
 /// The render was stopped (Ctrl-C) while an integrator was being made.
@@ -50,7 +53,8 @@ impl Integrator {
             | Integrator::Path(_)
             | Integrator::Sppm(_)
             | Integrator::Light(_)
-            | Integrator::Bdpt(_) => "set-up",
+            | Integrator::Bdpt(_)
+            | Integrator::Vcm(_) => "set-up",
         }
     }
 
@@ -78,6 +82,7 @@ impl Integrator {
                 Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, scene, settings.pixels()) })
             }
             IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
+            IntegratorKind::Vcm => Integrator::Vcm(Vcm::new(desc, scene, settings)),
         })
     }
 
@@ -89,6 +94,7 @@ impl Integrator {
             Integrator::Sppm(_) => IntegratorKind::Sppm,
             Integrator::Light(_) => IntegratorKind::Light,
             Integrator::Bdpt(_) => IntegratorKind::Bdpt,
+            Integrator::Vcm(_) => IntegratorKind::Vcm,
         }
     }
 
@@ -108,8 +114,8 @@ impl Integrator {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        // The pixels of SPPM, the light tracer and bidirectional path tracing are not sums of
-        // camera samples alone: their first-hit AOVs are added afterwards, for the sample
+        // The pixels of SPPM, the light tracer, bidirectional path tracing and VCM are not sums
+        // of camera samples alone: their first-hit AOVs are added afterwards, for the sample
         // indices the render took.
         let before: Vec<Vec<u32>> = film.tiles.iter().map(|t| t.count.clone()).collect();
         let mut out = match self {
@@ -119,6 +125,7 @@ impl Integrator {
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
             Integrator::Light(i) => i.render(scene, settings, control, film),
             Integrator::Bdpt(i) => i.render(scene, settings, control, film),
+            Integrator::Vcm(i) => i.render(scene, settings, control, film),
         };
         crate::render::aov::add_first_hits(scene, settings, &mut out.film, &before);
         out
@@ -140,6 +147,7 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
         }
         IntegratorKind::Light => light::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Bdpt => bdpt::estimated_bytes(settings.pixels(), settings.layers),
+        IntegratorKind::Vcm => vcm::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
             sppm::estimated_bytes(settings.pixels(), c.photons_per_iter, settings.layers)
