@@ -209,7 +209,7 @@ fn the_image_and_its_layers_are_the_same_on_any_thread_count() {
     }
 }
 
-/// The mean luminance of `text` by `reference` (the path tracer or the light tracer) and by
+/// The mean luminance of `text` by `reference` and by
 /// bidirectional path tracing agree within `tol` of the reference's, or four standard errors of
 /// their difference (runs of seeds 1..=4).
 fn agrees_with(reference: IntegratorKind, name: &str, text: &str, (ref_spp, bdpt_spp): (u32, u32), tol: f64) {
@@ -321,14 +321,10 @@ intensity = 10
 "#;
 
 #[test]
-fn bump_maps_normal_maps_and_masks_agree_with_the_path_and_light_tracers() {
+fn bump_maps_normal_maps_and_masks_agree_with_the_path_tracer() {
     let veil = "[[objects]]\ntype = \"quad\"\ncorner = [-1.5, 1.6, -1]\nedge1 = [3, 0, 0]\nedge2 = [0, 0, 2]\nmaterial = \"veil\"";
     // The perturbed frames against the path tracer.
     agrees_with(IntegratorKind::Path, "bump and normal maps", &WRAPPED.replace("VEIL", ""), (1024, 256), 0.02);
-    // Light through the veil's transparent part: the light tracer is the reference, which
-    // passes it as shadow rays do (the camera sees no mirror here, so it renders every path).
-    // The path tracer counts that light twice: it weighs a light sample through the veil against
-    // BSDF sampling, then gives a BSDF-sampled ray that passes through the veil to the light the
-    // full weight of a mirror bounce.
-    agrees_with(IntegratorKind::Light, "mask", &WRAPPED.replace("VEIL", veil), (1024, 256), 0.02);
+    // Light through the veil's transparent part, which light paths and shadow rays pass alike.
+    agrees_with(IntegratorKind::Path, "mask", &WRAPPED.replace("VEIL", veil), (1024, 256), 0.02);
 }
