@@ -344,6 +344,15 @@ fn render_description(
     for w in opts.overrides.unused_by(loaded.integrator.kind) {
         display.warn(&w);
     }
+    let kind = loaded.integrator.kind;
+    if loaded.scene.has_media() && !kind.renders_media() {
+        let by: Vec<&str> = IntegratorKind::ALL.iter().filter(|k| k.renders_media()).map(|k| k.name()).collect();
+        display.warn(&format!(
+            "the {} integrator does not render participating media: the scene's media are left out (they are rendered by: {})",
+            kind.name(),
+            by.join(", ")
+        ));
+    }
     let info = &loaded.info;
     for m in &info.meshes {
         let (lo, hi) = (m.bounds.min, m.bounds.max);
@@ -381,7 +390,10 @@ fn render_description(
     );
     let mut settings: RenderSettings = loaded.settings.clone();
     if settings.aovs.has(AovKind::Variance)
-        && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
+        && matches!(
+            loaded.integrator.kind,
+            IntegratorKind::Sppm | IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm
+        )
     {
         // Their pixels are not means of samples: there is no sample variance to give.
         display.warn(&format!(
@@ -530,6 +542,22 @@ fn render_description(
                 stats.samples_per_pixel,
                 sppm.config.photons_per_iter,
                 stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
+                stats.memory_bytes as f64 / 1048576.0
+            ),
+        );
+    }
+    if let Integrator::Vcm(vcm) = &integrator {
+        let n = stats.samples_per_pixel;
+        let last = settings.first_sample.saturating_add(n).saturating_sub(1);
+        say(
+            display,
+            format_args!(
+                "vcm took {n} iterations of {} light paths, {:.1} iterations/s, merge radius {:.3e} to {:.3e}, \
+                 working memory {:.1} MiB",
+                settings.pixels(),
+                n as f64 / stats.wall.as_secs_f64().max(1e-9),
+                vcm.config.radius(settings.first_sample),
+                vcm.config.radius(last),
                 stats.memory_bytes as f64 / 1048576.0
             ),
         );
