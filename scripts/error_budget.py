@@ -3,7 +3,7 @@
 reference (issue 32), so a change to SPPM (or VCM) says which layer it improved.
 
     python3 scripts/error_budget.py SCENE [--integrator sppm] [--time 5 | --spp N]
-        [--width W --height H] [--runs 1] [-- EXTRA CAUSTIC ARGS]
+        [--width W --height H] [--runs 1] [-- MORE ARGUMENTS FOR THE RENDER]
 
 The reference is rendered once per scene, size and reference settings, and cached
 (--cache, default /tmp/caustic-error-budget):
@@ -113,6 +113,12 @@ def main():
     ap.add_argument("--integrator", default="sppm")
     ap.add_argument("--time", type=float, help="seconds per render (equal time)")
     ap.add_argument("--spp", type=int, help="samples per pixel or iterations (equal work)")
+    ap.add_argument(
+        "--cpu",
+        type=float,
+        help="CPU seconds per render (equal CPU time, for a busy machine): a first render of "
+        "--spp samples (default 16) measures the cost, and the render counted takes as many as fit",
+    )
     ap.add_argument("--width", type=int, default=160)
     ap.add_argument("--height", type=int, default=120)
     ap.add_argument("--runs", type=int, default=1)
@@ -123,8 +129,19 @@ def main():
     ap.add_argument("--cache", default="/tmp/caustic-error-budget")
     ap.add_argument("--bin", default=os.environ.get("BIN", "target/release/caustic"))
     ap.add_argument("--label", help="the table's label (default: the integrator)")
-    ap.add_argument("extra", nargs="*", help="more arguments for the render under test (after --)")
-    args = ap.parse_args()
+    argv = sys.argv[1:]
+    extra = argv[argv.index("--") + 1 :] if "--" in argv else []
+    args = ap.parse_args(argv[: len(argv) - len(extra) - (1 if "--" in argv else 0)])
+    args.extra = extra
+    if args.cpu is not None:
+        if args.time is not None:
+            ap.error("give one of --time and --cpu")
+        probe = args.spp or 16
+        args.spp = probe
+        _, cpu, _ = render(args, ["--width", str(args.width), "--height", str(args.height)], args.seed, "/tmp/eb-probe.exr")
+        args.spp = max(1, round(probe * args.cpu / max(cpu, 1e-3)))
+        for f in ["/tmp/eb-probe.exr", *layer_files("/tmp/eb-probe.exr").values()]:
+            os.remove(f)
     if (args.time is None) == (args.spp is None):
         ap.error("give one of --time and --spp")
     if args.ref_photons is None:
@@ -150,7 +167,7 @@ def main():
     mse = {k: float(np.mean(v)) for k, v in se.items()}
     summed = sum(mse.values()) or 1.0
     label = args.label or args.integrator
-    budget = f"{args.time:g} s" if args.time else f"{args.spp} spp"
+    budget = f"{args.time:g} s" if args.time else (f"{args.cpu:g} s CPU" if args.cpu else f"{args.spp} spp")
     load = open("/proc/loadavg").read().split()[0] if os.path.exists("/proc/loadavg") else "?"
     print(
         f"| {os.path.basename(args.scene)} | {label} | {budget} | {'/'.join(work)} | "

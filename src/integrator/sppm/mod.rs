@@ -29,7 +29,7 @@ use crate::film::{Film, Image, Layers};
 use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3};
+use crate::math::{Color, Vec3, luminance};
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::Sampler;
@@ -41,12 +41,17 @@ use rayon::iter::Either;
 use rayon::prelude::*;
 use std::cell::{Cell, RefCell};
 use std::f32::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// SPPM settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SppmConfig {
-    /// Photons emitted per iteration.
+    /// Photons emitted per iteration (the first iteration's when `adaptive_photons`).
     pub photons_per_iter: u64,
+    /// Photons per iteration follow the error budget (`PhotonBudget`), between a sixteenth and
+    /// four times `photons_per_iter`: what SPPM does unless the scene or the command line sets
+    /// the number.
+    pub adaptive_photons: bool,
     /// Search radius every pixel starts with; `None` derives it per pixel (see `initial_radius`).
     pub initial_radius: Option<f32>,
     /// Fraction of new photons kept (Hachisuka 2008): 2/3.
@@ -63,10 +68,20 @@ impl SppmConfig {
     pub fn new(desc: &IntegratorDesc, scene: &Scene, pixels: u64) -> Self {
         SppmConfig {
             photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
+            adaptive_photons: desc.photon.photons_per_iter.is_none(),
             initial_radius: desc.photon.initial_radius,
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
             ray_bias: desc.ray_bias(scene),
+        }
+    }
+
+    /// The most photons an iteration may emit.
+    pub fn max_photons_per_iter(&self) -> u64 {
+        if self.adaptive_photons {
+            self.photons_per_iter.saturating_mul(PhotonBudget::MAX_FACTOR)
+        } else {
+            self.photons_per_iter
         }
     }
 }
@@ -74,6 +89,133 @@ impl SppmConfig {
 /// The SPPM integrator.
 pub struct Sppm {
     pub config: SppmConfig,
+    /// Photons emitted by the last render over all its iterations, and its iterations (for the
+    /// report).
+    emitted: AtomicU64,
+    iterations: AtomicU64,
+}
+
+/// How many photons each iteration emits. With `SppmConfig::adaptive_photons`, the number
+/// follows the error budget: every `WINDOW` iterations it is set to the number that makes the
+/// error after a given time least, given what the last window measured (all of it the same for
+/// any thread count, so the image is too):
+/// - the variance of one iteration's direct light (emitted and directly sampled light, from the
+///   camera pass) around each pixel's running mean, summed over the pixels: d;
+/// - the same of one iteration's photon estimate (the flux gathered within the pixel's radius
+///   over its disc): p, at P photons per iteration; it falls as 1/P, so p = s / P;
+/// - the cost of the camera pass (its rays, and one more per visible point for its gather):
+///   c, and of a photon (its rays: the first, and one per stored bounce): k.
+///
+/// Each pixel's error after time T is about (d + s/P) (c + k P) / T, least at
+/// P = sqrt(s c / (d k)): few photons where direct light's variance dominates (more camera
+/// samples, and so more direct-light samples, per second), many where the photons' does. Costs
+/// are counted in rays, not seconds, to keep the choice independent of the machine's load and
+/// thread count.
+struct PhotonBudget {
+    /// Photons the next iteration emits.
+    photons: u64,
+    adaptive: bool,
+    /// Bounds, and the granularity of the number (a 64th of the configured number).
+    min: u64,
+    max: u64,
+    step: u64,
+    /// Sums over the current window (variances in the fixed point of `fixed_square`).
+    direct: u64,
+    photon: u64,
+    camera_rays: u64,
+    photon_rays: u64,
+    photons_traced: u64,
+    iterations: u32,
+    /// Photons emitted by the run so far.
+    emitted: u64,
+}
+
+impl PhotonBudget {
+    const WINDOW: u32 = 4;
+    const MAX_FACTOR: u64 = 4;
+    const MIN_DIVISOR: u64 = 16;
+
+    fn new(config: &SppmConfig) -> Self {
+        let p = config.photons_per_iter;
+        PhotonBudget {
+            photons: p,
+            adaptive: config.adaptive_photons,
+            min: (p / Self::MIN_DIVISOR).max(1),
+            max: p.saturating_mul(Self::MAX_FACTOR),
+            step: (p / 64).max(1),
+            direct: 0,
+            photon: 0,
+            camera_rays: 0,
+            photon_rays: 0,
+            photons_traced: 0,
+            iterations: 0,
+            emitted: 0,
+        }
+    }
+
+    /// Records an iteration's measurements (`measured`: false for a run's first iteration,
+    /// which has no running means yet) and, at the end of a window, sets the photons of the
+    /// next.
+    fn record(&mut self, measured: bool, m: IterationCosts) {
+        self.emitted += m.photons;
+        if !self.adaptive || !measured {
+            return;
+        }
+        self.direct = self.direct.saturating_add(m.direct);
+        self.photon = self.photon.saturating_add(m.photon);
+        self.camera_rays += m.camera_rays;
+        self.photon_rays += m.photon_rays;
+        self.photons_traced += m.photons;
+        self.iterations += 1;
+        if self.iterations < Self::WINDOW {
+            return;
+        }
+        let (d, p) = (self.direct as f64, self.photon as f64);
+        let mean_photons = self.photons_traced as f64 / f64::from(self.iterations);
+        let c = self.camera_rays as f64 / f64::from(self.iterations);
+        let k = self.photon_rays as f64 / self.photons_traced.max(1) as f64;
+        let best = if d <= 0.0 {
+            f64::INFINITY
+        } else if p <= 0.0 || k <= 0.0 {
+            0.0
+        } else {
+            (p * mean_photons * c / (d * k)).sqrt()
+        };
+        // At most a factor of four per window, in steps of `step`.
+        let current = self.photons as f64;
+        let best = best.clamp(current / 4.0, current * 4.0);
+        let rounded = ((best / self.step as f64).round() as u64).saturating_mul(self.step);
+        self.photons = rounded.clamp(self.min, self.max);
+        *self = PhotonBudget {
+            direct: 0,
+            photon: 0,
+            camera_rays: 0,
+            photon_rays: 0,
+            photons_traced: 0,
+            iterations: 0,
+            ..*self
+        };
+    }
+}
+
+/// What one iteration measured for `PhotonBudget`.
+#[derive(Clone, Copy, Debug, Default)]
+struct IterationCosts {
+    direct: u64,
+    photon: u64,
+    camera_rays: u64,
+    photon_rays: u64,
+    photons: u64,
+}
+
+/// A squared deviation in fixed point (2^-32 units, at most 2^40 per pixel), so that sums over
+/// pixels are integers whose value does not depend on the order of the additions (a sum in
+/// floating point over a parallel reduction would change with the thread count). Saturating
+/// sums of non-negative numbers are also order-independent.
+#[inline]
+fn fixed_square(x: f32) -> u64 {
+    let v = f64::from(x) * f64::from(x) * 4_294_967_296.0;
+    if v.is_finite() { v.min(1_099_511_627_776.0) as u64 } else { 0 }
 }
 
 /// Working memory of an SPPM render of `pixels` pixels and `photons_per_iter` photons per
@@ -196,6 +338,15 @@ struct CameraSample {
 }
 
 impl Sppm {
+    pub fn new(config: SppmConfig) -> Self {
+        Sppm { config, emitted: AtomicU64::new(0), iterations: AtomicU64::new(0) }
+    }
+
+    /// Mean photons per iteration of the last render.
+    pub fn mean_photons_per_iter(&self) -> f64 {
+        self.emitted.load(Ordering::Relaxed) as f64 / self.iterations.load(Ordering::Relaxed).max(1) as f64
+    }
+
     /// Renders iterations up to `settings.spp` (or until the time limit), one camera sample per
     /// pixel per iteration, as a run of its own after the iterations `prior` holds (none for a
     /// new render); the result is `prior` plus this run, each weighted by its iterations.
@@ -214,6 +365,7 @@ impl Sppm {
             grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
+            budget: PhotonBudget::new(&self.config),
         });
         let iterations = Cell::new(0u32);
         // A render-farm shard runs iterations `first_sample..spp` as a progressive run of its
@@ -230,7 +382,7 @@ impl Sppm {
                 let mut state = state.borrow_mut();
                 let start = range.start;
                 for it in range {
-                    if driver.cancelled() || !self.iteration(scene, driver, &mut state, it) {
+                    if driver.cancelled() || !self.iteration(scene, driver, &mut state, it, iterations.get()) {
                         return PassOutcome::Interrupted { taken: it - start };
                     }
                     iterations.set(iterations.get() + 1);
@@ -241,6 +393,8 @@ impl Sppm {
         );
         let state = state.into_inner();
         let it = iterations.get();
+        self.emitted.store(state.budget.emitted, Ordering::Relaxed);
+        self.iterations.store(u64::from(it), Ordering::Relaxed);
         stats.memory_bytes = state.peak_bytes as u64;
         let film = combined(state.film(settings, it));
         stats.samples_per_pixel = film.min_samples();
@@ -248,8 +402,9 @@ impl Sppm {
     }
 
     /// One iteration: visible points, photons, statistics. Returns false when the render was
-    /// cancelled during it, leaving every pixel as it was.
-    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) -> bool {
+    /// cancelled during it, leaving every pixel as it was. `done`: iterations this run has
+    /// completed (the running means the photon budget measures deviations from).
+    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32, done: u32) -> bool {
         let config = &self.config;
         let settings = driver.settings;
         let w = settings.width;
@@ -264,7 +419,8 @@ impl Sppm {
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
         let mut hits = std::mem::take(&mut state.hits);
         let store = trace::Store::Indirect;
-        trace::trace_global_into(scene, config.photons_per_iter, seed, config.ray_bias, store, watch, &mut hits);
+        let photons = state.budget.photons;
+        trace::trace_global_into(scene, photons, seed, config.ray_bias, store, watch, &mut hits);
         if watch.cancelled() {
             return false;
         }
@@ -272,7 +428,8 @@ impl Sppm {
         // and its visible point (a new one gets a radius) into a buffer kept between iterations.
         state.points.resize(n_pixels, None);
         // Ray counts are summed over the pass and recorded once (not an atomic per pixel).
-        let (rays, nonfinite) = state
+        let prior = done.max(1) as f32;
+        let (rays, nonfinite, direct_dev, points) = state
             .pixels
             .par_iter_mut()
             .zip(layers_of(&mut state.layers, n_pixels))
@@ -283,7 +440,11 @@ impl Sppm {
                 let mut stats = RayStats::default();
                 let sample = self.camera_sample(scene, settings, (k as u32 % w, k as u32 / w), it, &mut stats);
                 let mut nonfinite = 0u64;
+                let mut dev = 0;
                 if sample.ld.is_finite() {
+                    if done > 0 {
+                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld) / prior);
+                    }
                     px.ld += sample.ld;
                     if let Some(l) = layers {
                         for (a, b) in l.ld.iter_mut().zip(sample.ld_layers) {
@@ -299,13 +460,13 @@ impl Sppm {
                     px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
                 }
                 *point = sample.point.map(|(v, _)| v);
-                (stats, nonfinite)
+                (stats, nonfinite, dev, u64::from(point.is_some()))
             })
             .reduce(
-                || (RayStats::default(), 0),
-                |(mut a, na), (b, nb)| {
+                || (RayStats::default(), 0, 0, 0),
+                |(mut a, na, da, pa), (b, nb, db, pb)| {
                     a.add(&b);
-                    (a, na + nb)
+                    (a, na + nb, da.saturating_add(db), pa + pb)
                 },
             );
         driver.record(&rays, nonfinite, 0);
@@ -326,20 +487,33 @@ impl Sppm {
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
             + hits.capacity() * std::mem::size_of::<PhotonHit>();
+        let mut photon_dev = 0;
         if cell > 0.0 && !hits.is_empty() {
             state.grid.rebuild(&hits, cell, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
             bytes += grid.memory_bytes();
             let layers = layers_of(&mut state.layers, n_pixels);
-            state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
-                |((px, layers), vp)| {
-                    let Some(v) = vp else { return };
+            photon_dev = state
+                .pixels
+                .par_iter_mut()
+                .zip(layers)
+                .zip(vps.par_iter())
+                .with_min_len(64)
+                .map(|((px, layers), vp)| {
+                    let Some(v) = vp else { return 0 };
                     let (m, phi, phi_caustic) = gather(scene, v, px.r, grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
-                        return;
+                        return 0;
                     }
+                    // This iteration's photon estimate against the running one, both over the
+                    // disc of the current radius.
+                    let dev = if done > 0 {
+                        fixed_square((luminance(total) - luminance(px.tau) / prior) / (PI * px.r * px.r))
+                    } else {
+                        0
+                    };
                     let ratio = px.update(m, total, config.alpha);
                     if let Some(l) = layers {
                         let caustic = v.beta * phi_caustic;
@@ -350,9 +524,22 @@ impl Sppm {
                             *t = (*t + p) * ratio;
                         }
                     }
-                },
-            );
+                    dev
+                })
+                .reduce(|| 0, u64::saturating_add);
         }
+        // The camera pass's cost counts a gather as one ray; a photon's, its first ray and one
+        // for each stored bounce.
+        state.budget.record(
+            done > 0,
+            IterationCosts {
+                direct: direct_dev,
+                photon: photon_dev,
+                camera_rays: rays.total() + points,
+                photon_rays: photons + hits.len() as u64,
+                photons,
+            },
+        );
         state.peak_bytes = state.peak_bytes.max(bytes);
         state.hits = hits;
         driver.record(&RayStats::default(), 0, settings.pixels());
@@ -479,6 +666,7 @@ struct State {
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
     peak_bytes: usize,
+    budget: PhotonBudget,
 }
 
 impl State {
@@ -576,6 +764,57 @@ mod tests {
         assert_eq!((m, phi), (1, Color::ZERO));
         let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
         assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
+    }
+
+    #[test]
+    fn photon_budget_follows_the_variances_and_costs() {
+        let config = SppmConfig {
+            photons_per_iter: 6400,
+            adaptive_photons: true,
+            initial_radius: None,
+            alpha: 2.0 / 3.0,
+            max_depth: 5,
+            ray_bias: 1e-4,
+        };
+        // Windows of iterations measuring direct variance d, photon variance p at the current
+        // photons, camera rays c and two rays a photon: the number goes to sqrt(p P c / (d k)),
+        // at most four times up or down per window.
+        let run = |d: u64, p: u64, c: u64, windows: u32| {
+            let mut b = PhotonBudget::new(&config);
+            // The first iteration measures nothing.
+            b.record(false, IterationCosts { photons: b.photons, ..Default::default() });
+            let mut photons = Vec::new();
+            for _ in 0..windows * PhotonBudget::WINDOW {
+                let n = b.photons;
+                // The photon estimate's variance falls as 1 / photons.
+                let p = p * 6400 / n;
+                let costs = IterationCosts { direct: d, photon: p, camera_rays: c, photon_rays: 2 * n, photons: n };
+                b.record(true, costs);
+                photons.push(b.photons);
+            }
+            (photons, b.emitted)
+        };
+        // Equal variances, camera pass as costly as 3200 photons: P = sqrt(6400 * 6400 / 2).
+        let (p, _) = run(1000, 1000, 6400, 1);
+        assert_eq!(p[..3], [6400; 3]);
+        assert_eq!(p[3], (6400.0 / 2f64.sqrt() / 100.0).round() as u64 * 100);
+        // Direct light's variance 100 times the photons': a tenth, 640, in steps of at most 4 and
+        // rounded to a 64th of the first number.
+        let (p, _) = run(100_000, 1000, 12_800, 3);
+        assert_eq!((p[3], p[7], p[11]), (1600, 600, 600));
+        // No direct variance: up to the most, four times the first number.
+        let (p, emitted) = run(0, 1000, 6400, 2);
+        assert_eq!((p[3], p[7]), (25600, 25600));
+        assert_eq!(emitted, 6400 * 5 + 25600 * 4);
+        // No photon variance: down to the least, a sixteenth.
+        let (p, _) = run(1000, 0, 6400, 2);
+        assert_eq!((p[3], p[7]), (1600, 400));
+        // A fixed number stays fixed.
+        let mut b = PhotonBudget::new(&SppmConfig { adaptive_photons: false, ..config.clone() });
+        for _ in 0..8 {
+            b.record(true, IterationCosts { direct: 1, photon: 1000, camera_rays: 1, photon_rays: 1, photons: 6400 });
+        }
+        assert_eq!(b.photons, 6400);
     }
 
     #[test]
