@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# Equal-time comparison of the path tracer, photon mapping and SPPM on three scenes (a caustic,
-# a glossy and a sky-lit one): each integrator renders for the same wall time, and the RMSE
-# against a long reference says which to pick for which kind of scene (BENCHMARKS.md).
+# Equal-time comparison of the path tracer, photon mapping, SPPM, bidirectional path tracing and
+# VCM on four scenes (a caustic, a glossy, a sky-lit one, and glossy caustics: a caustic seen in
+# a metal floor and light through glass onto a rough plastic table): each integrator renders for
+# the same wall time, and the RMSE against a long reference says which to pick for which kind of
+# scene (BENCHMARKS.md). Run it on a quiet machine (nothing else building, testing or
+# rendering; record the load average), or the figures measure the load.
 #
 #   scripts/equal_time.sh [SECONDS] [OUT_DIR]
+#   INTEGRATORS="bdpt vcm" scripts/equal_time.sh 10     (a subset)
 #
 # References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
-# the path tracer cannot find; the path tracer elsewhere). Needs the OpenEXR Python bindings.
+# the path tracer cannot find; bidirectional path tracing, unbiased, for the glossy caustics of a
+# small area light; the path tracer elsewhere). Needs the OpenEXR Python bindings.
 set -euo pipefail
 T=${1:-10}
 OUT=${2:-/tmp/caustic-equal-time}
@@ -17,7 +22,10 @@ scenes=(
   "caustic|scenes/13-cornell-caustics.toml|--width 128 --height 128|--integrator sppm --spp 1000 --photons-per-iter 100000"
   "glossy|scenes/15-materials.toml|--width 160 --height 120|--integrator path --spp 4096"
   "sky|benches/scenes/sky-lit.toml|--width 160 --height 120|--integrator path --spp 8192"
+  "glossy-caustics|scenes/16-glossy-caustics.toml|--width 160 --height 120|--integrator bdpt --spp 16384"
 )
+INTEGRATORS=${INTEGRATORS:-path photon sppm bdpt vcm}
+printf 'load average before: %s\n\n' "$(cut -d' ' -f1-3 /proc/loadavg)"
 printf '| scene | integrator | samples in %s s | RMSE | mean / reference |\n|---|---|---|---|---|\n' "$T"
 for entry in "${scenes[@]}"; do
   IFS='|' read -r name scene size ref <<<"$entry"
@@ -25,7 +33,7 @@ for entry in "${scenes[@]}"; do
     # shellcheck disable=SC2086
     "$BIN" render "$scene" $size $ref -q -o "$OUT/$name-ref.exr"
   fi
-  for integrator in path photon sppm; do
+  for integrator in $INTEGRATORS; do
     # shellcheck disable=SC2086
     "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
       2>"$OUT/$name-$integrator.log" >/dev/null
@@ -41,3 +49,4 @@ print(f"| {sys.argv[3]} | {sys.argv[4]} | {sys.argv[5]} | {np.sqrt(((a - r) ** 2
 PY
   done
 done
+printf '\nload average after: %s\n' "$(cut -d' ' -f1-3 /proc/loadavg)"

@@ -48,6 +48,10 @@ integrator_kinds! {
     Sppm,
     /// Light tracing (Mitsuba's ptracer): paths from the lights connected to the camera; caustics on diffuse surfaces, nothing seen in mirrors or glass
     Light,
+    /// Bidirectional path tracing: camera and light paths joined by every technique with MIS; caustics on diffuse surfaces, glossy paths
+    Bdpt,
+    /// Vertex connection and merging: bidirectional path tracing plus photon merging under MIS, progressive; caustics everywhere, seen in mirrors too
+    Vcm,
 }
 
 impl IntegratorKind {
@@ -59,6 +63,8 @@ impl IntegratorKind {
             IntegratorKind::Photon => "photon",
             IntegratorKind::Sppm => "sppm",
             IntegratorKind::Light => "light",
+            IntegratorKind::Bdpt => "bdpt",
+            IntegratorKind::Vcm => "vcm",
         }
     }
 }
@@ -181,7 +187,8 @@ pub struct PhotonOptions {
     /// SPPM photons per iteration [default: one per pixel].
     #[arg(long, value_name = "N")]
     pub photons_per_iter: Option<u64>,
-    /// SPPM starting search radius in scene units [default: about two pixel footprints].
+    /// SPPM starting search radius, VCM first merge radius, in scene units [default: about two
+    /// pixel footprints].
     #[arg(long, value_name = "R")]
     pub initial_radius: Option<f32>,
 }
@@ -191,7 +198,7 @@ impl Options {
     /// integrators that do (an option that does nothing should say so, not be accepted
     /// silently).
     pub fn unused_by(&self, kind: IntegratorKind) -> Vec<String> {
-        use IntegratorKind::{Photon, Sppm, Whitted};
+        use IntegratorKind::{Photon, Sppm, Vcm, Whitted};
         let p = &self.photon;
         let given: [(&str, bool, &[IntegratorKind]); 13] = [
             ("--adc-bailout", self.adc_bailout.is_some(), &[Whitted]),
@@ -206,7 +213,7 @@ impl Options {
             ("--caustic-k", p.caustic_k.is_some(), &[Photon]),
             ("--caustic-radius", p.caustic_radius.is_some(), &[Photon]),
             ("--photons-per-iter", p.photons_per_iter.is_some(), &[Sppm]),
-            ("--initial-radius", p.initial_radius.is_some(), &[Sppm]),
+            ("--initial-radius", p.initial_radius.is_some(), &[Sppm, Vcm]),
         ];
         given
             .iter()
@@ -292,8 +299,8 @@ mod tests {
             let toml: Options = toml::from_str(&format!("integrator = \"{}\"", k.name())).unwrap();
             assert_eq!(toml.integrator, Some(k));
         }
-        let e = "vcm".parse::<IntegratorKind>().unwrap_err();
-        assert_eq!(e, "unknown integrator `vcm` (expected whitted, path, photon, sppm or light)");
+        let e = "mlt".parse::<IntegratorKind>().unwrap_err();
+        assert_eq!(e, "unknown integrator `mlt` (expected whitted, path, photon, sppm, light, bdpt or vcm)");
     }
 
     #[test]

@@ -1,12 +1,15 @@
 //! The consistency matrix: every material kind crossed with every light kind in a small scene (a
-//! sphere of the material on a grey floor), rendered by the path tracer, photon mapping and SPPM.
+//! sphere of the material on a grey floor), rendered by the path tracer, photon mapping, SPPM,
+//! the light tracer, bidirectional path tracing and vertex connection and merging.
 //! Photon mapping and SPPM must carry all the light the path tracer carries: their mean
 //! luminance agrees with the path tracer's within 2% (3% for glass, whose caustics make every
 //! integrator noisier), or within the noise the renders measure if that is larger, and so does
 //! each `--layers` layer (the layers follow the same rule in every integrator:
 //! `integrator::layers`). Caustics of point, spot and directional lights through smooth mirrors
 //! and glass cannot be rendered by the path tracer: there photon mapping and SPPM are compared
-//! with each other.
+//! with each other. Bidirectional path tracing and vertex connection and merging agree with the
+//! path tracer in every cell, image and layers, and with SPPM on the caustics the path tracer
+//! cannot render (VCM also where they are seen through mirrors and glass, which merging renders).
 
 mod common;
 
@@ -460,4 +463,86 @@ fn the_light_tracer_agrees_with_the_path_tracer_where_it_sees_the_surface() {
     }
     eprintln!("{table}");
     assert!(failures.is_empty(), "the light tracer disagrees:\n{}", failures.join("\n"));
+}
+
+/// Bidirectional path tracing and vertex connection and merging against the path tracer in every
+/// cell: the image and each layer, with the path tracer's sample count (they start the same
+/// camera rays). Where the path tracer cannot render caustics (point, spot and directional lights
+/// through smooth mirrors and glass), SPPM is the reference: for bidirectional path tracing of
+/// the light reaching the first surface the camera sees (direct, caustic and indirect layers),
+/// its specular layer still being the path tracer's, as neither can connect a caustic seen
+/// through a mirror (L S+ D S+ E needs merging); for VCM of the image and every layer (merging
+/// renders those caustics as SPPM does). VCM converges as its radius shrinks; at these counts the
+/// radius still blurs the caustics of small lights, as SPPM's does.
+#[test]
+fn bidirectional_methods_agree_with_the_path_tracer_and_sppm_everywhere() {
+    let mut failures = Vec::new();
+    let mut table = String::new();
+    for (light, light_toml, plane) in LIGHTS {
+        for (material, material_toml) in MATERIALS {
+            let s = scene_text(material_toml, light_toml, *plane);
+            let delta_light = matches!(*light, "point" | "spot" | "directional" | "directional_plane");
+            let smooth_specular = matches!(*material, "mirror" | "glass" | "diffuse_mirror" | "plastic");
+            let caustic_cell = delta_light && smooth_specular;
+            let glass = matches!(*material, "glass" | "roughdielectric");
+            let slow = if SLOW_CELLS.contains(&(*light, *material)) { SLOW_SPP_FACTOR } else { 1 };
+            let runs = |kind, factor| (11..11 + RUNS).map(|seed| render(&s, kind, seed, factor)).collect::<Vec<_>>();
+            // Bidirectional methods are cheap at this size: the path tracer's larger count.
+            let many = (1, PATH_SPP_FACTOR * slow);
+            let path = runs(IntegratorKind::Path, many);
+            let bdpt = runs(IntegratorKind::Bdpt, many);
+            let (sppm, vcm) = if caustic_cell {
+                (runs(IntegratorKind::Sppm, (1, slow)), runs(IntegratorKind::Vcm, (1, slow)))
+            } else {
+                (Vec::new(), runs(IntegratorKind::Vcm, many))
+            };
+            let tol = if glass { 0.03 } else { 0.02 };
+            let mut row = format!("{light:18} {material:16}");
+            for (method, runs) in [("bdpt", &bdpt), ("vcm", &vcm)] {
+                let mut cells = Vec::new();
+                for (j, layer) in LAYER_NAMES.iter().enumerate() {
+                    // The reference of this layer (see the test's comment).
+                    let by_sppm = caustic_cell && (method == "vcm" || j != 2);
+                    if method == "bdpt" && caustic_cell && j == 0 {
+                        continue;
+                    }
+                    let (name, reference) = if by_sppm { ("sppm", &sppm) } else { ("path", &path) };
+                    let image_ref = reference.iter().map(|r| r[0]).sum::<f64>() / reference.len() as f64;
+                    let col = |v: &[[f64; 5]]| v.iter().map(|r| r[j]).collect::<Vec<_>>();
+                    let (mb, md, err) = difference(&col(runs), &col(reference));
+                    // As in the matrix above, but the error is at least that of unpaired runs:
+                    // the methods share their camera rays, not their light paths, whose noise
+                    // three paired runs can underestimate (as the light tracer's comparison does).
+                    let err = err.max(unpaired_error(&col(runs), &col(reference)));
+                    let floor = if j == 0 { 0.0 } else { tol / 2.0 * image_ref };
+                    let bound = (tol * mb).max(floor).max(4.0 * err);
+                    let mark = if md.abs() <= bound { "" } else { "!" };
+                    if md.abs() > bound {
+                        failures.push(format!(
+                            "{light} x {material}: {method} {layer} {:.5} vs {name} {mb:.5} ({:+.2}%, bound {bound:.5})",
+                            mb + md,
+                            md / mb * 100.0
+                        ));
+                    }
+                    if mb > 0.0 {
+                        let by = if by_sppm { "(s)" } else { "" };
+                        cells.push(format!("{}{:+.1}%{mark}{by}", &layer[..2], md / mb * 100.0));
+                    }
+                }
+                row += &format!(" | {method} {}", cells.join(" "));
+            }
+            table += &format!("{row}\n");
+        }
+    }
+    eprintln!("{table}");
+    assert!(failures.is_empty(), "bidirectional methods disagree:\n{}", failures.join("\n"));
+}
+
+/// The standard error of the difference of the means of two independent sets of runs.
+fn unpaired_error(a: &[f64], b: &[f64]) -> f64 {
+    let var_of_mean = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() as f64 - 1.0) / v.len() as f64
+    };
+    (var_of_mean(a) + var_of_mean(b)).sqrt()
 }

@@ -61,7 +61,13 @@ fn shards(scene: &Path, kind: IntegratorKind, spp: u32, count: u32, dir: &Path) 
 fn merged_shards_are_the_single_render_bit_for_bit() {
     let dir = common::scratch("farm-exact");
     let scene = cornell();
-    for kind in [IntegratorKind::Whitted, IntegratorKind::Path, IntegratorKind::Photon, IntegratorKind::Light] {
+    for kind in [
+        IntegratorKind::Whitted,
+        IntegratorKind::Path,
+        IntegratorKind::Photon,
+        IntegratorKind::Light,
+        IntegratorKind::Bdpt,
+    ] {
         // 5 samples over 7 shards leaves two shards empty; 16 over 3 and 7 split unevenly.
         for spp in [5, 16] {
             let single = dir.join(format!("{}-{spp}.exr", kind.name()));

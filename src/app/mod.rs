@@ -381,7 +381,10 @@ fn render_description(
     );
     let mut settings: RenderSettings = loaded.settings.clone();
     if settings.aovs.has(AovKind::Variance)
-        && matches!(loaded.integrator.kind, IntegratorKind::Sppm | IntegratorKind::Light)
+        && matches!(
+            loaded.integrator.kind,
+            IntegratorKind::Sppm | IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm
+        )
     {
         // Their pixels are not means of samples: there is no sample variance to give.
         display.warn(&format!(
@@ -531,6 +534,22 @@ fn render_description(
                 sppm.mean_photons_per_iter(),
                 if sppm.config.adaptive_photons { " on average (adaptive)" } else { "" },
                 stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
+                stats.memory_bytes as f64 / 1048576.0
+            ),
+        );
+    }
+    if let Integrator::Vcm(vcm) = &integrator {
+        let n = stats.samples_per_pixel;
+        let last = settings.first_sample.saturating_add(n).saturating_sub(1);
+        say(
+            display,
+            format_args!(
+                "vcm took {n} iterations of {} light paths, {:.1} iterations/s, merge radius {:.3e} to {:.3e}, \
+                 working memory {:.1} MiB",
+                settings.pixels(),
+                n as f64 / stats.wall.as_secs_f64().max(1e-9),
+                vcm.config.radius(settings.first_sample),
+                vcm.config.radius(last),
                 stats.memory_bytes as f64 / 1048576.0
             ),
         );

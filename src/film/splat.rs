@@ -133,6 +133,31 @@ impl SplatFilm {
         true
     }
 
+    /// Adds `value` (by layer) to image pixel (`x`, `y`) alone, with no filter: a camera
+    /// sample's own value (bidirectional methods add their camera paths' light here beside the
+    /// light paths' splats, so both are summed exactly in one place). Returns false, adding
+    /// nothing, when the value is not finite.
+    #[inline]
+    pub fn add_pixel(&self, x: u32, y: u32, value: &Layers) -> bool {
+        let total = value[0] + value[1] + value[2] + value[3];
+        if !total.is_finite() {
+            return false;
+        }
+        debug_assert!(x < self.width && y < self.height);
+        let k = y as usize * self.width as usize + x as usize;
+        if self.layers {
+            self.add_rgb(k * 15, total);
+            for (l, c) in value.iter().enumerate() {
+                if *c != Color::ZERO {
+                    self.add_rgb(k * 15 + 3 + l * 3, *c);
+                }
+            }
+        } else {
+            self.add_rgb(k * 3, total);
+        }
+        true
+    }
+
     #[inline]
     fn add_rgb(&self, at: usize, c: Color) {
         for (i, v) in c.to_array().into_iter().enumerate() {

@@ -3,6 +3,7 @@
 //! multi-pass method with its own passes in the same driver. [`Integrator::new`] is the one place
 //! an integrator is made from the scene's description.
 
+pub mod bdpt;
 pub mod camera_walk;
 pub mod layers;
 pub mod light;
@@ -10,12 +11,15 @@ pub mod lighting;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+pub mod vcm;
 pub mod whitted;
 
+pub use bdpt::Bdpt;
 pub use light::LightTracer;
 pub use path::PathTracer;
 pub use photon::PhotonIntegrator;
 pub use sppm::Sppm;
+pub use vcm::Vcm;
 pub use whitted::Whitted;
 
 use crate::film::Film;
@@ -31,6 +35,8 @@ pub enum Integrator {
     Photon(Box<PhotonIntegrator>),
     Sppm(Sppm),
     Light(LightTracer),
+    Bdpt(Bdpt),
+    Vcm(Vcm),
 }
 
 /// The render was stopped (Ctrl-C) while an integrator was being made.
@@ -42,7 +48,12 @@ impl Integrator {
     pub fn preparation_name(&self) -> &'static str {
         match self {
             Integrator::Photon(_) => "photon maps",
-            Integrator::Whitted(_) | Integrator::Path(_) | Integrator::Sppm(_) | Integrator::Light(_) => "set-up",
+            Integrator::Whitted(_)
+            | Integrator::Path(_)
+            | Integrator::Sppm(_)
+            | Integrator::Light(_)
+            | Integrator::Bdpt(_)
+            | Integrator::Vcm(_) => "set-up",
         }
     }
 
@@ -67,7 +78,11 @@ impl Integrator {
             IntegratorKind::Light => {
                 Integrator::Light(LightTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
             }
-            IntegratorKind::Sppm => Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels()))),
+            IntegratorKind::Sppm => {
+                Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels())))
+            }
+            IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
+            IntegratorKind::Vcm => Integrator::Vcm(Vcm::new(desc, scene, settings)),
         })
     }
 
@@ -78,6 +93,8 @@ impl Integrator {
             Integrator::Photon(_) => IntegratorKind::Photon,
             Integrator::Sppm(_) => IntegratorKind::Sppm,
             Integrator::Light(_) => IntegratorKind::Light,
+            Integrator::Bdpt(_) => IntegratorKind::Bdpt,
+            Integrator::Vcm(_) => IntegratorKind::Vcm,
         }
     }
 
@@ -97,8 +114,9 @@ impl Integrator {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        // SPPM's and the light tracer's pixels are not sums of camera samples: their first-hit
-        // AOVs are added afterwards, for the sample indices the render took.
+        // The pixels of SPPM, the light tracer, bidirectional path tracing and VCM are not sums
+        // of camera samples alone: their first-hit AOVs are added afterwards, for the sample
+        // indices the render took.
         let before: Vec<Vec<u32>> = film.tiles.iter().map(|t| t.count.clone()).collect();
         let mut out = match self {
             Integrator::Whitted(i) => return render_rays_from(scene, i, settings, control, film),
@@ -106,6 +124,8 @@ impl Integrator {
             Integrator::Photon(i) => return render_rays_from(scene, i.as_ref(), settings, control, film),
             Integrator::Sppm(i) => i.render(scene, settings, control, film),
             Integrator::Light(i) => i.render(scene, settings, control, film),
+            Integrator::Bdpt(i) => i.render(scene, settings, control, film),
+            Integrator::Vcm(i) => i.render(scene, settings, control, film),
         };
         crate::render::aov::add_first_hits(scene, settings, &mut out.film, &before);
         out
@@ -129,6 +149,8 @@ pub fn plan(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> 
         IntegratorKind::Whitted | IntegratorKind::Path => vec![("render", camera_samples)],
         IntegratorKind::Light => vec![("light", camera_samples)],
         IntegratorKind::Sppm => vec![("sppm", camera_samples)],
+        IntegratorKind::Bdpt => vec![("bdpt", camera_samples)],
+        IntegratorKind::Vcm => vec![("vcm", camera_samples)],
         IntegratorKind::Photon => {
             photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed).plan(scene, camera_samples)
         }
@@ -149,6 +171,8 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
                 + photon::estimated_map_bytes(c.caustic_photons)
         }
         IntegratorKind::Light => light::estimated_bytes(settings.pixels(), settings.layers),
+        IntegratorKind::Bdpt => bdpt::estimated_bytes(settings.pixels(), settings.layers),
+        IntegratorKind::Vcm => vcm::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
             sppm::estimated_bytes(settings.pixels(), c.max_photons_per_iter(), settings.layers)

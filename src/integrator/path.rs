@@ -77,11 +77,19 @@ impl RayIntegrator for PathTracer {
             let u = sampler.next_2d();
             let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
             beta *= s.weight;
+            layer.bounce(s.flags.is_specular());
+            depth += 1;
+            if s.flags.is_null() {
+                // Straight through a mask's transparent part: what the ray meets next is weighed
+                // against the light sample of the last vertex that scattered, whose shadow ray
+                // passes the mask the same way (by its transmittance). Taken as a mirror bounce,
+                // weight 1, that light was counted twice.
+                ray = hit.spawn(s.wi, self.ray_bias);
+                continue;
+            }
             specular_bounce = s.flags.is_specular();
-            layer.bounce(specular_bounce);
             prev_pdf = s.pdf;
             prev_p = hit.p;
-            depth += 1;
             if depth >= 3 {
                 let survive = beta.max_element().min(0.95);
                 if sampler.rng().uniform() >= survive {

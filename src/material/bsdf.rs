@@ -235,6 +235,19 @@ impl<'a> Bsdf<'a> {
         2.0 / (1.0 + (1.0 + alpha2 * tan2).sqrt())
     }
 
+    /// The perturbation's factor for the pair (`wo`, `wi`) in transport `mode`: it belongs to
+    /// the direction light arrives from, `wi` for radiance and `wo` for importance, so that
+    /// `f(wo, wi, Importance) = f(wi, wo, Radiance)` (the adjoint BSDF light paths and photons
+    /// need; with the factor on `wi` in both modes, light tracing a bump-mapped surface read
+    /// +1.5% against the path tracer). Sampling and densities follow the same direction.
+    #[inline]
+    fn perturbation_of(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
+        match mode {
+            Transport::Radiance => self.perturbation(wi),
+            Transport::Importance => self.perturbation(wo),
+        }
+    }
+
     #[inline]
     fn lobes(&self) -> &[Bxdf] {
         self.lobes.as_slice()
@@ -303,7 +316,7 @@ impl<'a> Bsdf<'a> {
                 f += lobe.f(wo_l, wi_l, mode);
             }
         }
-        f * (self.opacity * self.perturbation(wi))
+        f * (self.opacity * self.perturbation_of(wo, wi, mode))
     }
 
     /// `f` and `pdf` of the pair at once (one change of frame, one pass over the lobes, and
@@ -325,7 +338,7 @@ impl<'a> Bsdf<'a> {
                 }
             }
         }
-        let p = self.perturbation(wi);
+        let p = self.perturbation_of(wo, wi, mode);
         let pdf = if total > 0.0 && p != 0.0 { pdf * self.opacity } else { 0.0 };
         (f * (self.opacity * p), pdf)
     }
@@ -352,7 +365,7 @@ impl<'a> Bsdf<'a> {
         let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
-        if !(total > 0.0) || self.perturbation(wi) == 0.0 {
+        if !(total > 0.0) || self.perturbation_of(wo, wi, mode) == 0.0 {
             return 0.0;
         }
         let mut pdf = 0.0;
@@ -362,6 +375,18 @@ impl<'a> Bsdf<'a> {
             }
         }
         pdf * self.opacity
+    }
+
+    /// The reverse of `pdf(wo, wi)`: the density with which this surface, reached from `wi`,
+    /// samples `wo` (bidirectional methods weigh each technique by the densities of both
+    /// subpaths, so each vertex needs the density of the direction the other subpath would have
+    /// sampled). When `wi` is on the viewer's side of the geometric surface (reflection) that is
+    /// `pdf(wi, wo)` of these lobes. `None` when `wi` is across the surface: seen from there the
+    /// surface has other lobes (a dielectric's inverted relative index, a one-sided material's
+    /// back), so the caller asks the BSDF made for `wi` (`Scene::bsdf(hit, wi).pdf(wi, wo)`).
+    #[inline]
+    pub fn pdf_reverse(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<f32> {
+        (wi.dot(self.ng) > 0.0).then(|| self.pdf(wi, wo, mode))
     }
 
     /// Picks a lobe in proportion to its sampling weight and samples it: (the lobe's sample in
@@ -412,7 +437,7 @@ impl<'a> Bsdf<'a> {
         if reflected == s.flags.is_transmission() {
             return None;
         }
-        let p = self.perturbation(s.wi);
+        let p = self.perturbation_of(wo, s.wi, mode);
         if p == 0.0 {
             return None;
         }

@@ -701,7 +701,7 @@ impl State {
 
 /// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
 /// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.
-fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
+pub(crate) fn initial_radius(scene: &Scene, dist: f32, diag: f32) -> f32 {
     let footprint = scene.camera.footprint(dist);
     (2.0 * footprint).clamp(5e-4 * diag, 0.02 * diag)
 }

@@ -1,0 +1,539 @@
+//! Multiple importance sampling weights of bidirectional path tracing and of vertex connection
+//! and merging, computed recursively along each subpath: every vertex carries three partial
+//! sums (dVCM, dVC, dVM) from which the weight of any connection or merge made there follows in
+//! constant time, whatever the path's length. Sources: Georgiev, Křivánek, Davidovič and
+//! Slusallek, "Vertex connection and merging" (SIGGRAPH Asia 2012) and Georgiev's technical
+//! report "Implementing vertex connection and merging" (2012), sec. 4-5 (its eq. 31-55), as
+//! SmallVCM implements them (`src/vertexcm.hxx`).
+//!
+//! Conventions (the report's, with the choices caustic makes):
+//! - `mis(p)` is the power heuristic's p^2, applied to every density and ratio before they are
+//!   multiplied, so products of squares are squares of products. The partial sums are kept in
+//!   f64: squared densities of grazing or far-away connections pass 1e38.
+//! - Densities include the probability of having chosen the light: light paths choose by power
+//!   (`Scene::light_picker`), next-event estimation by `Scene::direct_picker`, so the two
+//!   probabilities differ and each appears where its technique does.
+//! - Solid angle is turned into area with the cosine to the *geometric* normal (pbrt-v4's
+//!   `ConvertDensity`); the throughput keeps the shading normals.
+//! - A delta vertex (mirror, glass) makes the density ratio of its two directions 1 (the
+//!   report's eq. 53-55): any fixed value used by every technique leaves the weights a
+//!   partition of unity.
+//! - Russian roulette is left out of the densities (pbrt-v4 does the same): the weights are
+//!   still a partition of unity, and the throughput keeps the estimate unbiased.
+//! - Camera densities are those of a sample of the whole film (`Camera::pdf_we`, normalised over
+//!   the full film) times `camera_scale` = full-film pixels / light paths per sample index:
+//!   SmallVCM's pixel-area densities over its light-path count.
+//! - Lights at infinity (environment, directional) and an orthographic camera emit parallel
+//!   rays: their first segment has no 1 / distance^2 (the report's sec. 5.1).
+
+/// The power heuristic's exponent 2.
+#[inline(always)]
+pub fn mis(p: f64) -> f64 {
+    p * p
+}
+
+/// Smallest cosine a vertex counts with: a grazing hit would otherwise divide by zero.
+const MIN_COS: f64 = 1e-9;
+
+/// The partial weights a subpath carries to its current vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SubpathMis {
+    /// Weight of techniques that connect or merge at this vertex's predecessor.
+    pub d_vcm: f64,
+    /// Of vertex connections further back.
+    pub d_vc: f64,
+    /// Of vertex merges further back.
+    pub d_vm: f64,
+}
+
+/// The constants of one iteration that tie connections, merges and the camera together.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MisFactors {
+    /// mis(eta) with eta = pi r^2 x light paths: merges weighed against a connection (0 without
+    /// merging: bidirectional path tracing).
+    pub vm: f64,
+    /// mis(1 / eta): a connection weighed against merges (0 without merging).
+    pub vc: f64,
+    /// Full-film pixels over light paths per sample index (see the module header).
+    pub camera_scale: f64,
+}
+
+impl MisFactors {
+    /// Bidirectional path tracing: connections only.
+    pub fn connections_only(camera_scale: f64) -> Self {
+        MisFactors { vm: 0.0, vc: 0.0, camera_scale }
+    }
+
+    /// Vertex connection and merging with merge radius `radius` and `light_paths` light paths
+    /// per iteration (the report's eq. 20 with one connection and `light_paths` merges).
+    pub fn with_merging(radius: f64, light_paths: f64, camera_scale: f64) -> Self {
+        let eta = std::f64::consts::PI * radius * radius * light_paths;
+        MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale }
+    }
+}
+
+impl SubpathMis {
+    /// A light path's start (eq. 31-33 before the first segment, with delta lights as in eq.
+    /// 48-50). `direct_pdf` is the density with which next-event estimation from the first hit
+    /// picks the start (area measure; solid angle for a light at infinity; 1 for a delta light),
+    /// `emission_pdf` that of the emitted ray (position x direction, a delta part counting 1),
+    /// both times their light's choice probability; `cos` is the cosine at the light's surface.
+    pub fn light_start(
+        direct_pdf: f64,
+        emission_pdf: f64,
+        cos: f64,
+        delta: bool,
+        finite: bool,
+        f: &MisFactors,
+    ) -> Self {
+        if !(emission_pdf > 0.0) {
+            return SubpathMis::default();
+        }
+        let d_vc = if delta { 0.0 } else { mis(if finite { cos } else { 1.0 } / emission_pdf) };
+        SubpathMis { d_vcm: mis(direct_pdf / emission_pdf), d_vc, d_vm: d_vc * f.vc }
+    }
+
+    /// A camera path's start: `pdf` is the density of its first direction (solid angle; for an
+    /// orthographic camera the importance, whose first segment then counts no distance), times
+    /// `camera_scale`. 0 (a ray no light path could reach) makes the light-tracing technique
+    /// count for nothing.
+    pub fn camera_start(pdf: f64) -> Self {
+        let d_vcm = if pdf > 0.0 { mis(1.0 / pdf) } else { 0.0 };
+        SubpathMis { d_vcm, d_vc: 0.0, d_vm: 0.0 }
+    }
+
+    /// Completes the start or the last scattering at the vertex the path reached, `dist2` away
+    /// (`None` for the first segment of parallel rays), arriving at cosine `cos` to its
+    /// geometric normal.
+    #[inline]
+    pub fn arrive(self, dist2: Option<f64>, cos: f64) -> Self {
+        let c = mis(cos.abs().max(MIN_COS));
+        let d_vcm = match dist2 {
+            Some(d2) => self.d_vcm * mis(d2),
+            None => self.d_vcm,
+        };
+        SubpathMis { d_vcm: d_vcm / c, d_vc: self.d_vc / c, d_vm: self.d_vm / c }
+    }
+
+    /// Scattering at the current vertex towards a direction at cosine `cos_out` to its
+    /// geometric normal, sampled with density `pdf` (solid angle); `pdf_rev` is the density of
+    /// the opposite sampling (the arriving direction sampled from the new one). A delta bounce
+    /// ignores both densities (see the module header). Eq. 34-36 and 53-55.
+    #[inline]
+    pub fn scatter(self, cos_out: f64, pdf: f64, pdf_rev: f64, delta: bool, f: &MisFactors) -> Self {
+        let cos_out = cos_out.abs();
+        if delta {
+            let c = mis(cos_out);
+            return SubpathMis { d_vcm: 0.0, d_vc: self.d_vc * c, d_vm: self.d_vm * c };
+        }
+        if !(pdf > 0.0) {
+            return SubpathMis::default();
+        }
+        let g = mis(cos_out / pdf);
+        let rev = mis(pdf_rev);
+        SubpathMis {
+            d_vcm: mis(1.0 / pdf),
+            d_vc: g * (self.d_vc * rev + self.d_vcm + f.vm),
+            d_vm: g * (self.d_vm * rev + self.d_vcm * f.vc + 1.0),
+        }
+    }
+}
+
+/// Weight of a camera path that hit an emitter (after `arrive` for a surface, before it for the
+/// environment), the light point having densities `direct_pdf` (next-event estimation from the
+/// previous vertex, area measure or solid angle at infinity) and `emission_pdf`, both with their
+/// choice probabilities. Eq. 42-43. A camera that sees an emitter directly is not weighted
+/// (there is no technique that connects a light point to the camera).
+#[inline]
+pub fn emitter_weight(cam: &SubpathMis, direct_pdf: f64, emission_pdf: f64) -> f64 {
+    let w_camera = mis(direct_pdf) * cam.d_vcm + mis(emission_pdf) * cam.d_vc;
+    1.0 / (1.0 + w_camera)
+}
+
+/// Weight of next-event estimation at a camera vertex (eq. 44-45). `bsdf_pdf` is the density
+/// of the BSDF sampling the light's direction (0 for a delta light), `bsdf_rev_pdf` that of
+/// sampling the camera's direction from the light's; `direct_pdf` is the solid-angle density of
+/// the light sample (times its choice probability; for a delta-position light its squared
+/// distance, for a directional light 1, SmallVCM's conventions), `emission_pdf` the density
+/// of the light emitting towards the vertex (times its choice probability), `cos_camera` and
+/// `cos_light` the cosines at the vertex (geometric normal) and at the light (1 for lights
+/// without a surface).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn light_sample_weight(
+    cam: &SubpathMis,
+    bsdf_pdf: f64,
+    bsdf_rev_pdf: f64,
+    direct_pdf: f64,
+    emission_pdf: f64,
+    cos_camera: f64,
+    cos_light: f64,
+    f: &MisFactors,
+) -> f64 {
+    if !(direct_pdf > 0.0) {
+        return 0.0;
+    }
+    let w_light = mis(bsdf_pdf / direct_pdf);
+    let ratio = emission_pdf * cos_camera.abs() / (direct_pdf * cos_light.abs().max(MIN_COS));
+    let w_camera = mis(ratio) * (f.vm + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// Weight of connecting a camera vertex to a light vertex (eq. 40-41). `camera_pdf` is the
+/// camera vertex's BSDF density of the connection converted to area at the light vertex,
+/// `camera_rev_pdf` (solid angle) its density of the camera path's direction given the
+/// connection; `light_pdf` and `light_rev_pdf` the same at the light vertex.
+#[inline]
+pub fn connection_weight(
+    cam: &SubpathMis,
+    light: &SubpathMis,
+    camera_pdf: f64,
+    camera_rev_pdf: f64,
+    light_pdf: f64,
+    light_rev_pdf: f64,
+    f: &MisFactors,
+) -> f64 {
+    let w_light = mis(camera_pdf) * (f.vm + light.d_vcm + light.d_vc * mis(light_rev_pdf));
+    let w_camera = mis(light_pdf) * (f.vm + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// Weight of connecting a light vertex to the camera (light tracing, eq. 46-47): `camera_pdf`
+/// is the density with which the camera samples the vertex (area measure, times
+/// `camera_scale`), `light_rev_pdf` the vertex's BSDF density of the light path's arriving
+/// direction given the camera's.
+#[inline]
+pub fn camera_connection_weight(light: &SubpathMis, camera_pdf: f64, light_rev_pdf: f64, f: &MisFactors) -> f64 {
+    let w_light = mis(camera_pdf) * (f.vm + light.d_vcm + light.d_vc * mis(light_rev_pdf));
+    1.0 / (w_light + 1.0)
+}
+
+/// Weight of merging a camera vertex with a light vertex (eq. 37-39): `camera_pdf` is the
+/// camera vertex's BSDF density of the light's arriving direction, `camera_rev_pdf` of the
+/// camera path's direction given the light's.
+#[inline]
+pub fn merge_weight(cam: &SubpathMis, light: &SubpathMis, camera_pdf: f64, camera_rev_pdf: f64, f: &MisFactors) -> f64 {
+    let w_light = light.d_vcm * f.vc + light.d_vm * mis(camera_pdf);
+    let w_camera = cam.d_vcm * f.vc + cam.d_vm * mis(camera_rev_pdf);
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+#[cfg(test)]
+mod tests {
+    //! The recursion against the definition: on abstract paths (random densities, cosines and
+    //! distances), every technique's weight computed from the subpaths' partial sums must equal
+    //! its density's square over the sum of all techniques' squared densities, so the weights of
+    //! each path add up to 1.
+
+    use super::*;
+    use crate::sampling::Rng32;
+
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum LightKind {
+        Area,
+        Point,
+        Environment,
+        Directional,
+    }
+
+    /// A path v0 (on the light) .. v_n (the camera) with every density the techniques use.
+    struct Path {
+        n: usize,
+        light: LightKind,
+        orthographic: bool,
+        /// cos at v_i of the edge to v_(i-1) and to v_(i+1) (geometric normal).
+        cos_prev: Vec<f64>,
+        cos_next: Vec<f64>,
+        /// Squared length of edge v_i v_(i+1).
+        d2: Vec<f64>,
+        /// BSDF density at v_i of the direction to v_(i+1) given v_(i-1) (the light path's
+        /// sampling), and of v_(i-1) given v_(i+1) (the camera path's).
+        to_next: Vec<f64>,
+        to_prev: Vec<f64>,
+        delta: Vec<bool>,
+        pick_e: f64,
+        pick_d: f64,
+        /// Emission: position density (area, or the disk's for lights at infinity) and
+        /// direction density (solid angle); next-event density of v0 from v1 (solid angle).
+        pdf_pos: f64,
+        pdf_dir: f64,
+        direct_w: f64,
+        /// The camera's density of its direction to v_(n-1) (importance for orthographic),
+        /// times the camera scale.
+        camera: f64,
+        /// pi r^2 light paths, or None without merging.
+        eta: Option<f64>,
+    }
+
+    impl Path {
+        fn random(rng: &mut Rng32, n: usize, light: LightKind, orthographic: bool, eta: Option<f64>) -> Path {
+            let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform() as f64;
+            let mut p = Path {
+                n,
+                light,
+                orthographic,
+                cos_prev: vec![0.0; n + 1],
+                cos_next: vec![0.0; n + 1],
+                d2: vec![0.0; n + 1],
+                to_next: vec![0.0; n + 1],
+                to_prev: vec![0.0; n + 1],
+                delta: vec![false; n + 1],
+                pick_e: r(0.1, 1.0),
+                pick_d: r(0.1, 1.0),
+                pdf_pos: r(0.1, 3.0),
+                pdf_dir: r(0.05, 2.0),
+                direct_w: r(0.1, 5.0),
+                camera: r(0.1, 20.0),
+                eta,
+            };
+            for i in 0..=n {
+                p.cos_prev[i] = r(0.05, 1.0);
+                p.cos_next[i] = r(0.05, 1.0);
+                p.d2[i] = r(0.1, 10.0);
+                p.to_next[i] = r(0.05, 3.0);
+                p.to_prev[i] = r(0.05, 3.0);
+            }
+            // Some surface vertices are mirrors: one density both ways (see the module header).
+            for i in 1..n {
+                if r(0.0, 1.0) < 0.3 {
+                    p.delta[i] = true;
+                    p.to_prev[i] = p.to_next[i];
+                }
+            }
+            p
+        }
+
+        fn factors(&self) -> MisFactors {
+            match self.eta {
+                Some(eta) => MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale: 1.0 },
+                None => MisFactors::connections_only(1.0),
+            }
+        }
+
+        fn finite_light(&self) -> bool {
+            matches!(self.light, LightKind::Area | LightKind::Point)
+        }
+
+        fn delta_light(&self) -> bool {
+            matches!(self.light, LightKind::Point | LightKind::Directional)
+        }
+
+        /// Area density of v_i sampled from v_(i-1) by the light path.
+        fn fwd(&self, i: usize) -> f64 {
+            if i == 0 {
+                // Position: the choice of the light times its position density (1 for a point;
+                // a direction for lights at infinity, whose own density is counted at v1).
+                return self.pick_e
+                    * match self.light {
+                        LightKind::Area => self.pdf_pos,
+                        LightKind::Point => 1.0,
+                        LightKind::Environment => self.pdf_dir,
+                        LightKind::Directional => 1.0,
+                    };
+            }
+            let pdf_w = if i == 1 {
+                match self.light {
+                    LightKind::Area | LightKind::Point => self.pdf_dir,
+                    // Parallel rays: the disk's area density, projected.
+                    LightKind::Environment | LightKind::Directional => self.pdf_pos,
+                }
+            } else {
+                self.to_next[i - 1]
+            };
+            let g = if i == 1 && !self.finite_light() { 1.0 } else { 1.0 / self.d2[i - 1] };
+            pdf_w * self.cos_prev[i] * g
+        }
+
+        /// Area density of v_i sampled from v_(i+1) by the camera path (v0 by the BSDF).
+        fn rev(&self, i: usize) -> f64 {
+            if i == self.n - 1 {
+                let g = if self.orthographic { 1.0 } else { 1.0 / self.d2[i] };
+                return self.camera * self.cos_next[i] * g;
+            }
+            if i == 0 && !self.finite_light() {
+                return self.to_prev[1];
+            }
+            self.to_prev[i + 1] * self.cos_next[i] / self.d2[i]
+        }
+
+        /// Next-event estimation's density of v0 (area, or solid angle at infinity).
+        fn direct(&self) -> f64 {
+            self.pick_d
+                * match self.light {
+                    LightKind::Area => self.direct_w * self.cos_next[0] / self.d2[0],
+                    LightKind::Environment => self.direct_w,
+                    LightKind::Point | LightKind::Directional => 1.0,
+                }
+        }
+
+        /// The density of technique `s` (light vertices v0 .. v_(s-1), camera vertices v_s ..
+        /// v_n), or None where it cannot make the path.
+        fn connection(&self, s: usize) -> Option<f64> {
+            let n = self.n;
+            if s == 0 && self.delta_light() {
+                return None;
+            }
+            // The two vertices joined must not be delta (v0 and the camera never are).
+            if (s >= 2 && self.delta[s - 1]) || (s >= 1 && s < n && self.delta[s]) {
+                return None;
+            }
+            // With s = 1, v0 comes from next-event estimation instead of the light path.
+            let mut p = if s == 1 { self.direct() } else { 1.0 };
+            for i in 0..s {
+                if !(s == 1 && i == 0) {
+                    p *= self.fwd(i);
+                }
+            }
+            for i in s..n {
+                p *= self.rev(i);
+            }
+            Some(p)
+        }
+
+        /// The density of merging at surface vertex i (light path to v_i, camera path to v_i).
+        fn merge(&self, i: usize) -> Option<f64> {
+            let eta = self.eta?;
+            if self.delta[i] {
+                return None;
+            }
+            let mut p = eta;
+            for j in 0..=i {
+                p *= self.fwd(j);
+            }
+            for j in i..self.n {
+                p *= self.rev(j);
+            }
+            Some(p)
+        }
+
+        fn light_subpath(&self, s: usize) -> SubpathMis {
+            let f = self.factors();
+            let emission = self.pick_e
+                * match self.light {
+                    LightKind::Point => self.pdf_dir,
+                    LightKind::Directional => self.pdf_pos,
+                    LightKind::Area | LightKind::Environment => self.pdf_pos * self.pdf_dir,
+                };
+            let direct = self.direct();
+            let mut m = SubpathMis::light_start(
+                direct,
+                emission,
+                self.cos_next[0],
+                self.delta_light(),
+                self.finite_light(),
+                &f,
+            );
+            m = m.arrive(self.finite_light().then_some(self.d2[0]), self.cos_prev[1]);
+            for i in 1..s - 1 {
+                m = m.scatter(self.cos_next[i], self.to_next[i], self.to_prev[i], self.delta[i], &f);
+                m = m.arrive(Some(self.d2[i]), self.cos_prev[i + 1]);
+            }
+            m
+        }
+
+        /// The camera path's partial sums at v_i (before arriving there when `arrive` is false).
+        fn camera_subpath(&self, i: usize, arrive: bool) -> SubpathMis {
+            let f = self.factors();
+            let n = self.n;
+            let mut m = SubpathMis::camera_start(self.camera);
+            let first = if self.orthographic { None } else { Some(self.d2[n - 1]) };
+            m = m.arrive(first, self.cos_next[n - 1]);
+            for j in (i + 1..n).rev() {
+                m = m.scatter(self.cos_prev[j], self.to_prev[j], self.to_next[j], self.delta[j], &f);
+                if j - 1 > i || arrive {
+                    m = m.arrive(Some(self.d2[j - 1]), self.cos_next[j - 1]);
+                }
+            }
+            m
+        }
+
+        /// (the technique's density, the weight the recursion gives it) for every technique.
+        fn techniques(&self) -> Vec<(String, f64, f64)> {
+            let f = self.factors();
+            let n = self.n;
+            let mut out = Vec::new();
+            for s in 0..=n {
+                let Some(p) = self.connection(s) else { continue };
+                let w = if s == 0 {
+                    // The camera path hits the light.
+                    let emission = self.pick_e * self.pdf_pos * self.pdf_dir;
+                    let direct = self.direct();
+                    let cam = self.camera_subpath(0, self.finite_light());
+                    emitter_weight(&cam, direct, emission)
+                } else if s == 1 {
+                    let cam = self.camera_subpath(1, true);
+                    let (direct_w, emission, cos_light) = match self.light {
+                        LightKind::Area => (self.direct_w, self.pdf_pos * self.pdf_dir, self.cos_next[0]),
+                        LightKind::Point => (self.d2[0], self.pdf_dir, 1.0),
+                        LightKind::Environment => (self.direct_w, self.pdf_pos * self.pdf_dir, 1.0),
+                        LightKind::Directional => (1.0, self.pdf_pos, 1.0),
+                    };
+                    let bsdf = if self.delta_light() { 0.0 } else { self.to_prev[1] };
+                    light_sample_weight(
+                        &cam,
+                        bsdf,
+                        self.to_next[1],
+                        direct_w * self.pick_d,
+                        emission * self.pick_e,
+                        self.cos_prev[1],
+                        cos_light,
+                        &f,
+                    )
+                } else if s == n {
+                    let light = self.light_subpath(n);
+                    let g = if self.orthographic { 1.0 } else { 1.0 / self.d2[n - 1] };
+                    camera_connection_weight(&light, self.camera * self.cos_next[n - 1] * g, self.to_prev[n - 1], &f)
+                } else {
+                    let (y, x) = (s - 1, s);
+                    let light = self.light_subpath(s);
+                    let cam = self.camera_subpath(x, true);
+                    connection_weight(
+                        &cam,
+                        &light,
+                        self.to_prev[x] * self.cos_next[y] / self.d2[y],
+                        self.to_next[x],
+                        self.to_next[y] * self.cos_prev[x] / self.d2[y],
+                        self.to_prev[y],
+                        &f,
+                    )
+                };
+                out.push((format!("s={s}"), p, w));
+            }
+            for i in 1..n {
+                let Some(p) = self.merge(i) else { continue };
+                let light = self.light_subpath(i + 1);
+                let cam = self.camera_subpath(i, true);
+                let w = merge_weight(&cam, &light, self.to_prev[i], self.to_next[i], &f);
+                out.push((format!("merge at v{i}"), p, w));
+            }
+            out
+        }
+    }
+
+    #[test]
+    fn recursive_weights_are_the_power_heuristic_over_every_technique() {
+        let mut rng = Rng32::new(17);
+        let kinds = [LightKind::Area, LightKind::Point, LightKind::Environment, LightKind::Directional];
+        let mut checked = 0;
+        for trial in 0..400 {
+            let n = 2 + trial % 6;
+            let light = kinds[trial / 6 % 4];
+            let orthographic = trial % 5 == 0;
+            let eta = (trial % 3 == 0).then(|| 0.01 + rng.uniform() as f64);
+            let path = Path::random(&mut rng, n, light, orthographic, eta);
+            let t = path.techniques();
+            let total: f64 = t.iter().map(|(_, p, _)| mis(*p)).sum();
+            let sum: f64 = t.iter().map(|(_, _, w)| w).sum();
+            for (name, p, w) in &t {
+                let expected = mis(*p) / total;
+                assert!(
+                    (w - expected).abs() < 1e-9 * (1.0 + expected),
+                    "{light:?} n={n} ortho={orthographic} eta={eta:?}: {name} weight {w} vs {expected} ({t:?})"
+                );
+            }
+            assert!(t.is_empty() || (sum - 1.0).abs() < 1e-9, "{light:?} n={n}: weights sum to {sum}");
+            checked += t.len();
+        }
+        assert!(checked > 1200, "only {checked} techniques checked");
+    }
+}

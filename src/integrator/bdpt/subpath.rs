@@ -1,0 +1,233 @@
+//! The two random walks of bidirectional methods: a light subpath from `Light::sample_le`
+//! through the scene (each vertex with a non-delta part handed to the caller, which connects it
+//! to the camera and keeps it), and a camera subpath that at each vertex gathers what the
+//! techniques of `strategy` bring: the emitter it hits, a light sample, connections to the
+//! light subpath's vertices, and (for vertex merging) whatever the caller's `merge` adds.
+//! Both carry their MIS partial sums (`mis::SubpathMis`) along.
+//!
+//! A mask's transparent part is not a vertex: a walk that passes straight through keeps its
+//! partial sums and measures the next segment from the last real vertex, as shadow rays pass
+//! masks by their transmittance. It counts as a delta bounce for the layers, as in the path
+//! tracer, but not as a bounce of the depth limit.
+
+use super::mis::SubpathMis;
+use super::strategy::{self, CameraVertex, Context, LightVertex};
+use crate::camera::Projection;
+use crate::film::Layers;
+use crate::geometry::Ray;
+use crate::integrator::layers::LayerPath;
+use crate::integrator::lighting::MAX_CROSSINGS;
+use crate::material::bsdf::Bsdf;
+use crate::material::bxdf::Transport;
+use crate::math::Color;
+use crate::render::RayStats;
+use crate::sampling::{Rng32, Sampler};
+
+/// Bounces after which Russian roulette may end a subpath.
+const ROULETTE_DEPTH: u32 = 3;
+
+/// Traces a light subpath with numbers from `rng` and calls `vertex` for each vertex with a
+/// non-delta part (with its BSDF, the numbers and the ray counts), in order from the light.
+/// Vertices up to `ctx.max_depth` bounces are made: the deepest can only be connected to the
+/// camera.
+pub fn trace_light_path<'a>(
+    ctx: &Context<'a>,
+    rng: &mut Rng32,
+    stats: &mut RayStats,
+    mut vertex: impl FnMut(&LightVertex, &Bsdf<'a>, &mut Rng32, &mut RayStats),
+) {
+    let scene = ctx.scene;
+    if ctx.max_depth == 0 {
+        return;
+    }
+    let Some((li, pick_e)) = scene.light_picker.pick(rng.uniform()) else { return };
+    let light = &scene.lights[li];
+    let Some(e) = light.sample_le(rng.uniform2(), rng.uniform2(), scene.textures()) else { return };
+    let mut beta = e.flux / pick_e;
+    if !(beta.max_element() > 0.0) || !beta.is_finite() {
+        return;
+    }
+    let start = beta.max_element();
+    let finite = !light.is_infinite();
+    let pick_d = scene.direct_picker.prob(li) as f64;
+    let emission = (e.pdf_pos * e.pdf_dir) as f64 * pick_e as f64;
+    let cos_light = strategy::emission_cos(light, &e.ray, e.n);
+    let f = &ctx.factors;
+    let mut ray = if finite { e.ray } else { scene.photon_entry(e.ray) };
+    // The partial sums after the last scattering, and where it happened (none yet: the light).
+    let mut mis = SubpathMis::default();
+    let mut last_p = e.ray.o;
+    let mut at_light = true;
+    let (mut depth, mut bounces, mut delta_only, mut crossings) = (0u32, 0u32, true, 0usize);
+    loop {
+        stats.rays += 1;
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { break };
+        let wo = -ray.d;
+        let cos_in = wo.dot(hit.ng) as f64;
+        let arrived = if at_light {
+            // Next-event estimation's density of the light's point is known once the point it
+            // would be sampled from is (a sphere light is sampled by the cone it subtends).
+            let direct = strategy::start_direct_pdf(light, &e.ray, e.n, hit.p) * pick_d;
+            let start = SubpathMis::light_start(direct, emission, cos_light, light.is_delta(), finite, f);
+            start.arrive(finite.then(|| (hit.p - last_p).length_squared() as f64), cos_in)
+        } else {
+            mis.arrive(Some((hit.p - last_p).length_squared() as f64), cos_in)
+        };
+        let bsdf = scene.bsdf(&hit, wo);
+        if bsdf.is_black() {
+            break;
+        }
+        depth += 1;
+        let v = LightVertex { hit, wo, beta, mis: arrived, depth, bounces, delta_only };
+        if bsdf.has_smooth() {
+            vertex(&v, &bsdf, rng, stats);
+        }
+        if depth >= ctx.max_depth {
+            break;
+        }
+        let Some(s) = bsdf.sample(wo, rng.uniform(), rng.uniform2(), Transport::Importance) else { break };
+        bounces += 1;
+        if s.flags.is_null() {
+            // Straight through a mask: no vertex (see the module header).
+            depth -= 1;
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                break;
+            }
+            ray = hit.spawn(ray.d, ctx.ray_bias);
+            continue;
+        }
+        let delta = s.flags.is_specular();
+        let rev = if delta { 0.0 } else { strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Radiance) };
+        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
+        beta *= s.weight * bsdf.shading_normal_correction(wo, s.wi);
+        delta_only &= delta;
+        if depth >= ROULETTE_DEPTH {
+            // Russian roulette on the throughput relative to the light's, as the light tracer.
+            let survive = (beta.max_element() / start).min(0.95);
+            if !(rng.uniform() < survive) {
+                break;
+            }
+            beta /= survive;
+        }
+        if !beta.is_finite() || beta == Color::ZERO {
+            break;
+        }
+        last_p = hit.p;
+        at_light = false;
+        crossings = 0;
+        ray = hit.spawn(s.wi, ctx.ray_bias);
+    }
+}
+
+/// Traces the camera subpath of `ray` (its numbers from `sampler`, which made the ray) and
+/// returns the light its techniques gather, by layer: emitters it hits, a light sample at each
+/// vertex, connections to `light_path` (vertices of one light subpath with their BSDFs in
+/// `light_bsdfs`) and what `merge` adds at each vertex with a non-delta part.
+pub fn trace_camera_path<'a>(
+    ctx: &Context<'a>,
+    sampler: &mut Sampler,
+    ray: Ray,
+    light_path: &[LightVertex],
+    light_bsdfs: &[Bsdf<'a>],
+    stats: &mut RayStats,
+    mut merge: impl FnMut(&CameraVertex<'a, '_>, &mut Layers, &mut RayStats),
+) -> Layers {
+    let scene = ctx.scene;
+    let f = &ctx.factors;
+    let mut layers = [Color::ZERO; 4];
+    let mut mis = SubpathMis::camera_start(strategy::camera_start_pdf(ctx, &ray));
+    let parallel = scene.camera.projection == Projection::Orthographic;
+    let mut ray = ray;
+    let mut beta = Color::ONE;
+    let mut layer = LayerPath::CAMERA;
+    let mut last_p = ray.o;
+    let mut first = true;
+    let (mut depth, mut crossings) = (0u32, 0usize);
+    loop {
+        stats.rays += 1;
+        let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
+            if let Some(env) = scene.environment {
+                let le = scene.lights[env as usize].environment_radiance(ray.d);
+                if le != Color::ZERO {
+                    let w = if depth == 0 {
+                        1.0
+                    } else {
+                        strategy::environment_weight(ctx, env as usize, last_p, ray.d, &mis)
+                    };
+                    layers[layer.emitted()] += beta * le * w as f32;
+                }
+            }
+            break;
+        };
+        let wo = -ray.d;
+        let dist2 = (hit.p - last_p).length_squared();
+        let parallel_ray = first && parallel;
+        let arrived = mis.arrive((!parallel_ray).then_some(dist2 as f64), wo.dot(hit.ng) as f64);
+        depth += 1;
+        if hit.is_emitter() && hit.is_front(ray.d) {
+            let le = scene.emitted(&hit, wo);
+            if le != Color::ZERO {
+                // A camera that sees an emitter directly is the only technique for that path.
+                let w = if depth == 1 {
+                    1.0
+                } else {
+                    strategy::area_light_weight(ctx, &hit, last_p, ray.d, dist2, &arrived)
+                };
+                layers[layer.emitted()] += beta * le * w as f32;
+            }
+        }
+        if depth > ctx.max_depth {
+            break;
+        }
+        let bsdf = scene.bsdf(&hit, wo);
+        if bsdf.has_smooth() {
+            let x = CameraVertex { hit: &hit, bsdf: &bsdf, wo, beta, mis: arrived, depth, layer };
+            let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
+            layers[layer.direct()] += strategy::light_sample(ctx, &x, u_pick, u, stats);
+            for (y, y_bsdf) in light_path.iter().zip(light_bsdfs) {
+                // Light vertices come in order of depth: the rest are deeper still.
+                if y.depth + depth > ctx.max_depth {
+                    break;
+                }
+                if let Some((c, k)) = strategy::connect(ctx, &x, y, y_bsdf, stats) {
+                    layers[k] += c;
+                }
+            }
+            merge(&x, &mut layers, stats);
+        }
+        let (uc, u) = (sampler.next_1d(), sampler.next_2d());
+        let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
+        if s.flags.is_null() {
+            // Straight through a mask: no vertex, a delta bounce for the layers.
+            layer.bounce(true);
+            depth -= 1;
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                break;
+            }
+            ray = hit.spawn(ray.d, ctx.ray_bias);
+            continue;
+        }
+        let delta = s.flags.is_specular();
+        let rev = if delta { 0.0 } else { strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Importance) };
+        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
+        beta *= s.weight;
+        layer.bounce(delta);
+        if depth >= ROULETTE_DEPTH {
+            let survive = beta.max_element().min(0.95);
+            if sampler.rng().uniform() >= survive {
+                break;
+            }
+            beta /= survive;
+        }
+        if !beta.is_finite() || beta == Color::ZERO {
+            break;
+        }
+        last_p = hit.p;
+        first = false;
+        crossings = 0;
+        ray = hit.spawn(s.wi, ctx.ray_bias);
+    }
+    layers
+}

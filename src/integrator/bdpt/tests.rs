@@ -1,0 +1,71 @@
+//! The reverse density every technique's weight reads: at a surface reached from `wi`, the
+//! density of sampling `wo` must be what `strategy::reverse_pdf` computes from the BSDF seen from
+//! `wo` (the BSDF of `wi`'s side for transmission: another relative index, another face).
+
+use super::strategy::reverse_pdf;
+use crate::geometry::Ray;
+use crate::material::bxdf::Transport;
+use crate::math::Vec3;
+use crate::sampling::chi2::{Chi2Config, chi2_directions};
+use crate::scene::Scene;
+
+/// A scene of one quad of material `material` (TOML) in the plane z = 0, facing +z.
+fn quad_of(material: &str) -> Scene {
+    let text = format!(
+        r#"
+[camera]
+eye = [0, 0, 3]
+look_at = [0, 0, 0]
+[materials.m]
+{material}
+[[lights]]
+type = "point"
+position = [0, 0, 2]
+[[objects]]
+type = "quad"
+corner = [-1, -1, 0]
+edge1 = [2, 0, 0]
+edge2 = [0, 2, 0]
+material = "m"
+"#
+    );
+    let mut desc = crate::scene::load_scene_str(&text, "quad.toml", std::path::Path::new(".")).unwrap();
+    desc.apply(&crate::options::Options::default());
+    desc.build().unwrap().scene
+}
+
+#[test]
+fn reverse_densities_are_the_densities_of_sampling_from_the_other_direction() {
+    let materials = [
+        ("roughdielectric", "type = \"roughdielectric\"\nior = 1.5\nalpha = 0.3"),
+        ("roughplastic", "type = \"roughplastic\"\ncolor = [0.3, 0.4, 0.5]\nalpha = 0.2"),
+        ("principled", "type = \"principled\"\ncolor = [0.7, 0.4, 0.3]\nroughness = 0.4\nspec_trans = 0.6"),
+        ("principledthin", "type = \"principledthin\"\ncolor = [0.3, 0.6, 0.3]\nroughness = 0.4\ndiff_trans = 0.8"),
+    ];
+    let arrivals = [
+        Vec3::new(0.3, -0.2, 0.9).normalize(),
+        Vec3::new(-0.5, 0.1, -0.7).normalize(),
+        Vec3::new(0.8, 0.4, 0.3).normalize(),
+    ];
+    let tests = materials.len() * arrivals.len() * 2;
+    for (name, material) in materials {
+        let scene = quad_of(material);
+        let hit = scene.intersect(&Ray::new(Vec3::new(0.1, 0.05, 1.0), -Vec3::Z), f32::INFINITY).unwrap();
+        for wi in arrivals {
+            for mode in [Transport::Radiance, Transport::Importance] {
+                // Light (or importance) arrives from `wi`: the surface seen from there samples
+                // the next direction; its density must be the reverse density of each direction
+                // `wo`, computed as a connection ending at `wo` computes it.
+                let from_wi = scene.bsdf(&hit, wi);
+                let config = Chi2Config { tests, samples: 200_000, ..Chi2Config::with_theta_res(8) };
+                chi2_directions(
+                    &format!("{name} reverse from {wi} ({mode:?})"),
+                    |u, uc| from_wi.sample(wi, uc, u, mode).filter(|s| !s.flags.is_specular()).map(|s| s.wi),
+                    |wo| reverse_pdf(&scene, &hit, &scene.bsdf(&hit, wo), wo, wi, mode),
+                    &config,
+                )
+                .unwrap_or_else(|report| panic!("{report}"));
+            }
+        }
+    }
+}

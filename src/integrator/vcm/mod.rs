@@ -1,0 +1,389 @@
+//! Vertex connection and merging (Georgiev, Křivánek, Davidovič and Slusallek 2012; the same
+//! combination as Hachisuka, Pantaleoni and Jensen's unified path sampling): bidirectional path
+//! tracing (`integrator::bdpt`) plus vertex merging, photon mapping's density estimation seen as
+//! one more technique, all weighted by multiple importance sampling through the partial weights
+//! dVCM, dVC and dVM (`bdpt::mis`, Georgiev's technical report; SmallVCM's `VertexCM`).
+//!
+//! Each iteration (one sample index) runs two passes:
+//! 1. `light_pass`: one light subpath per pixel of the image; each vertex with a non-delta part
+//!    is connected to the camera (splatted) and stored, in path order;
+//! 2. `camera_pass`: each pixel's camera subpath takes every technique of bidirectional path
+//!    tracing with the light subpath of its own index (SmallVCM's pairing) and, at each vertex
+//!    with a non-delta part, merges with every stored vertex within the iteration's radius
+//!    (`grid`, a hashed grid of cells twice the radius), each merge weighted against the
+//!    connections that make the same path.
+//!
+//! The merge radius shrinks as progressive photon mapping's does (Knaus and Zwicker 2011;
+//! SmallVCM): iteration i merges within r_i = r_0 (i + 1)^((alpha - 1) / 2) with alpha = 0.75,
+//! so the bias of merging vanishes while its variance stays bounded. r_0 is `--initial-radius`
+//! or what SPPM starts a pixel with (about two pixel footprints at the first hit, within 0.05%
+//! and 2% of the scene's size), taken at the median of a grid of camera rays: the weights need
+//! one radius per iteration for the whole image.
+//!
+//! An iteration's image is an estimate of its own (camera paths' light and splats, exact
+//! fixed-point sums in the `SplatFilm`), and a render is their mean: iteration i always has
+//! radius r_i and draws its numbers from (seed, i), so images are bit-identical on any thread
+//! count, a checkpoint resumes exactly, and a farm's shards, each taking a block of
+//! iterations, merge into the one-machine image bit for bit (SPPM's shards restart their radii;
+//! these need not, as every iteration knows its own).
+
+mod grid;
+
+use super::bdpt::strategy::{self, Context, LightVertex};
+use super::bdpt::{LightPathBuffer, mis, subpath};
+use crate::film::splat::{DRAIN_PATHS, SplatFilm};
+use crate::film::{Film, Layers};
+use crate::material::bxdf::Transport;
+use crate::math::{Color, Vec2, Vec3};
+use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
+use crate::sampling::{Rng32, hash_seed};
+use crate::scene::Scene;
+use crate::scene::desc::IntegratorDesc;
+use grid::VertexGrid;
+use rayon::prelude::*;
+use std::cell::RefCell;
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Paths traced together by one worker (light paths, or pixels' camera paths).
+const CHUNK: u64 = 256;
+
+/// The stream light subpaths draw from (apart from bidirectional path tracing's).
+const LIGHT_STREAM: u64 = 0x5643_4d4c_4947;
+
+/// Radius reduction of progressive photon mapping (SmallVCM's default).
+pub const DEFAULT_ALPHA: f32 = 0.75;
+
+/// Camera rays per image axis that pick the initial radius.
+const RADIUS_PROBES: u32 = 16;
+
+/// VCM settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VcmConfig {
+    /// Longest path in bounces, as the path tracer's.
+    pub max_depth: u32,
+    /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
+    pub ray_bias: f32,
+    /// Merge radius of the first iteration.
+    pub initial_radius: f32,
+    /// Radius reduction: r_i = r_0 (i + 1)^((alpha - 1) / 2).
+    pub alpha: f32,
+}
+
+impl VcmConfig {
+    /// Settings from the scene's description for `scene` rendered with `settings`.
+    pub fn new(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Self {
+        VcmConfig {
+            max_depth: desc.depth_limit(desc.kind),
+            ray_bias: desc.ray_bias(scene),
+            initial_radius: desc.photon.initial_radius.unwrap_or_else(|| scene_radius(scene, settings)),
+            alpha: DEFAULT_ALPHA,
+        }
+    }
+
+    /// The merge radius of iteration `i` (from 0).
+    pub fn radius(&self, i: u32) -> f32 {
+        self.initial_radius * ((i as f64 + 1.0).powf((self.alpha as f64 - 1.0) / 2.0)) as f32
+    }
+}
+
+/// The initial radius SPPM would give the pixels (`sppm::initial_radius`), at the median over a
+/// grid of camera rays through the image (those that hit something; the scene's 2% cap when
+/// none does).
+fn scene_radius(scene: &Scene, settings: &RenderSettings) -> f32 {
+    let b = scene.bounds();
+    let diag = if b.is_empty() || !b.diagonal().is_finite() { 1.0 } else { b.diagonal() };
+    let mut radii = Vec::new();
+    for j in 0..RADIUS_PROBES {
+        for i in 0..RADIUS_PROBES {
+            let raster = Vec2::new(
+                settings.origin.0 as f32 + (i as f32 + 0.5) / RADIUS_PROBES as f32 * settings.width as f32,
+                settings.origin.1 as f32 + (j as f32 + 0.5) / RADIUS_PROBES as f32 * settings.height as f32,
+            );
+            let ray = scene.camera.generate_ray(raster, Vec2::splat(0.5));
+            if let Some(hit) = scene.intersect(&ray, f32::INFINITY) {
+                radii.push(super::sppm::initial_radius(scene, (hit.p - ray.o).length(), diag));
+            }
+        }
+    }
+    if radii.is_empty() {
+        return 0.02 * diag;
+    }
+    radii.sort_by(f32::total_cmp);
+    radii[radii.len() / 2]
+}
+
+/// The VCM integrator.
+pub struct Vcm {
+    pub config: VcmConfig,
+}
+
+/// Working memory of a VCM render of `pixels` pixels: the light vertices of one iteration (a few
+/// per light path) with their grid, the splat film and the film a pass accumulates into.
+pub fn estimated_bytes(pixels: u64, layers: bool) -> u64 {
+    let per_path = 3 * (std::mem::size_of::<LightVertex>() + 2 * std::mem::size_of::<u32>()) as u64 + 8;
+    super::light::estimated_bytes(pixels, layers) + pixels * per_path
+}
+
+/// One iteration's light subpaths: their vertices in path order, and where each path's end.
+#[derive(Default)]
+struct LightPaths {
+    vertices: Vec<LightVertex>,
+    /// Path k's vertices are `vertices[ends[k - 1]..ends[k]]` (from 0 for the first).
+    ends: Vec<u32>,
+    positions: Vec<Vec3>,
+    grid: VertexGrid,
+    peak_bytes: usize,
+}
+
+impl LightPaths {
+    fn path(&self, k: usize) -> &[LightVertex] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.vertices[start..self.ends[k] as usize]
+    }
+}
+
+impl Vcm {
+    /// Renders iterations up to `settings.spp` (or until the time limit) after those `film`
+    /// holds (from `settings.first_sample`).
+    pub fn render(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        control: &RenderControl,
+        film: Film,
+    ) -> RenderOutput {
+        let first = settings.first_sample.saturating_add(film.min_samples());
+        let splats = SplatFilm::new(settings.width, settings.height, settings.origin, settings.filter, settings.layers);
+        let film = RefCell::new(film);
+        let paths = RefCell::new(LightPaths::default());
+        let mut driver = Driver::new(settings, control, "vcm", "iterations", settings.pixels(), first);
+        let mut stats = driver.run(
+            |driver, range| self.pass(scene, driver, &splats, &mut paths.borrow_mut(), &mut film.borrow_mut(), range),
+            |f| f(&film.borrow()),
+        );
+        let film = film.into_inner();
+        stats.samples_per_pixel = film.min_samples();
+        stats.memory_bytes = paths.borrow().peak_bytes as u64;
+        RenderOutput::from_film(film, stats)
+    }
+
+    /// Runs iterations `range` and adds them to `film`; an interrupted pass keeps the iterations
+    /// it finished.
+    fn pass(
+        &self,
+        scene: &Scene,
+        driver: &Driver,
+        splats: &SplatFilm,
+        paths: &mut LightPaths,
+        film: &mut Film,
+        range: Range<u32>,
+    ) -> PassOutcome {
+        let mut pass = Film::new(film.width, film.height, film.has_layers());
+        let mut done = 0;
+        for it in range.clone() {
+            if !self.iteration(scene, driver, splats, paths, &mut pass, it) {
+                splats.clear();
+                break;
+            }
+            done += 1;
+        }
+        for t in &mut pass.tiles {
+            t.count.iter_mut().for_each(|c| *c = done);
+        }
+        film.add(&pass);
+        if done < range.len() as u32 { PassOutcome::Interrupted { taken: done } } else { PassOutcome::Complete }
+    }
+
+    /// Iteration `it`: light paths, their grid, camera paths; its light is drained into `pass`.
+    /// Returns false, leaving `pass` as it was, when the render was cancelled during it.
+    fn iteration(
+        &self,
+        scene: &Scene,
+        driver: &Driver,
+        splats: &SplatFilm,
+        paths: &mut LightPaths,
+        pass: &mut Film,
+        it: u32,
+    ) -> bool {
+        let settings = driver.settings;
+        let pixels = settings.pixels();
+        let radius = self.config.radius(it);
+        let full = scene.camera.width as f64 * scene.camera.height as f64;
+        let factors = mis::MisFactors::with_merging(radius as f64, pixels as f64, full / pixels.max(1) as f64);
+        let ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
+        // The iteration's sums gather here and join the pass only when it is whole.
+        let mut sums = Film::new(pass.width, pass.height, pass.has_layers());
+        if !self.light_pass(&ctx, driver, splats, paths, &mut sums, it) {
+            return false;
+        }
+        paths.positions.clear();
+        paths.positions.extend(paths.vertices.iter().map(|v| v.hit.p));
+        paths.grid.rebuild(&paths.positions, radius, scene.bounds().min.min(Vec3::ZERO));
+        let bytes = paths.vertices.capacity() * std::mem::size_of::<LightVertex>()
+            + (paths.ends.capacity() + 3 * paths.positions.capacity()) * 4
+            + paths.grid.memory_bytes();
+        paths.peak_bytes = paths.peak_bytes.max(bytes);
+        if !self.camera_pass(&ctx, driver, splats, paths, it, radius) {
+            return false;
+        }
+        splats.drain_into(&mut sums);
+        pass.add(&sums);
+        true
+    }
+
+    /// Traces the light subpaths of iteration `it`, splatting their connections to the camera
+    /// (drained into `sums`) and keeping their vertices in `paths`.
+    fn light_pass<'a>(
+        &self,
+        ctx: &Context<'a>,
+        driver: &Driver,
+        splats: &SplatFilm,
+        paths: &mut LightPaths,
+        sums: &mut Film,
+        it: u32,
+    ) -> bool {
+        let settings = driver.settings;
+        let pixels = settings.pixels();
+        let width = settings.width as u64;
+        let film_width = ctx.scene.camera.width as u64;
+        paths.vertices.clear();
+        paths.ends.clear();
+        let interrupted = AtomicBool::new(false);
+        let mut batch = 0;
+        while batch < pixels {
+            let batch_end = (batch + DRAIN_PATHS).min(pixels);
+            let chunks = (batch_end - batch).div_ceil(CHUNK);
+            // Each chunk's vertices and path lengths, joined in chunk order afterwards.
+            let traced: Vec<(Vec<LightVertex>, Vec<u32>, RayStats, u64)> = (0..chunks)
+                .into_par_iter()
+                .map(|c| {
+                    let mut out = (Vec::new(), Vec::new(), RayStats::default(), 0u64);
+                    if driver.cancelled() {
+                        interrupted.store(true, Ordering::Relaxed);
+                        return out;
+                    }
+                    let (vertices, lengths, stats, bad) = (&mut out.0, &mut out.1, &mut out.2, &mut out.3);
+                    let from = batch + c * CHUNK;
+                    for k in from..(from + CHUNK).min(batch_end) {
+                        let (x, y) = (k % width + settings.origin.0 as u64, k / width + settings.origin.1 as u64);
+                        let seed = hash_seed(&[settings.seed, LIGHT_STREAM, y * film_width + x, it as u64]);
+                        let mut rng = Rng32::new(seed);
+                        let before = vertices.len();
+                        subpath::trace_light_path(ctx, &mut rng, stats, |v, bsdf, rng, stats| {
+                            if let Some((raster, layers)) =
+                                strategy::connect_to_camera(ctx, v, bsdf, rng.uniform2(), stats)
+                                && !splats.add(raster, &layers)
+                            {
+                                *bad += 1;
+                            }
+                            vertices.push(*v);
+                        });
+                        lengths.push((vertices.len() - before) as u32);
+                    }
+                    out
+                })
+                .collect();
+            if interrupted.load(Ordering::Relaxed) {
+                return false;
+            }
+            for (vertices, lengths, stats, bad) in traced {
+                for n in lengths {
+                    let end = paths.ends.last().copied().unwrap_or(0) + n;
+                    paths.ends.push(end);
+                }
+                paths.vertices.extend(vertices);
+                driver.record(&stats, bad, 0);
+            }
+            splats.drain_into(sums);
+            batch = batch_end;
+        }
+        true
+    }
+
+    /// Traces each pixel's camera subpath of iteration `it`, connecting it to the pixel's own
+    /// light path and merging it with every light vertex within `radius`; adds it to its pixel.
+    fn camera_pass(
+        &self,
+        ctx: &Context,
+        driver: &Driver,
+        splats: &SplatFilm,
+        paths: &LightPaths,
+        it: u32,
+        radius: f32,
+    ) -> bool {
+        let settings = driver.settings;
+        let pixels = settings.pixels();
+        let interrupted = AtomicBool::new(false);
+        (0..pixels.div_ceil(CHUNK)).into_par_iter().for_each(|c| {
+            if driver.cancelled() {
+                interrupted.store(true, Ordering::Relaxed);
+                return;
+            }
+            let mut stats = RayStats::default();
+            let mut own = LightPathBuffer::default();
+            let mut bad = 0;
+            let from = c * CHUNK;
+            let to = (from + CHUNK).min(pixels);
+            for k in from..to {
+                let (x, y) = ((k % settings.width as u64) as u32, (k / settings.width as u64) as u32);
+                let (mut sampler, ray, weight) = settings.camera_sample(ctx.scene, x, y, it);
+                // The BSDFs of this pixel's light path, for connections.
+                own.clear();
+                own.vertices.extend_from_slice(paths.path(k as usize));
+                own.bsdfs.extend(own.vertices.iter().map(|v| ctx.scene.bsdf(&v.hit, v.wo)));
+                let mut layers = subpath::trace_camera_path(
+                    ctx,
+                    &mut sampler,
+                    ray,
+                    &own.vertices,
+                    &own.bsdfs,
+                    &mut stats,
+                    |x, layers, _| merge(ctx, x, paths, radius, layers),
+                );
+                if weight != 1.0 {
+                    layers = layers.map(|c| c * weight);
+                }
+                if !splats.add_pixel(x, y, &layers) {
+                    bad += 1;
+                }
+            }
+            driver.record(&stats, bad, to - from);
+        });
+        !interrupted.load(Ordering::Relaxed)
+    }
+}
+
+/// Merges camera vertex `x` with every light vertex within `radius` (the report's eq. 37-39:
+/// each merge weighted against the connections and other merges that make the same path),
+/// adding the estimate by layer to `layers`.
+fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: f32, layers: &mut Layers) {
+    let r2 = radius * radius;
+    let p = x.hit.p;
+    // The density estimate's kernel and the number of light paths.
+    let norm = 1.0 / (std::f32::consts::PI * r2 * paths.ends.len().max(1) as f32);
+    let mut sum = [Color::ZERO; 4];
+    paths.grid.for_each_near(p, |i| {
+        let y = &paths.vertices[i as usize];
+        if (y.hit.p - p).length_squared() > r2 || y.depth + x.depth > ctx.max_depth + 1 {
+            return;
+        }
+        let (f, pdf) = x.bsdf.eval(x.wo, y.wo, Transport::Radiance);
+        if f == Color::ZERO {
+            return;
+        }
+        let rev = strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance);
+        let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, &ctx.factors);
+        sum[y.layer(x.layer, 1)] += f * y.beta * w as f32;
+    });
+    for (l, s) in layers.iter_mut().zip(sum) {
+        *l += x.beta * s * norm;
+    }
+}
+
+impl Vcm {
+    /// Made for `scene` rendered with `settings` from the description `desc`.
+    pub fn new(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Self {
+        Vcm { config: VcmConfig::new(desc, scene, settings) }
+    }
+}

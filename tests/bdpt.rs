@@ -1,0 +1,330 @@
+//! Bidirectional path tracing (`--integrator bdpt`): the furnace's closed forms, a diffuse plane
+//! under a point light against its formula, thin-lens and orthographic cameras and wrapped
+//! materials (bump map, mask) against the path tracer, and the image bit for bit the same on
+//! any thread count with splats. The consistency matrix (`tests/consistency.rs`) compares it
+//! with the path tracer for every material and light.
+
+mod common;
+
+use caustic::app::LoadedScene;
+use caustic::film::Image;
+use caustic::math::luminance;
+use caustic::options::{IntegratorKind, Options};
+
+fn render(s: &LoadedScene, threads: usize) -> caustic::render::RenderOutput {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| s.render())
+}
+
+fn bdpt(text: &str, spp: u32, seed: u64) -> LoadedScene {
+    let o = Options { integrator: Some(IntegratorKind::Bdpt), spp: Some(spp), seed: Some(seed), ..Default::default() };
+    common::scene_with(text, &o)
+}
+
+fn mean(img: &Image) -> f64 {
+    luminance(img.mean()) as f64
+}
+
+/// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen
+/// from its centre: radiance 0.5 from direct light, 1 with all bounces (0.5 / (1 - 0.5)).
+fn furnace(max_depth: u32) -> String {
+    format!(
+        r#"
+[render]
+width = 8
+height = 8
+max_depth = {max_depth}
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, 1]
+fov = 60
+[materials.grey]
+type = "diffuse"
+color = [1, 1, 1]
+kd = 0.5
+[[lights]]
+type = "point"
+position = [0, 0, 0]
+intensity = 3.14159265
+[[objects]]
+type = "sphere"
+radius = 1
+material = "grey"
+"#
+    )
+}
+
+#[test]
+fn furnace_has_radiance_one_with_all_bounces_and_one_half_direct() {
+    let mut s = bdpt(&furnace(200), 64, 1);
+    s.settings.layers = true;
+    let out = render(&s, 2);
+    let (gi, direct) = (mean(&out.image), mean(&out.layers[caustic::film::DIRECT]));
+    assert!((gi - 1.0).abs() < 0.03, "all bounces: {gi}");
+    assert!((direct - 0.5).abs() < 0.015, "direct layer: {direct}");
+    let direct_only = mean(&render(&bdpt(&furnace(1), 64, 2), 2).image);
+    assert!((direct_only - 0.5).abs() < 0.015, "max_depth 1: {direct_only}");
+}
+
+#[test]
+fn a_diffuse_plane_under_a_point_light_has_the_radiance_of_the_formula() {
+    // As the light tracer's test: a Lambertian floor of albedo rho under a point light of
+    // intensity I at height hl, direct light only (light samples and light tracing, weighted),
+    // radiance rho / pi I cos / d^2 averaged over 8 x 8 points of each pixel.
+    let (rho, intensity, hl) = (0.5f64, 8.0f64, 2.0f64);
+    let text = format!(
+        r#"
+[render]
+width = 12
+height = 12
+max_depth = 1
+[camera]
+eye = [0, 6, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+fov = 50
+[materials.floor]
+type = "diffuse"
+color = [{rho}, {rho}, {rho}]
+kd = 1
+[[objects]]
+type = "quad"
+corner = [-50, 0, 50]
+edge1 = [100, 0, 0]
+edge2 = [0, 0, -100]
+material = "floor"
+[[lights]]
+type = "point"
+position = [0, {hl}, 0]
+intensity = {intensity}
+"#
+    );
+    let s = bdpt(&text, 256, 3);
+    let img = render(&s, 2).image;
+    let cam = &s.scene.camera;
+    let mut expected = 0.0;
+    for py in 0..12 {
+        for px in 0..12 {
+            for k in 0..64 {
+                let raster = caustic::math::Vec2::new(
+                    px as f32 + (k % 8) as f32 / 8.0 + 1.0 / 16.0,
+                    py as f32 + (k / 8) as f32 / 8.0 + 1.0 / 16.0,
+                );
+                let ray = cam.generate_ray(raster, caustic::math::Vec2::splat(0.5));
+                let t = -ray.o.y as f64 / ray.d.y as f64;
+                let p = ray.o.as_dvec3() + ray.d.as_dvec3() * t;
+                let to_light = glam::DVec3::new(0.0, hl, 0.0) - p;
+                let d2 = to_light.length_squared();
+                expected += rho / std::f64::consts::PI * intensity * (to_light.y / d2.sqrt()) / d2;
+            }
+        }
+    }
+    expected /= 144.0 * 64.0;
+    let mean = img.pixels.iter().map(|c| c.g() as f64).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean - expected).abs() < 0.005 * expected, "{mean} vs the formula's {expected}");
+}
+
+/// A rough gold sphere and a glass one on a floor under a spot light and an area light, with a
+/// Gaussian pixel filter (whose splats reach neighbouring pixels); `CAMERA` is replaced.
+const SCENE: &str = r#"
+[render]
+width = 32
+height = 24
+max_depth = 6
+filter = { type = "gaussian" }
+
+CAMERA
+
+[materials.floor]
+type = "roughplastic"
+color = [0.5, 0.5, 0.45]
+alpha = 0.3
+
+[materials.gold]
+type = "roughconductor"
+metal = "Au"
+alpha = 0.2
+
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+
+[[objects]]
+type = "quad"
+corner = [-3, 0, 3]
+edge1 = [6, 0, 0]
+edge2 = [0, 0, -6]
+material = "floor"
+
+[[objects]]
+type = "sphere"
+center = [-0.7, 0.5, 0]
+radius = 0.5
+material = "gold"
+
+[[objects]]
+type = "sphere"
+center = [0.7, 0.5, 0]
+radius = 0.5
+material = "glass"
+
+[[lights]]
+type = "spot"
+position = [1.5, 3, 2]
+look_at = [0, 0, 0]
+angle = 40
+falloff = 25
+intensity = 25
+
+[[lights]]
+type = "area"
+corner = [-0.5, 2.5, -0.5]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, 1]
+intensity = 4
+
+[[lights]]
+type = "constant"
+color = [0.2, 0.25, 0.3]
+"#;
+
+const PINHOLE: &str = "[camera]\neye = [0, 1.6, 4.5]\nlook_at = [0, 0.5, 0]\nfov = 45";
+
+fn bits(img: &Image) -> Vec<[u32; 3]> {
+    img.pixels.iter().map(|c| c.to_array().map(f32::to_bits)).collect()
+}
+
+#[test]
+fn the_image_and_its_layers_are_the_same_on_any_thread_count() {
+    let mut s = bdpt(&SCENE.replace("CAMERA", PINHOLE), 4, 5);
+    s.settings.layers = true;
+    let one = render(&s, 1);
+    assert!(mean(&one.image) > 0.0, "nothing rendered");
+    for threads in [2, 8] {
+        let other = render(&s, threads);
+        assert!(bits(&other.image) == bits(&one.image), "{threads} threads differ from one");
+        for (a, b) in one.layers.iter().zip(&other.layers) {
+            assert!(bits(a) == bits(b), "a layer differs on {threads} threads");
+        }
+    }
+}
+
+/// The mean luminance of `text` by `reference` and by
+/// bidirectional path tracing agree within `tol` of the reference's, or four standard errors of
+/// their difference (runs of seeds 1..=4).
+fn agrees_with(reference: IntegratorKind, name: &str, text: &str, (ref_spp, bdpt_spp): (u32, u32), tol: f64) {
+    let runs =
+        |make: &dyn Fn(u64) -> LoadedScene| (1..=4).map(|seed| mean(&render(&make(seed), 2).image)).collect::<Vec<_>>();
+    let reference_scene = |seed| {
+        let o = Options { integrator: Some(reference), spp: Some(ref_spp), seed: Some(seed), ..Default::default() };
+        common::scene_with(text, &o)
+    };
+    let p = runs(&reference_scene);
+    let b = runs(&|seed| bdpt(text, bdpt_spp, seed + 10));
+    let stats = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() as f64 - 1.0);
+        (m, var / v.len() as f64)
+    };
+    let ((mp, vp), (mb, vb)) = (stats(&p), stats(&b));
+    let bound = (tol * mp).max(4.0 * (vp + vb).sqrt());
+    let r = reference.name();
+    eprintln!(
+        "{name}: bdpt {mb:.5} vs {r} {mp:.5} ({:+.2}%, bound {:.2}%)",
+        (mb / mp - 1.0) * 100.0,
+        bound / mp * 100.0
+    );
+    assert!((mb - mp).abs() <= bound, "{name}: bdpt {mb} vs {r} {mp} (bound {bound})");
+}
+
+#[test]
+fn thin_lens_and_orthographic_cameras_agree_with_the_path_tracer() {
+    let lens = "[camera]\neye = [0, 1.6, 4.5]\nlook_at = [0, 0.5, 0]\nfov = 45\nlens_radius = 0.15\nfocal_distance = 4";
+    let ortho = "[camera]\nprojection = \"orthographic\"\neye = [0, 1.6, 4.5]\nlook_at = [0, 0.5, 0]\nview_height = 4";
+    for (name, camera) in [("thin lens", lens), ("orthographic", ortho)] {
+        agrees_with(IntegratorKind::Path, name, &SCENE.replace("CAMERA", camera), (64, 16), 0.02);
+    }
+}
+
+/// A bump-mapped plastic and a normal-mapped metal sphere on a floor under an area light, and
+/// `VEIL`: nothing, or a translucent veil between them and the light.
+const WRAPPED: &str = r#"
+[render]
+width = 24
+height = 20
+max_depth = 8
+[camera]
+eye = [0, 1.6, 4.5]
+look_at = [0, 0.5, 0]
+fov = 45
+[textures.dimples]
+type = "bitmap"
+file = "scenes/textures/dimples.png"
+raw = true
+[textures.hammered]
+type = "bitmap"
+file = "scenes/textures/hammered.png"
+raw = true
+scale = [4, 2]
+[materials.floor]
+type = "diffuse"
+color = [0.6, 0.6, 0.6]
+kd = 1
+[materials.white]
+type = "roughplastic"
+color = 0.8
+alpha = 0.15
+[materials.golf]
+type = "bumpmap"
+material = "white"
+texture = "dimples"
+scale = 0.03
+[materials.silver]
+type = "roughconductor"
+metal = "Ag"
+alpha = 0.1
+[materials.hammered]
+type = "normalmap"
+material = "silver"
+texture = "hammered"
+[materials.orange]
+type = "diffuse"
+color = [0.8, 0.4, 0.1]
+kd = 1
+[materials.veil]
+type = "mask"
+material = "orange"
+opacity = 0.4
+[[objects]]
+type = "quad"
+corner = [-3, 0, 3]
+edge1 = [6, 0, 0]
+edge2 = [0, 0, -6]
+material = "floor"
+[[objects]]
+type = "sphere"
+center = [-0.8, 0.45, 0]
+radius = 0.45
+material = "golf"
+[[objects]]
+type = "sphere"
+center = [0.8, 0.45, 0]
+radius = 0.45
+material = "hammered"
+VEIL
+[[lights]]
+type = "area"
+corner = [-0.5, 2.5, -0.5]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, 1]
+intensity = 10
+"#;
+
+#[test]
+fn bump_maps_normal_maps_and_masks_agree_with_the_path_tracer() {
+    let veil = "[[objects]]\ntype = \"quad\"\ncorner = [-1.5, 1.6, -1]\nedge1 = [3, 0, 0]\nedge2 = [0, 0, 2]\nmaterial = \"veil\"";
+    // The perturbed frames against the path tracer.
+    agrees_with(IntegratorKind::Path, "bump and normal maps", &WRAPPED.replace("VEIL", ""), (1024, 256), 0.02);
+    // Light through the veil's transparent part, which light paths and shadow rays pass alike.
+    agrees_with(IntegratorKind::Path, "mask", &WRAPPED.replace("VEIL", veil), (1024, 256), 0.02);
+}
