@@ -78,9 +78,7 @@ impl Integrator {
             IntegratorKind::Light => {
                 Integrator::Light(LightTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
             }
-            IntegratorKind::Sppm => {
-                Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels())))
-            }
+            IntegratorKind::Sppm => Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels()))),
             IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
             IntegratorKind::Vcm => Integrator::Vcm(Vcm::new(desc, scene, settings)),
         })
