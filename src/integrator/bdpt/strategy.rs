@@ -79,17 +79,24 @@ impl LightVertex {
     /// `joins` vertices where the two subpaths meet (two for a connection, one for a merge or a
     /// connection to the camera, whose state is then `LayerPath::CAMERA`).
     #[inline]
-    pub fn layer(&self, mut camera: LayerPath, joins: u32) -> usize {
-        for _ in 0..joins {
-            camera.bounce(false);
-        }
-        // The light path's own bounces come after the joins: only their number and whether
-        // all were delta count (`LayerPath` has left its vertex x by then).
-        for _ in 0..self.bounces {
-            camera.bounce(self.delta_only);
-        }
-        camera.emitted()
+    pub fn layer(&self, camera: LayerPath, joins: u32) -> usize {
+        light_layer(self.bounces, self.delta_only, camera, joins)
     }
+}
+
+/// `LightVertex::layer` of a vertex after `bounces` scattering events, all delta when
+/// `delta_only`.
+#[inline]
+pub fn light_layer(bounces: u32, delta_only: bool, mut camera: LayerPath, joins: u32) -> usize {
+    for _ in 0..joins {
+        camera.bounce(false);
+    }
+    // The light path's own bounces come after the joins: only their number and whether all
+    // were delta count (`LayerPath` has left its vertex x by then).
+    for _ in 0..bounces {
+        camera.bounce(delta_only);
+    }
+    camera.emitted()
 }
 
 /// A vertex of a camera subpath, as connections and merges see it.

@@ -7,7 +7,11 @@
 //! order that does not depend on the thread count.
 //!
 //! Building it is two passes over the vertices and needs no comparison sort (SPPM's grid sorts
-//! its entries), since every query has the same radius.
+//! its entries), since every query has the same radius. Each entry keeps its vertex's position
+//! beside its index, so a query tests distances on the bucket's contiguous entries and reads
+//! only the vertices within the radius: most of a query's candidates are outside it (a surface
+//! crosses 2 x 2 x 2 cells of width 2r, about ten times the disc of radius r), and reading each
+//! candidate's vertex (scattered, over a hundred bytes) took half of a caustic box's render.
 
 use crate::math::Vec3;
 
@@ -18,9 +22,9 @@ pub struct VertexGrid {
     cell: f32,
     origin: Vec3,
     mask: u64,
-    /// Bucket b holds `indices[starts[b]..starts[b + 1]]`.
+    /// Bucket b holds `entries[starts[b]..starts[b + 1]]`: a vertex's position and index.
     starts: Vec<u32>,
-    indices: Vec<u32>,
+    entries: Vec<(Vec3, u32)>,
 }
 
 #[inline]
@@ -49,11 +53,11 @@ impl VertexGrid {
         }
         // Each bucket's next free slot, from its start: indices go in increasing order.
         let mut next: Vec<u32> = self.starts[..size].to_vec();
-        self.indices.clear();
-        self.indices.resize(n, 0);
+        self.entries.clear();
+        self.entries.resize(n, (Vec3::ZERO, 0));
         for (i, &p) in positions.iter().enumerate() {
             let b = bucket(p);
-            self.indices[next[b] as usize] = i as u32;
+            self.entries[next[b] as usize] = (p, i as u32);
             next[b] += 1;
         }
     }
@@ -64,11 +68,17 @@ impl VertexGrid {
         [c.x.clamp(-1e6, 1e6) as i32, c.y.clamp(-1e6, 1e6) as i32, c.z.clamp(-1e6, 1e6) as i32]
     }
 
-    /// Calls `f(index)` for every vertex whose cell may hold points within the query radius of
-    /// `p` (the caller checks the distance), each once, in a fixed order.
+    /// The vertex index of each slot, in slot order (bucket by bucket).
+    pub fn slots(&self) -> impl Iterator<Item = u32> + '_ {
+        self.entries.iter().map(|e| e.1)
+    }
+
+    /// Calls `f(slot)` for every vertex within the query radius of `p` (squared distance at
+    /// most `r2`, the radius the grid was built for squared), each once, in a fixed order;
+    /// `slots` names its vertex. Data kept by slot is read from consecutive addresses.
     #[inline]
-    pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(u32)) {
-        if self.indices.is_empty() {
+    pub fn for_each_within(&self, p: Vec3, r2: f32, mut f: impl FnMut(usize)) {
+        if self.entries.is_empty() {
             return;
         }
         let r = 0.5 * self.cell;
@@ -87,8 +97,11 @@ impl VertexGrid {
                         seen[n_seen] = b;
                         n_seen += 1;
                     }
-                    for &i in &self.indices[self.starts[b] as usize..self.starts[b + 1] as usize] {
-                        f(i);
+                    let (from, to) = (self.starts[b] as usize, self.starts[b + 1] as usize);
+                    for (slot, &(q, _)) in self.entries[from..to].iter().enumerate() {
+                        if !((q - p).length_squared() > r2) {
+                            f(from + slot);
+                        }
                     }
                 }
             }
@@ -97,7 +110,8 @@ impl VertexGrid {
 
     /// Bytes the grid holds.
     pub fn memory_bytes(&self) -> usize {
-        (self.starts.capacity() + self.indices.capacity()) * std::mem::size_of::<u32>()
+        self.starts.capacity() * std::mem::size_of::<u32>()
+            + self.entries.capacity() * std::mem::size_of::<(Vec3, u32)>()
     }
 }
 
@@ -122,16 +136,15 @@ mod tests {
             } else {
                 Vec3::new(rng.uniform(), rng.uniform(), 0.0) * 0.08
             };
+            let slots: Vec<u32> = grid.slots().collect();
             let mut offered = Vec::new();
-            grid.for_each_near(p, |i| offered.push(i));
-            let mut unique = offered.clone();
-            unique.sort();
-            unique.dedup();
-            assert_eq!(unique.len(), offered.len(), "a point was offered twice");
-            let mut found: Vec<u32> = offered.into_iter().filter(|&i| (points[i as usize] - p).length() <= r).collect();
+            grid.for_each_within(p, r * r, |slot| offered.push(slots[slot]));
+            let mut found = offered.clone();
             found.sort();
+            found.dedup();
+            assert_eq!(found.len(), offered.len(), "a point was offered twice");
             let brute: Vec<u32> =
-                (0..points.len() as u32).filter(|&i| (points[i as usize] - p).length() <= r).collect();
+                (0..points.len() as u32).filter(|&i| (points[i as usize] - p).length_squared() <= r * r).collect();
             assert_eq!(found, brute);
         }
     }

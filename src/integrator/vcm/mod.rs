@@ -121,7 +121,11 @@ pub struct Vcm {
 /// Working memory of a VCM render of `pixels` pixels: the light vertices of one iteration (a few
 /// per light path) with their grid, the splat film and the film a pass accumulates into.
 pub fn estimated_bytes(pixels: u64, layers: bool) -> u64 {
-    let per_path = 3 * (std::mem::size_of::<LightVertex>() + 2 * std::mem::size_of::<u32>()) as u64 + 8;
+    // About three stored vertices per path, each with its position, its grid entry (position
+    // and index), up to two bucket starts (buckets are a power of two at least the count) and
+    // its merge record.
+    let per_vertex = std::mem::size_of::<LightVertex>() + 12 + 16 + 8 + std::mem::size_of::<MergeVertex>();
+    let per_path = 3 * per_vertex as u64 + 8;
     super::light::estimated_bytes(pixels, layers) + pixels * per_path
 }
 
@@ -133,6 +137,8 @@ struct LightPaths {
     ends: Vec<u32>,
     positions: Vec<Vec3>,
     grid: VertexGrid,
+    /// What a merge reads of each vertex, by grid slot.
+    merges: Vec<MergeVertex>,
     peak_bytes: usize,
 }
 
@@ -220,9 +226,12 @@ impl Vcm {
         paths.positions.clear();
         paths.positions.extend(paths.vertices.iter().map(|v| v.hit.p));
         paths.grid.rebuild(&paths.positions, radius, scene.bounds().min.min(Vec3::ZERO));
+        paths.merges.clear();
+        paths.merges.extend(paths.grid.slots().map(|i| MergeVertex::of(&paths.vertices[i as usize])));
         let bytes = paths.vertices.capacity() * std::mem::size_of::<LightVertex>()
             + (paths.ends.capacity() + 3 * paths.positions.capacity()) * 4
-            + paths.grid.memory_bytes();
+            + paths.grid.memory_bytes()
+            + paths.merges.capacity() * std::mem::size_of::<MergeVertex>();
         paths.peak_bytes = paths.peak_bytes.max(bytes);
         if !self.camera_pass(&ctx, driver, splats, paths, it, radius) {
             return false;
@@ -354,6 +363,25 @@ impl Vcm {
     }
 }
 
+/// What a merge reads of a light vertex (`LightVertex`'s fields of the same names), kept in the
+/// grid's slot order: the vertices a query finds lie together in memory, where reading each from
+/// the path-ordered vertices was a cache miss per vertex and half of a caustic box's render.
+#[derive(Clone, Copy, Debug)]
+struct MergeVertex {
+    wo: Vec3,
+    beta: Color,
+    mis: mis::SubpathMis,
+    depth: u32,
+    bounces: u32,
+    delta_only: bool,
+}
+
+impl MergeVertex {
+    fn of(v: &LightVertex) -> Self {
+        MergeVertex { wo: v.wo, beta: v.beta, mis: v.mis, depth: v.depth, bounces: v.bounces, delta_only: v.delta_only }
+    }
+}
+
 /// Merges camera vertex `x` with every light vertex within `radius` (the report's eq. 37-39:
 /// each merge weighted against the connections and other merges that make the same path),
 /// adding the estimate by layer to `layers`.
@@ -363,9 +391,9 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
     // The density estimate's kernel and the number of light paths.
     let norm = 1.0 / (std::f32::consts::PI * r2 * paths.ends.len().max(1) as f32);
     let mut sum = [Color::ZERO; 4];
-    paths.grid.for_each_near(p, |i| {
-        let y = &paths.vertices[i as usize];
-        if (y.hit.p - p).length_squared() > r2 || y.depth + x.depth > ctx.max_depth + 1 {
+    paths.grid.for_each_within(p, r2, |slot| {
+        let y = &paths.merges[slot];
+        if y.depth + x.depth > ctx.max_depth + 1 {
             return;
         }
         let (f, pdf) = x.bsdf.eval(x.wo, y.wo, Transport::Radiance);
@@ -374,7 +402,7 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
         }
         let rev = strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance);
         let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, &ctx.factors);
-        sum[y.layer(x.layer, 1)] += f * y.beta * w as f32;
+        sum[strategy::light_layer(y.bounces, y.delta_only, x.layer, 1)] += f * y.beta * w as f32;
     });
     for (l, s) in layers.iter_mut().zip(sum) {
         *l += x.beta * s * norm;
