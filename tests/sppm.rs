@@ -11,22 +11,33 @@ use caustic::options::{IntegratorKind, Options};
 use caustic::render::{RenderControl, RenderStats};
 
 fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) {
+    let (image, stats, _) = sppm_with(s, iterations, photons, false);
+    (image, stats)
+}
+
+/// An SPPM render starting at `photons` per iteration, by SPPM's default policy (adaptive
+/// photons, indirect light over a wider disc) or the classic algorithm; also returns the mean
+/// photons per iteration.
+fn sppm_with(s: &LoadedScene, iterations: u32, photons: u64, adaptive: bool) -> (Image, RenderStats, f64) {
     let mut settings = s.settings.clone();
     settings.spp = iterations;
     let config = SppmConfig {
         photons_per_iter: photons,
+        adaptive_photons: adaptive,
+        indirect_radius_factor: if adaptive { caustic::integrator::sppm::INDIRECT_RADIUS_FACTOR } else { 1.0 },
         initial_radius: None,
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
         ray_bias: common::bias(s),
     };
-    let out = Sppm { config }.render(
+    let sppm = Sppm::new(config);
+    let out = sppm.render(
         &s.scene,
         &settings,
         &RenderControl::uncancelled(),
         caustic::film::Film::new(settings.width, settings.height, settings.layers),
     );
-    (out.image, out.stats)
+    (out.image, out.stats, sppm.mean_photons_per_iter())
 }
 
 #[test]
@@ -41,6 +52,34 @@ fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
     let (late, _) = sppm(&s, 256, 20_000);
     let (e_early, e_late) = (early.rmse(&reference), late.rmse(&reference));
     // 16 times the iterations: the error must fall clearly (measured: about 0.09 -> 0.01).
+    assert!(e_late < 0.5 * e_early, "RMSE after 16 iterations {e_early}, after 256 {e_late}");
+    let (l_ref, l) = (luminance(reference.mean()), luminance(late.mean()));
+    assert!((l - l_ref).abs() < 0.01 * l_ref, "mean luminance {l} vs path tracer {l_ref}");
+}
+
+#[test]
+fn default_policy_converges_to_the_path_tracer_and_does_not_depend_on_threads() {
+    let size = Options { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
+    let reference = {
+        let r = common::bundled("11-cornell-area.toml", &Options { spp: Some(2048), ..size.clone() });
+        common::render_with(&r, &common::path_tracer(&r, 12))
+    };
+    let s = common::bundled("11-cornell-area.toml", &size);
+    let pixels = 48 * 48;
+    let on = |threads: usize, iterations: u32| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| sppm_with(&s, iterations, pixels, true))
+    };
+    let (one, _, photons_one) = on(1, 24);
+    let (three, _, photons_three) = on(3, 24);
+    assert!(one.pixels == three.pixels, "1 and 3 threads differ");
+    assert_eq!(photons_one, photons_three);
+    // The number moved from the first iteration's (this box's direct light, an area light's
+    // soft shadows, is most of its variance: fewer photons).
+    assert!(photons_one != pixels as f64, "photons per iteration stayed at {photons_one}");
+    let (early, _, _) = on(2, 16);
+    let (late, _, _) = on(2, 256);
+    let (e_early, e_late) = (early.rmse(&reference), late.rmse(&reference));
     assert!(e_late < 0.5 * e_early, "RMSE after 16 iterations {e_early}, after 256 {e_late}");
     let (l_ref, l) = (luminance(reference.mean()), luminance(late.mean()));
     assert!((l - l_ref).abs() < 0.01 * l_ref, "mean luminance {l} vs path tracer {l_ref}");

@@ -88,9 +88,7 @@ impl Integrator {
             IntegratorKind::Light => {
                 Integrator::Light(LightTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
             }
-            IntegratorKind::Sppm => {
-                Integrator::Sppm(Sppm { config: sppm::SppmConfig::new(desc, scene, settings.pixels()) })
-            }
+            IntegratorKind::Sppm => Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels()))),
             IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
             IntegratorKind::Vcm => Integrator::Vcm(Vcm::new(desc, scene, settings)),
         })
@@ -187,7 +185,7 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
         IntegratorKind::Vcm => vcm::estimated_bytes(settings.pixels(), settings.layers),
         IntegratorKind::Sppm => {
             let c = sppm::SppmConfig::new(desc, scene, settings.pixels());
-            sppm::estimated_bytes(settings.pixels(), c.photons_per_iter, settings.layers)
+            sppm::estimated_bytes(settings.pixels(), c.max_photons_per_iter(), settings.layers)
         }
     }
 }

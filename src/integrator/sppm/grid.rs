@@ -25,6 +25,26 @@ fn cell_key(c: [i32; 3]) -> u64 {
     m(c[0]) | m(c[1]) << 21 | m(c[2]) << 42
 }
 
+/// `v.clamp(-1e6, 1e6).floor() as i32` without a call to the library's `floorf` (the build's
+/// target has no rounding instruction): the same integer for every value, NaN included (0).
+#[inline(always)]
+fn floor_clamped(v: f32) -> i32 {
+    let v = v.clamp(-1e6, 1e6);
+    let t = v as i32;
+    t - i32::from((t as f32) > v)
+}
+
+/// Inserts `b` into the sorted first `n` entries of `list`, keeping them sorted.
+#[inline(always)]
+fn insert_sorted(list: &mut [u32; 8], n: usize, b: u32) {
+    let mut k = n;
+    while k > 0 && list[k - 1] > b {
+        list[k] = list[k - 1];
+        k -= 1;
+    }
+    list[k] = b;
+}
+
 impl PhotonGrid {
     pub(super) fn build(hits: &[PhotonHit], cell: f32, origin: Vec3) -> Self {
         let mut grid = PhotonGrid { cell, origin, mask: 0, starts: Vec::new(), entries: Vec::new() };
@@ -70,8 +90,8 @@ impl PhotonGrid {
 
     #[inline]
     fn coords(p: Vec3, origin: Vec3, cell: f32) -> [i32; 3] {
-        let c = ((p - origin) / cell).floor();
-        [c.x.clamp(-1e6, 1e6) as i32, c.y.clamp(-1e6, 1e6) as i32, c.z.clamp(-1e6, 1e6) as i32]
+        let c = (p - origin) / cell;
+        [floor_clamped(c.x), floor_clamped(c.y), floor_clamped(c.z)]
     }
 
     /// Calls `f(photon index)` for every photon within distance `r` of `p` (at most `r`), each
@@ -88,26 +108,37 @@ impl PhotonGrid {
         let r2 = r * r;
         let span = |a: usize| (i64::from(hi[a]) - i64::from(lo[a]) + 1) as usize;
         let bucket = |c: [i32; 3]| (crate::sampling::mix64(cell_key(c)) & self.mask) as usize;
-        if span(0) * span(1) * span(2) <= MAX_BUCKETS {
-            let mut buckets = [0usize; MAX_BUCKETS];
+        let cells = span(0) * span(1) * span(2);
+        if cells <= 8 {
+            // The usual query (cells twice the mean radius): at most two cells a side, their
+            // buckets sorted by insertion into a small array that needs no clearing.
+            let mut buckets = [0u32; 8];
             let mut n = 0;
             for x in lo[0]..=hi[0] {
                 for y in lo[1]..=hi[1] {
                     for z in lo[2]..=hi[2] {
-                        buckets[n] = bucket([x, y, z]);
+                        insert_sorted(&mut buckets, n, bucket([x, y, z]) as u32);
+                        n += 1;
+                    }
+                }
+            }
+            self.scan_buckets(&buckets[..n], p, r2, &mut f);
+            return;
+        }
+        if cells <= MAX_BUCKETS {
+            let mut buckets = [0u32; MAX_BUCKETS];
+            let mut n = 0;
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets[n] = bucket([x, y, z]) as u32;
                         n += 1;
                     }
                 }
             }
             let buckets = &mut buckets[..n];
             buckets.sort_unstable();
-            let mut last = usize::MAX;
-            for &b in buckets.iter() {
-                if b != last {
-                    self.scan(b, p, r2, |_, i| f(i));
-                    last = b;
-                }
-            }
+            self.scan_buckets(buckets, p, r2, &mut f);
             return;
         }
         for x in lo[0]..=hi[0] {
@@ -119,6 +150,18 @@ impl PhotonGrid {
                         }
                     });
                 }
+            }
+        }
+    }
+
+    /// Scans the buckets of a sorted list (repeats once).
+    #[inline(always)]
+    fn scan_buckets(&self, buckets: &[u32], p: Vec3, r2: f32, f: &mut impl FnMut(u32)) {
+        let mut last = u32::MAX;
+        for &b in buckets {
+            if b != last {
+                self.scan(b as usize, p, r2, |_, i| f(i));
+                last = b;
             }
         }
     }
@@ -139,6 +182,24 @@ impl PhotonGrid {
 mod tests {
     use super::*;
     use crate::math::Color;
+
+    #[test]
+    fn floor_clamped_is_the_library_floor() {
+        let floor = |v: f32| v.floor().clamp(-1e6, 1e6) as i32;
+        let mut rng = crate::sampling::Rng32::new(7);
+        let special = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1e6, -1e6, 1e6 + 64.0, -1e6 - 64.0, 3e9, -3e9];
+        let more = [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, f32::MIN_POSITIVE, -f32::MIN_POSITIVE];
+        let random = (0..100_000).map(|k| (rng.uniform() - 0.5) * 10f32.powi(k % 8));
+        for v in special.into_iter().chain(more).chain(random) {
+            assert_eq!(floor_clamped(v), floor(v), "{v}");
+        }
+        // Just below an integer and at it.
+        for k in -1000..1000 {
+            let v = k as f32;
+            assert_eq!(floor_clamped(v), k);
+            assert_eq!(floor_clamped(v - v.abs().max(1.0) * f32::EPSILON), k - 1);
+        }
+    }
 
     #[test]
     fn grid_finds_each_nearby_photon_once() {

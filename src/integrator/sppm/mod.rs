@@ -12,6 +12,11 @@
 //! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
 //!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
 //!
+//! By default (no `photons_per_iter` given: docs/scene-format.md, "What SPPM does by default")
+//! the photons per iteration follow the measured error budget (`PhotonBudget`), and photons of
+//! indirect light are gathered over a disc `INDIRECT_RADIUS_FACTOR` times wider, each weighted
+//! down by its area (`gather`).
+//!
 //! Pixels query the photons (rather than photons the pixels), so every pixel sums its photons in
 //! a fixed order and the image is the same for any thread count. Memory is the per-pixel state
 //! plus one iteration's visible points and photons, whatever the number of iterations.
@@ -30,7 +35,7 @@ use crate::film::{Film, Image, Layers};
 use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3};
+use crate::math::{Color, Vec3, luminance};
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::Sampler;
@@ -42,12 +47,21 @@ use rayon::iter::Either;
 use rayon::prelude::*;
 use std::cell::{Cell, RefCell};
 use std::f32::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// SPPM settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SppmConfig {
-    /// Photons emitted per iteration.
+    /// Photons emitted per iteration (the first iteration's when `adaptive_photons`).
     pub photons_per_iter: u64,
+    /// Photons per iteration follow the error budget (`PhotonBudget`), between a sixteenth and
+    /// four times `photons_per_iter`: what SPPM does unless the scene or the command line sets
+    /// the number.
+    pub adaptive_photons: bool,
+    /// Photons that did not come only through mirrors and glass (indirect light, smooth) are
+    /// gathered within this many times the pixel's radius, each weighing the inverse square of
+    /// it (`gather`); 1 gathers every photon within the radius.
+    pub indirect_radius_factor: f32,
     /// Search radius every pixel starts with; `None` derives it per pixel (see `initial_radius`).
     pub initial_radius: Option<f32>,
     /// Fraction of new photons kept (Hachisuka 2008): 2/3.
@@ -64,17 +78,159 @@ impl SppmConfig {
     pub fn new(desc: &IntegratorDesc, scene: &Scene, pixels: u64) -> Self {
         SppmConfig {
             photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
+            adaptive_photons: desc.photon.photons_per_iter.is_none(),
+            indirect_radius_factor: if desc.photon.photons_per_iter.is_none() { INDIRECT_RADIUS_FACTOR } else { 1.0 },
             initial_radius: desc.photon.initial_radius,
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
             ray_bias: desc.ray_bias(scene),
         }
     }
+
+    /// The most photons an iteration may emit.
+    pub fn max_photons_per_iter(&self) -> u64 {
+        if self.adaptive_photons {
+            self.photons_per_iter.saturating_mul(PhotonBudget::MAX_FACTOR)
+        } else {
+            self.photons_per_iter
+        }
+    }
 }
+
+/// The indirect radius factor of SPPM's default policy (scene-format.md, "What SPPM does by
+/// default"; BENCHMARKS.md has the measurement that chose it).
+pub const INDIRECT_RADIUS_FACTOR: f32 = 3.0;
 
 /// The SPPM integrator.
 pub struct Sppm {
     pub config: SppmConfig,
+    /// Photons emitted by the last render over all its iterations, and its iterations (for the
+    /// report).
+    emitted: AtomicU64,
+    iterations: AtomicU64,
+}
+
+/// How many photons each iteration emits. With `SppmConfig::adaptive_photons`, the number
+/// follows the error budget: every `WINDOW` iterations it is set to the number that makes the
+/// error after a given time least, given what the last window measured (all of it the same for
+/// any thread count, so the image is too):
+/// - the variance of one iteration's direct light (emitted and directly sampled light, from the
+///   camera pass) around each pixel's running mean, summed over the pixels: d;
+/// - the same of one iteration's photon estimate (the flux gathered within the pixel's radius
+///   over its disc): p, at P photons per iteration; it falls as 1/P, so p = s / P;
+/// - the cost of the camera pass (its rays, and one more per visible point for its gather):
+///   c, and of a photon (its rays: the first, and one per stored bounce): k.
+///
+/// Each pixel's error after time T is about (d + s/P) (c + k P) / T, least at
+/// P = sqrt(s c / (d k)): few photons where direct light's variance dominates (more camera
+/// samples, and so more direct-light samples, per second), many where the photons' does. Costs
+/// are counted in rays, not seconds, to keep the choice independent of the machine's load and
+/// thread count.
+struct PhotonBudget {
+    /// Photons the next iteration emits.
+    photons: u64,
+    adaptive: bool,
+    /// Bounds, and the granularity of the number (a 64th of the configured number).
+    min: u64,
+    max: u64,
+    step: u64,
+    /// Sums over the current window (variances in the fixed point of `fixed_square`).
+    direct: u64,
+    photon: u64,
+    camera_rays: u64,
+    photon_rays: u64,
+    photons_traced: u64,
+    iterations: u32,
+    /// Photons emitted by the run so far.
+    emitted: u64,
+}
+
+impl PhotonBudget {
+    const WINDOW: u32 = 4;
+    const MAX_FACTOR: u64 = 4;
+    const MIN_DIVISOR: u64 = 16;
+
+    fn new(config: &SppmConfig) -> Self {
+        let p = config.photons_per_iter;
+        PhotonBudget {
+            photons: p,
+            adaptive: config.adaptive_photons,
+            min: (p / Self::MIN_DIVISOR).max(1),
+            max: p.saturating_mul(Self::MAX_FACTOR),
+            step: (p / 64).max(1),
+            direct: 0,
+            photon: 0,
+            camera_rays: 0,
+            photon_rays: 0,
+            photons_traced: 0,
+            iterations: 0,
+            emitted: 0,
+        }
+    }
+
+    /// Records an iteration's measurements (`measured`: false for a run's first iteration,
+    /// which has no running means yet) and, at the end of a window, sets the photons of the
+    /// next.
+    fn record(&mut self, measured: bool, m: IterationCosts) {
+        self.emitted += m.photons;
+        if !self.adaptive || !measured {
+            return;
+        }
+        self.direct = self.direct.saturating_add(m.direct);
+        self.photon = self.photon.saturating_add(m.photon);
+        self.camera_rays += m.camera_rays;
+        self.photon_rays += m.photon_rays;
+        self.photons_traced += m.photons;
+        self.iterations += 1;
+        if self.iterations < Self::WINDOW {
+            return;
+        }
+        let (d, p) = (self.direct as f64, self.photon as f64);
+        let mean_photons = self.photons_traced as f64 / f64::from(self.iterations);
+        let c = self.camera_rays as f64 / f64::from(self.iterations);
+        let k = self.photon_rays as f64 / self.photons_traced.max(1) as f64;
+        let best = if d <= 0.0 {
+            f64::INFINITY
+        } else if p <= 0.0 || k <= 0.0 {
+            0.0
+        } else {
+            (p * mean_photons * c / (d * k)).sqrt()
+        };
+        // At most a factor of four per window, in steps of `step`.
+        let current = self.photons as f64;
+        let best = best.clamp(current / 4.0, current * 4.0);
+        let rounded = ((best / self.step as f64).round() as u64).saturating_mul(self.step);
+        self.photons = rounded.clamp(self.min, self.max);
+        *self = PhotonBudget {
+            direct: 0,
+            photon: 0,
+            camera_rays: 0,
+            photon_rays: 0,
+            photons_traced: 0,
+            iterations: 0,
+            ..*self
+        };
+    }
+}
+
+/// What one iteration measured for `PhotonBudget`.
+#[derive(Clone, Copy, Debug, Default)]
+struct IterationCosts {
+    direct: u64,
+    photon: u64,
+    camera_rays: u64,
+    photon_rays: u64,
+    photons: u64,
+}
+
+/// A squared deviation in fixed point (2^-32 units, at most 2^40 per pixel), so that sums over
+/// pixels are integers whose value does not depend on the order of the additions (a sum in
+/// floating point over a parallel reduction would change with the thread count). Saturating
+/// sums of non-negative numbers are also order-independent.
+#[inline]
+fn fixed_square(x: f32) -> u64 {
+    let v = f64::from(x) * f64::from(x) * 4_294_967_296.0;
+    if v.is_finite() { v.min(1_099_511_627_776.0) as u64 } else { 0 }
 }
 
 /// Working memory of an SPPM render of `pixels` pixels and `photons_per_iter` photons per
@@ -108,6 +264,9 @@ impl PixelStats {
     /// Returns the factor the accumulated flux was scaled by (1 without photons).
     pub fn update(&mut self, m: u32, phi: Color, alpha: f32) -> f32 {
         if m == 0 {
+            // Light from photons beyond the radius (`gather`'s wider disc for indirect light)
+            // still counts; without photons this adds nothing.
+            self.tau += phi;
             return 1.0;
         }
         let m = m as f32;
@@ -197,6 +356,15 @@ struct CameraSample {
 }
 
 impl Sppm {
+    pub fn new(config: SppmConfig) -> Self {
+        Sppm { config, emitted: AtomicU64::new(0), iterations: AtomicU64::new(0) }
+    }
+
+    /// Mean photons per iteration of the last render.
+    pub fn mean_photons_per_iter(&self) -> f64 {
+        self.emitted.load(Ordering::Relaxed) as f64 / self.iterations.load(Ordering::Relaxed).max(1) as f64
+    }
+
     /// Renders iterations up to `settings.spp` (or until the time limit), one camera sample per
     /// pixel per iteration, as a run of its own after the iterations `prior` holds (none for a
     /// new render); the result is `prior` plus this run, each weighted by its iterations.
@@ -215,6 +383,7 @@ impl Sppm {
             grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
+            budget: PhotonBudget::new(&self.config),
         });
         let iterations = Cell::new(0u32);
         // A render-farm shard runs iterations `first_sample..spp` as a progressive run of its
@@ -231,7 +400,7 @@ impl Sppm {
                 let mut state = state.borrow_mut();
                 let start = range.start;
                 for it in range {
-                    if driver.cancelled() || !self.iteration(scene, driver, &mut state, it) {
+                    if driver.cancelled() || !self.iteration(scene, driver, &mut state, it, iterations.get()) {
                         return PassOutcome::Interrupted { taken: it - start };
                     }
                     iterations.set(iterations.get() + 1);
@@ -242,6 +411,8 @@ impl Sppm {
         );
         let state = state.into_inner();
         let it = iterations.get();
+        self.emitted.store(state.budget.emitted, Ordering::Relaxed);
+        self.iterations.store(u64::from(it), Ordering::Relaxed);
         stats.memory_bytes = state.peak_bytes as u64;
         let film = combined(state.film(settings, it));
         stats.samples_per_pixel = film.min_samples();
@@ -249,8 +420,9 @@ impl Sppm {
     }
 
     /// One iteration: visible points, photons, statistics. Returns false when the render was
-    /// cancelled during it, leaving every pixel as it was.
-    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32) -> bool {
+    /// cancelled during it, leaving every pixel as it was. `done`: iterations this run has
+    /// completed (the running means the photon budget measures deviations from).
+    fn iteration(&self, scene: &Scene, driver: &Driver, state: &mut State, it: u32, done: u32) -> bool {
         let config = &self.config;
         let settings = driver.settings;
         let w = settings.width;
@@ -265,7 +437,8 @@ impl Sppm {
         let watch = Watch { cancel: driver.cancel_flag(), progress: None };
         let mut hits = std::mem::take(&mut state.hits);
         let store = if scene.has_media() { trace::Store::Media } else { trace::Store::Indirect };
-        trace::trace_global_into(scene, config.photons_per_iter, seed, config.ray_bias, store, watch, &mut hits);
+        let photons = state.budget.photons;
+        trace::trace_global_into(scene, photons, seed, config.ray_bias, store, watch, &mut hits);
         if watch.cancelled() {
             return false;
         }
@@ -278,7 +451,8 @@ impl Sppm {
         // and its visible point (a new one gets a radius) into a buffer kept between iterations.
         state.points.resize(n_pixels, None);
         // Ray counts are summed over the pass and recorded once (not an atomic per pixel).
-        let (rays, nonfinite) = state
+        let prior = done.max(1) as f32;
+        let (rays, nonfinite, direct_dev, points) = state
             .pixels
             .par_iter_mut()
             .zip(layers_of(&mut state.layers, n_pixels))
@@ -293,7 +467,11 @@ impl Sppm {
                     Some(v) => self.camera_sample_media(scene, settings, xy, it, v, &mut stats),
                 };
                 let mut nonfinite = 0u64;
+                let mut dev = 0;
                 if sample.ld.is_finite() {
+                    if done > 0 {
+                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld) / prior);
+                    }
                     px.ld += sample.ld;
                     if let Some(l) = layers {
                         for (a, b) in l.ld.iter_mut().zip(sample.ld_layers) {
@@ -309,13 +487,13 @@ impl Sppm {
                     px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
                 }
                 *point = sample.point.map(|(v, _)| v);
-                (stats, nonfinite)
+                (stats, nonfinite, dev, u64::from(point.is_some()))
             })
             .reduce(
-                || (RayStats::default(), 0),
-                |(mut a, na), (b, nb)| {
+                || (RayStats::default(), 0, 0, 0),
+                |(mut a, na, da, pa), (b, nb, db, pb)| {
                     a.add(&b);
-                    (a, na + nb)
+                    (a, na + nb, da.saturating_add(db), pa + pb)
                 },
             );
         driver.record(&rays, nonfinite, 0);
@@ -330,26 +508,40 @@ impl Sppm {
             .zip(vps)
             .filter(|(_, v)| v.is_some())
             .fold((0.0f64, 0u64), |(s, n), (p, _)| (s + f64::from(p.r), n + 1));
-        let cell = if n > 0 { 2.0 * (sum / n as f64) as f32 } else { 0.0 };
+        let reach = config.indirect_radius_factor.max(1.0);
+        let cell = if n > 0 { 2.0 * reach * (sum / n as f64) as f32 } else { 0.0 };
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
             + hits.capacity() * std::mem::size_of::<PhotonHit>();
+        let mut photon_dev = 0;
         if cell > 0.0 && !hits.is_empty() {
             state.grid.rebuild(&hits, cell, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
             bytes += grid.memory_bytes();
             let layers = layers_of(&mut state.layers, n_pixels);
-            state.pixels.par_iter_mut().zip(layers).zip(vps.par_iter()).with_min_len(64).for_each(
-                |((px, layers), vp)| {
-                    let Some(v) = vp else { return };
-                    let (m, phi, phi_caustic) = gather(scene, v, px.r, grid, &hits);
+            photon_dev = state
+                .pixels
+                .par_iter_mut()
+                .zip(layers)
+                .zip(vps.par_iter())
+                .with_min_len(64)
+                .map(|((px, layers), vp)| {
+                    let Some(v) = vp else { return 0 };
+                    let (m, phi, phi_caustic) = gather(scene, v, px.r, reach, grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
-                        return;
+                        return 0;
                     }
+                    // This iteration's photon estimate against the running one, both over the
+                    // disc of the current radius.
+                    let dev = if done > 0 {
+                        fixed_square((luminance(total) - luminance(px.tau) / prior) / (PI * px.r * px.r))
+                    } else {
+                        0
+                    };
                     let ratio = px.update(m, total, config.alpha);
                     if let Some(l) = layers {
                         let caustic = v.beta * phi_caustic;
@@ -360,9 +552,22 @@ impl Sppm {
                             *t = (*t + p) * ratio;
                         }
                     }
-                },
-            );
+                    dev
+                })
+                .reduce(|| 0, u64::saturating_add);
         }
+        // The camera pass's cost counts a gather as one ray; a photon's, its first ray and one
+        // for each stored bounce.
+        state.budget.record(
+            done > 0,
+            IterationCosts {
+                direct: direct_dev,
+                photon: photon_dev,
+                camera_rays: rays.total() + points,
+                photon_rays: photons + hits.len() as u64,
+                photons,
+            },
+        );
         state.peak_bytes = state.peak_bytes.max(bytes);
         state.hits = hits;
         driver.record(&RayStats::default(), 0, settings.pixels());
@@ -433,8 +638,19 @@ impl Sppm {
 
 /// The photons within radius `r` of visible point `v`: (M, their count, which sets the radius
 /// schedule; the flux the BSDF passes towards the camera; its part that came only through
-/// mirrors and glass).
-fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
+/// mirrors and glass). With `reach` k > 1, photons that did not come only through mirrors and
+/// glass are gathered within k r instead, each weighing 1/k^2: the same estimate of smooth
+/// indirect light over a disc k^2 times larger (k^2 times the photons: far less noise, a little
+/// more blur), shrinking with r so that it converges as r does; caustics keep the radius r.
+/// Photons within r count in M whatever their kind.
+fn gather(
+    scene: &Scene,
+    v: &VisiblePoint,
+    r: f32,
+    reach: f32,
+    grid: &PhotonGrid,
+    hits: &[PhotonHit],
+) -> (u32, Color, Color) {
     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
     let bsdf = scene.bsdf(&v.at.hit(), v.wo);
     let p = v.at.p;
@@ -444,11 +660,18 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[Ph
     // A Lambertian BSDF's value is the same for every direction above the surface: worked out
     // once (the same value `f` gives each photon), not per photon.
     let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
-    grid.for_each_within(p, r, |i| {
+    let (r2, weight_wide) = (r * r, 1.0 / (reach * reach));
+    grid.for_each_within(p, reach * r, |i| {
         let ph = &hits[i as usize];
+        let caustic = ph.flags & trace::CAUSTIC != 0;
+        let near = reach == 1.0 || (ph.p - p).length_squared() <= r2;
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
-        m += 1;
+        if near {
+            m += 1;
+        } else if caustic {
+            return;
+        }
         if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
             return;
         }
@@ -459,9 +682,13 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[Ph
             None => bsdf.f(v.wo, wi, Transport::Radiance),
         };
         if f != Color::ZERO {
-            phi += f * ph.flux;
-            if ph.flags & trace::CAUSTIC != 0 {
+            if caustic {
+                phi += f * ph.flux;
                 phi_caustic += f * ph.flux;
+            } else if reach == 1.0 {
+                phi += f * ph.flux;
+            } else {
+                phi += f * ph.flux * weight_wide;
             }
         }
     });
@@ -489,6 +716,7 @@ struct State {
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
     peak_bytes: usize,
+    budget: PhotonBudget,
 }
 
 impl State {
@@ -580,16 +808,110 @@ mod tests {
             hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
         ];
         let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &v, 0.5, &grid, &hits);
+        let (m, phi, _) = gather(&scene, &v, 0.5, 1.0, &grid, &hits);
         assert_eq!(m, 3);
         assert!((phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let deep = [PhotonHit { depth: 3, ..hits[0] }];
         let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, 1.0, &grid, &deep);
         assert_eq!((m, phi), (1, Color::ZERO));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, 1.0, &grid, &deep);
         assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
+    }
+
+    #[test]
+    fn photon_budget_follows_the_variances_and_costs() {
+        let config = SppmConfig {
+            photons_per_iter: 6400,
+            adaptive_photons: true,
+            indirect_radius_factor: 1.0,
+            initial_radius: None,
+            alpha: 2.0 / 3.0,
+            max_depth: 5,
+            ray_bias: 1e-4,
+        };
+        // Windows of iterations measuring direct variance d, photon variance p at the current
+        // photons, camera rays c and two rays a photon: the number goes to sqrt(p P c / (d k)),
+        // at most four times up or down per window.
+        let run = |d: u64, p: u64, c: u64, windows: u32| {
+            let mut b = PhotonBudget::new(&config);
+            // The first iteration measures nothing.
+            b.record(false, IterationCosts { photons: b.photons, ..Default::default() });
+            let mut photons = Vec::new();
+            for _ in 0..windows * PhotonBudget::WINDOW {
+                let n = b.photons;
+                // The photon estimate's variance falls as 1 / photons.
+                let p = p * 6400 / n;
+                let costs = IterationCosts { direct: d, photon: p, camera_rays: c, photon_rays: 2 * n, photons: n };
+                b.record(true, costs);
+                photons.push(b.photons);
+            }
+            (photons, b.emitted)
+        };
+        // Equal variances, camera pass as costly as 3200 photons: P = sqrt(6400 * 6400 / 2).
+        let (p, _) = run(1000, 1000, 6400, 1);
+        assert_eq!(p[..3], [6400; 3]);
+        assert_eq!(p[3], (6400.0 / 2f64.sqrt() / 100.0).round() as u64 * 100);
+        // Direct light's variance 100 times the photons': a tenth, 640, in steps of at most 4 and
+        // rounded to a 64th of the first number.
+        let (p, _) = run(100_000, 1000, 12_800, 3);
+        assert_eq!((p[3], p[7], p[11]), (1600, 600, 600));
+        // No direct variance: up to the most, four times the first number.
+        let (p, emitted) = run(0, 1000, 6400, 2);
+        assert_eq!((p[3], p[7]), (25600, 25600));
+        assert_eq!(emitted, 6400 * 5 + 25600 * 4);
+        // No photon variance: down to the least, a sixteenth.
+        let (p, _) = run(1000, 0, 6400, 2);
+        assert_eq!((p[3], p[7]), (1600, 400));
+        // A fixed number stays fixed.
+        let mut b = PhotonBudget::new(&SppmConfig { adaptive_photons: false, ..config.clone() });
+        for _ in 0..8 {
+            b.record(true, IterationCosts { direct: 1, photon: 1000, camera_rays: 1, photon_rays: 1, photons: 6400 });
+        }
+        assert_eq!(b.photons, 6400);
+    }
+
+    #[test]
+    fn indirect_photons_are_gathered_over_a_wider_disc() {
+        let scene = grey_quad();
+        let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
+        let v = VisiblePoint {
+            at: Shading::of(&hit.unwrap()),
+            wo: Vec3::Z,
+            beta: Color::ONE,
+            layer: LayerPath::CAMERA,
+            photon_depth: trace::MAX_PHOTON_DEPTH as u8,
+        };
+        let hit = |x: f32, flags: u8| PhotonHit {
+            p: Vec3::new(x, 0.0, 0.0),
+            dir: -Vec3::Z,
+            flux: Color::ONE,
+            flags,
+            depth: 1,
+            n: Vec3::Z,
+        };
+        let hits = [
+            hit(0.1, 0),               // indirect, within r: counted, weight 1/9
+            hit(0.4, 0),               // indirect, within 3r only: not counted, weight 1/9
+            hit(0.15, trace::CAUSTIC), // caustic within r: counted, weight 1
+            hit(0.5, trace::CAUSTIC),  // caustic beyond r: left out
+            hit(0.7, 0),               // beyond 3r: left out
+        ];
+        let grid = PhotonGrid::build(&hits, 1.2, Vec3::splat(-1.0));
+        let f = 0.5 / PI;
+        let (m, phi, caustic) = gather(&scene, &v, 0.2, 3.0, &grid, &hits);
+        assert_eq!(m, 2);
+        assert!((phi.r() - f * (1.0 + 2.0 / 9.0)).abs() < 1e-6, "{phi}");
+        assert!((caustic.r() - f).abs() < 1e-6, "{caustic}");
+        // Factor 1: every photon within r, weight 1.
+        let (m, phi, _) = gather(&scene, &v, 0.2, 1.0, &grid, &hits);
+        assert_eq!(m, 2);
+        assert!((phi.r() - 2.0 * f).abs() < 1e-6, "{phi}");
+        // Light from beyond the radius counts in a pixel without photons within it.
+        let mut p = PixelStats { ld: Color::ZERO, n: 4.0, r: 0.2, tau: Color::splat(1.0) };
+        assert_eq!(p.update(0, Color::splat(0.5), 2.0 / 3.0), 1.0);
+        assert_eq!((p.tau, p.n, p.r), (Color::splat(1.5), 4.0, 0.2));
     }
 
     #[test]
