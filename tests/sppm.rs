@@ -15,8 +15,7 @@ fn sppm(s: &LoadedScene, iterations: u32, photons: u64) -> (Image, RenderStats) 
     (image, stats)
 }
 
-/// An SPPM render starting at `photons` per iteration, by SPPM's default policy (adaptive
-/// photons, indirect light over a wider disc) or the classic algorithm; also returns the mean
+/// An SPPM render starting at `photons` per iteration, adaptive or not; also returns the mean
 /// photons per iteration.
 fn sppm_with(s: &LoadedScene, iterations: u32, photons: u64, adaptive: bool) -> (Image, RenderStats, f64) {
     let mut settings = s.settings.clone();
@@ -24,7 +23,6 @@ fn sppm_with(s: &LoadedScene, iterations: u32, photons: u64, adaptive: bool) -> 
     let config = SppmConfig {
         photons_per_iter: photons,
         adaptive_photons: adaptive,
-        indirect_radius_factor: if adaptive { caustic::integrator::sppm::INDIRECT_RADIUS_FACTOR } else { 1.0 },
         initial_radius: None,
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
@@ -58,7 +56,7 @@ fn sppm_converges_to_the_path_tracer_on_the_diffuse_cornell_box() {
 }
 
 #[test]
-fn default_policy_converges_to_the_path_tracer_and_does_not_depend_on_threads() {
+fn adaptive_photons_converge_to_the_path_tracer_and_do_not_depend_on_threads() {
     let size = Options { width: Some(48), height: Some(48), seed: Some(5), ..Default::default() };
     let reference = {
         let r = common::bundled("11-cornell-area.toml", &Options { spp: Some(2048), ..size.clone() });

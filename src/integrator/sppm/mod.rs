@@ -12,11 +12,6 @@
 //! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
 //!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
 //!
-//! By default (no `photons_per_iter` given: docs/scene-format.md, "What SPPM does by default")
-//! the photons per iteration follow the measured error budget (`PhotonBudget`), and photons of
-//! indirect light are gathered over a disc `INDIRECT_RADIUS_FACTOR` times wider, each weighted
-//! down by its area (`gather`).
-//!
 //! Pixels query the photons (rather than photons the pixels), so every pixel sums its photons in
 //! a fixed order and the image is the same for any thread count. Memory is the per-pixel state
 //! plus one iteration's visible points and photons, whatever the number of iterations.
@@ -58,10 +53,6 @@ pub struct SppmConfig {
     /// four times `photons_per_iter`: what SPPM does unless the scene or the command line sets
     /// the number.
     pub adaptive_photons: bool,
-    /// Photons that did not come only through mirrors and glass (indirect light, smooth) are
-    /// gathered within this many times the pixel's radius, each weighing the inverse square of
-    /// it (`gather`); 1 gathers every photon within the radius.
-    pub indirect_radius_factor: f32,
     /// Search radius every pixel starts with; `None` derives it per pixel (see `initial_radius`).
     pub initial_radius: Option<f32>,
     /// Fraction of new photons kept (Hachisuka 2008): 2/3.
@@ -79,7 +70,6 @@ impl SppmConfig {
         SppmConfig {
             photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
             adaptive_photons: desc.photon.photons_per_iter.is_none(),
-            indirect_radius_factor: if desc.photon.photons_per_iter.is_none() { INDIRECT_RADIUS_FACTOR } else { 1.0 },
             initial_radius: desc.photon.initial_radius,
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
@@ -96,10 +86,6 @@ impl SppmConfig {
         }
     }
 }
-
-/// The indirect radius factor of SPPM's default policy (scene-format.md, "What SPPM does by
-/// default"; BENCHMARKS.md has the measurement that chose it).
-pub const INDIRECT_RADIUS_FACTOR: f32 = 3.0;
 
 /// The SPPM integrator.
 pub struct Sppm {
@@ -264,9 +250,6 @@ impl PixelStats {
     /// Returns the factor the accumulated flux was scaled by (1 without photons).
     pub fn update(&mut self, m: u32, phi: Color, alpha: f32) -> f32 {
         if m == 0 {
-            // Light from photons beyond the radius (`gather`'s wider disc for indirect light)
-            // still counts; without photons this adds nothing.
-            self.tau += phi;
             return 1.0;
         }
         let m = m as f32;
@@ -508,8 +491,7 @@ impl Sppm {
             .zip(vps)
             .filter(|(_, v)| v.is_some())
             .fold((0.0f64, 0u64), |(s, n), (p, _)| (s + f64::from(p.r), n + 1));
-        let reach = config.indirect_radius_factor.max(1.0);
-        let cell = if n > 0 { 2.0 * reach * (sum / n as f64) as f32 } else { 0.0 };
+        let cell = if n > 0 { 2.0 * (sum / n as f64) as f32 } else { 0.0 };
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
@@ -529,7 +511,7 @@ impl Sppm {
                 .with_min_len(64)
                 .map(|((px, layers), vp)| {
                     let Some(v) = vp else { return 0 };
-                    let (m, phi, phi_caustic) = gather(scene, v, px.r, reach, grid, &hits);
+                    let (m, phi, phi_caustic) = gather(scene, v, px.r, grid, &hits);
                     let total = v.beta * phi;
                     if !total.is_finite() {
                         driver.record(&RayStats::default(), 1, 0);
@@ -638,19 +620,8 @@ impl Sppm {
 
 /// The photons within radius `r` of visible point `v`: (M, their count, which sets the radius
 /// schedule; the flux the BSDF passes towards the camera; its part that came only through
-/// mirrors and glass). With `reach` k > 1, photons that did not come only through mirrors and
-/// glass are gathered within k r instead, each weighing 1/k^2: the same estimate of smooth
-/// indirect light over a disc k^2 times larger (k^2 times the photons: far less noise, a little
-/// more blur), shrinking with r so that it converges as r does; caustics keep the radius r.
-/// Photons within r count in M whatever their kind.
-fn gather(
-    scene: &Scene,
-    v: &VisiblePoint,
-    r: f32,
-    reach: f32,
-    grid: &PhotonGrid,
-    hits: &[PhotonHit],
-) -> (u32, Color, Color) {
+/// mirrors and glass).
+fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
     let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
     let bsdf = scene.bsdf(&v.at.hit(), v.wo);
     let p = v.at.p;
@@ -660,18 +631,11 @@ fn gather(
     // A Lambertian BSDF's value is the same for every direction above the surface: worked out
     // once (the same value `f` gives each photon), not per photon.
     let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
-    let (r2, weight_wide) = (r * r, 1.0 / (reach * reach));
-    grid.for_each_within(p, reach * r, |i| {
+    grid.for_each_within(p, r, |i| {
         let ph = &hits[i as usize];
-        let caustic = ph.flags & trace::CAUSTIC != 0;
-        let near = reach == 1.0 || (ph.p - p).length_squared() <= r2;
         // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
         // not the BSDF passes its light.
-        if near {
-            m += 1;
-        } else if caustic {
-            return;
-        }
+        m += 1;
         if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
             return;
         }
@@ -682,13 +646,9 @@ fn gather(
             None => bsdf.f(v.wo, wi, Transport::Radiance),
         };
         if f != Color::ZERO {
-            if caustic {
-                phi += f * ph.flux;
+            phi += f * ph.flux;
+            if ph.flags & trace::CAUSTIC != 0 {
                 phi_caustic += f * ph.flux;
-            } else if reach == 1.0 {
-                phi += f * ph.flux;
-            } else {
-                phi += f * ph.flux * weight_wide;
             }
         }
     });
@@ -808,15 +768,15 @@ mod tests {
             hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
         ];
         let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &v, 0.5, 1.0, &grid, &hits);
+        let (m, phi, _) = gather(&scene, &v, 0.5, &grid, &hits);
         assert_eq!(m, 3);
         assert!((phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let deep = [PhotonHit { depth: 3, ..hits[0] }];
         let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, 1.0, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
         assert_eq!((m, phi), (1, Color::ZERO));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, 1.0, &grid, &deep);
+        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
         assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
     }
 
@@ -825,7 +785,6 @@ mod tests {
         let config = SppmConfig {
             photons_per_iter: 6400,
             adaptive_photons: true,
-            indirect_radius_factor: 1.0,
             initial_radius: None,
             alpha: 2.0 / 3.0,
             max_depth: 5,
@@ -870,48 +829,6 @@ mod tests {
             b.record(true, IterationCosts { direct: 1, photon: 1000, camera_rays: 1, photon_rays: 1, photons: 6400 });
         }
         assert_eq!(b.photons, 6400);
-    }
-
-    #[test]
-    fn indirect_photons_are_gathered_over_a_wider_disc() {
-        let scene = grey_quad();
-        let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
-        let v = VisiblePoint {
-            at: Shading::of(&hit.unwrap()),
-            wo: Vec3::Z,
-            beta: Color::ONE,
-            layer: LayerPath::CAMERA,
-            photon_depth: trace::MAX_PHOTON_DEPTH as u8,
-        };
-        let hit = |x: f32, flags: u8| PhotonHit {
-            p: Vec3::new(x, 0.0, 0.0),
-            dir: -Vec3::Z,
-            flux: Color::ONE,
-            flags,
-            depth: 1,
-            n: Vec3::Z,
-        };
-        let hits = [
-            hit(0.1, 0),               // indirect, within r: counted, weight 1/9
-            hit(0.4, 0),               // indirect, within 3r only: not counted, weight 1/9
-            hit(0.15, trace::CAUSTIC), // caustic within r: counted, weight 1
-            hit(0.5, trace::CAUSTIC),  // caustic beyond r: left out
-            hit(0.7, 0),               // beyond 3r: left out
-        ];
-        let grid = PhotonGrid::build(&hits, 1.2, Vec3::splat(-1.0));
-        let f = 0.5 / PI;
-        let (m, phi, caustic) = gather(&scene, &v, 0.2, 3.0, &grid, &hits);
-        assert_eq!(m, 2);
-        assert!((phi.r() - f * (1.0 + 2.0 / 9.0)).abs() < 1e-6, "{phi}");
-        assert!((caustic.r() - f).abs() < 1e-6, "{caustic}");
-        // Factor 1: every photon within r, weight 1.
-        let (m, phi, _) = gather(&scene, &v, 0.2, 1.0, &grid, &hits);
-        assert_eq!(m, 2);
-        assert!((phi.r() - 2.0 * f).abs() < 1e-6, "{phi}");
-        // Light from beyond the radius counts in a pixel without photons within it.
-        let mut p = PixelStats { ld: Color::ZERO, n: 4.0, r: 0.2, tau: Color::splat(1.0) };
-        assert_eq!(p.update(0, Color::splat(0.5), 2.0 / 3.0), 1.0);
-        assert_eq!((p.tau, p.n, p.r), (Color::splat(1.5), 4.0, 0.2));
     }
 
     #[test]
