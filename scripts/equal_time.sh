@@ -7,11 +7,12 @@
 # rendering; record the load average), or the figures measure the load.
 #
 #   scripts/equal_time.sh [SECONDS] [OUT_DIR]
-#   INTEGRATORS="bdpt vcm" scripts/equal_time.sh 10     (a subset)
+#   INTEGRATORS="bdpt vcm" scripts/equal_time.sh 10     (a subset; INTEGRATORS= only makes the references)
 #
 # References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
 # the path tracer cannot find; bidirectional path tracing, unbiased, for the glossy caustics of a
-# small area light; the path tracer elsewhere). Needs the OpenEXR Python bindings.
+# small area light, at most REF_TIME seconds, default 3600; the path tracer elsewhere), with
+# another seed than the renders. Needs the OpenEXR Python bindings.
 set -euo pipefail
 T=${1:-10}
 OUT=${2:-/tmp/caustic-equal-time}
@@ -22,16 +23,18 @@ scenes=(
   "caustic|scenes/13-cornell-caustics.toml|--width 128 --height 128|--integrator sppm --spp 1000 --photons-per-iter 100000"
   "glossy|scenes/15-materials.toml|--width 160 --height 120|--integrator path --spp 4096"
   "sky|benches/scenes/sky-lit.toml|--width 160 --height 120|--integrator path --spp 8192"
-  "glossy-caustics|scenes/16-glossy-caustics.toml|--width 160 --height 120|--integrator bdpt --spp 16384"
+  "glossy-caustics|scenes/16-glossy-caustics.toml|--width 160 --height 120|--integrator bdpt --spp 16384 --time ${REF_TIME:-3600}"
 )
-INTEGRATORS=${INTEGRATORS:-path photon sppm bdpt vcm}
+INTEGRATORS=${INTEGRATORS-path photon sppm bdpt vcm}
 printf 'load average before: %s\n\n' "$(cut -d' ' -f1-3 /proc/loadavg)"
 printf '| scene | integrator | samples in %s s | RMSE | mean / reference |\n|---|---|---|---|---|\n' "$T"
 for entry in "${scenes[@]}"; do
   IFS='|' read -r name scene size ref <<<"$entry"
   if [[ ! -f "$OUT/$name-ref.exr" ]]; then
     # shellcheck disable=SC2086
-    "$BIN" render "$scene" $size $ref -q -o "$OUT/$name-ref.exr"
+    # Another seed than the renders compared (seed 0): an SPPM or bdpt render must not share its
+    # first samples with its reference.
+    "$BIN" render "$scene" $size $ref --seed 7 -q -o "$OUT/$name-ref.exr"
   fi
   for integrator in $INTEGRATORS; do
     # shellcheck disable=SC2086
