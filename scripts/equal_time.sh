@@ -8,6 +8,8 @@
 #
 #   scripts/equal_time.sh [SECONDS] [OUT_DIR]
 #   INTEGRATORS="bdpt vcm" scripts/equal_time.sh 10     (a subset; INTEGRATORS= only makes the references)
+#   CPU=1 scripts/equal_time.sh 10     (equal CPU time on one thread each: for a machine that is
+#                                       not quiet, where wall time measures the load)
 #
 # References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
 # the path tracer cannot find; bidirectional path tracing, unbiased, for the glossy caustics of a
@@ -26,21 +28,37 @@ scenes=(
   "glossy-caustics|scenes/16-glossy-caustics.toml|--width 160 --height 120|--integrator bdpt --spp 16384 --time ${REF_TIME:-3600}"
 )
 INTEGRATORS=${INTEGRATORS-path photon sppm bdpt vcm}
+# User + system CPU seconds of a command (its output discarded).
+cpu_seconds() { /usr/bin/time -f '%U %S' "$@" 2>&1 >/dev/null | tail -1 | awk '{print $1 + $2}'; }
 printf 'load average before: %s\n\n' "$(cut -d' ' -f1-3 /proc/loadavg)"
-printf '| scene | integrator | samples in %s s | RMSE | mean / reference |\n|---|---|---|---|---|\n' "$T"
+printf '| scene | integrator | samples in %s s%s | RMSE | mean / reference |\n|---|---|---|---|---|\n' "$T" "${CPU:+ of CPU, one thread}"
 for entry in "${scenes[@]}"; do
   IFS='|' read -r name scene size ref <<<"$entry"
   if [[ ! -f "$OUT/$name-ref.exr" ]]; then
-    # shellcheck disable=SC2086
     # Another seed than the renders compared (seed 0): an SPPM or bdpt render must not share its
     # first samples with its reference.
+    # shellcheck disable=SC2086
     "$BIN" render "$scene" $size $ref --seed 7 -q -o "$OUT/$name-ref.exr"
   fi
   for integrator in $INTEGRATORS; do
-    # shellcheck disable=SC2086
-    "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
-      2>"$OUT/$name-$integrator.log" >/dev/null
-    samples=$(grep -oE '([0-9]+ samples per pixel|took [0-9]+ iterations)' "$OUT/$name-$integrator.log" | tail -1 || true)
+    if [[ -n "${CPU:-}" ]]; then
+      # Equal CPU time: one thread, as many samples as fit T CPU-seconds by two probes (the cost
+      # is a fixed part, such as photon maps, plus a part per sample).
+      # shellcheck disable=SC2086
+      p1=$(cpu_seconds "$BIN" render "$scene" $size --integrator "$integrator" --threads 1 --spp 4 -q -o "$OUT/probe.exr")
+      # shellcheck disable=SC2086
+      p2=$(cpu_seconds "$BIN" render "$scene" $size --integrator "$integrator" --threads 1 --spp 12 -q -o "$OUT/probe.exr")
+      n=$(python3 -c "a, b = $p1, $p2; per = max((b - a) / 8, 1e-4); print(max(1, int(($T - max(a - 4 * per, 0)) / per)))")
+      # shellcheck disable=SC2086
+      used=$(cpu_seconds "$BIN" render "$scene" $size --integrator "$integrator" --threads 1 --spp "$n" -q \
+        -o "$OUT/$name-$integrator.exr")
+      samples="$n in $used CPU-s"
+    else
+      # shellcheck disable=SC2086
+      "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
+        2>"$OUT/$name-$integrator.log" >/dev/null
+      samples=$(grep -oE '([0-9]+ samples per pixel|took [0-9]+ iterations)' "$OUT/$name-$integrator.log" | tail -1 || true)
+    fi
     python3 - "$OUT/$name-$integrator.exr" "$OUT/$name-ref.exr" "$name" "$integrator" "$samples" <<'PY'
 import sys
 sys.path.insert(0, "scripts")

@@ -204,7 +204,7 @@ def test_unknown_options_are_type_errors_naming_the_nearest():
     with pytest.raises(ValueError, match="option spp"):
         caustic.render(scene, spp=-1)
     with pytest.raises(ValueError, match="option integrator"):
-        caustic.render(scene, integrator="vcm")
+        caustic.render(scene, integrator="mlt")
     assert "display_server" in caustic.OPTIONS and "photons" in caustic.OPTIONS
 
 
