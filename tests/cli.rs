@@ -546,3 +546,30 @@ fn on_a_terminal_phase_lines_stay_above_one_bar_with_an_eta() {
     });
     assert!(eta, "no ETA in seconds:\n{raw}");
 }
+
+/// An integrator that does not render participating media says so when the scene has media
+/// (and renders the rest); one that does says nothing.
+#[test]
+fn integrators_without_media_say_they_leave_them_out() {
+    let dir = common::scratch("cli-media-warning");
+    let run = |integrator: &str| {
+        let out = caustic()
+            .arg("render")
+            .arg(scene("17-volumetric-caustic.toml"))
+            .args(["--integrator", integrator, "--spp", "1", "--width", "16", "--height", "12", "-o"])
+            .arg(dir.join(format!("{integrator}.png")))
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let light = run("light");
+    assert!(
+        light.contains("the light integrator does not render participating media")
+            && light.contains("rendered by: path, volpath, sppm"),
+        "{light}"
+    );
+    assert!(dir.join("light.png").exists());
+    let path = run("path");
+    assert!(!path.contains("participating media"), "{path}");
+}
