@@ -9,9 +9,16 @@ references, which tests/media.rs compares caustic's volumetric path tracer with.
 The rendering, the noise measurement (two halves with different seeds) and MANIFEST.md are those
 of scripts/make_material_refs.py, whose functions are reused with this folder and these sample
 counts. Every scene uses Mitsuba's `volpath` integrator.
+
+The heterogeneous cases read grids this script writes next to them in Mitsuba's `.vol` format
+(`write_vol`): smooth blobs of density, and an RGB albedo that varies across the box. It also
+writes scenes/smoke.vol, the grid of the example in docs/scene-format.md.
 """
+import struct
 import sys
 from pathlib import Path
+
+import numpy as np
 
 import make_material_refs as refs
 
@@ -106,6 +113,42 @@ def scene(comment, body, fov=28, origin="0, -5.5, 1.8", target="0, 0, -0.2", sen
 """
 
 
+def write_vol(path, values):
+    """Writes `values` (shape nz, ny, nx, channels: x fastest, channels innermost) as a Mitsuba
+    .vol file: `VOL`, version 3, encoding 1 (float32), resolutions and channels as int32, the
+    bounding box [0, 1]^3, then the data, all little-endian."""
+    nz, ny, nx, channels = values.shape
+    header = b"VOL" + bytes([3]) + struct.pack("<5i", 1, nx, ny, nz, channels) + struct.pack("<6f", 0, 0, 0, 1, 1, 1)
+    path.write_bytes(header + np.ascontiguousarray(values, dtype="<f4").tobytes())
+
+
+def texel_centres(n):
+    """The texel centres of an n[0] x n[1] x n[2] grid in its unit cube, as arrays z, y, x."""
+    axes = [(np.arange(k) + 0.5) / k for k in (n[2], n[1], n[0])]
+    return np.meshgrid(*axes, indexing="ij")
+
+
+def blob_density(n):
+    """A smooth density: two Gaussian blobs over a floor of 0.15, so the grid's edges are not
+    empty (outside the grid there is no medium, inside its edge texels hold 0.15)."""
+    z, y, x = texel_centres(n)
+    d = 0.15 + np.exp(-((x - 0.4) ** 2 + (y - 0.45) ** 2 + (z - 0.45) ** 2) / (2 * 0.16**2))
+    d += 0.6 * np.exp(-((x - 0.7) ** 2 + (y - 0.6) ** 2 + (z - 0.7) ** 2) / (2 * 0.1**2))
+    return d[..., None].astype(np.float32)
+
+
+def write_grids():
+    write_vol(DIR / "hetero_blob.vol", blob_density((24, 24, 20)))
+    # RGB extinction: the blob, redder where it is dense.
+    d = blob_density((12, 12, 12))[..., 0]
+    write_vol(DIR / "hetero_rgb_sigma_t.vol", np.stack([d, 0.8 * d + 0.05, 0.5 * d + 0.1], axis=-1))
+    # RGB albedo varying along each axis, within [0.1, 0.95].
+    z, y, x = texel_centres((12, 12, 12))
+    albedo = np.stack([0.95 - 0.6 * x, 0.3 + 0.6 * y, 0.1 + 0.8 * z * (1 - 0.5 * x)], axis=-1)
+    write_vol(DIR / "hetero_rgb_albedo.vol", albedo.astype(np.float32))
+    write_vol(ROOT / "scenes" / "smoke.vol", blob_density((16, 16, 16)))
+
+
 SCENES = {
     "cube_area": scene(
         "a null-bounded cube of fog (side 1.96, just above the floor: a face on the floor would make the\n     boundary and the floor coplanar) under a rectangular area light.",
@@ -179,6 +222,55 @@ SCENES = {
         fov=45,
         sensor_medium='\n        <ref id="air"/>',
     ),
+    "hetero_blob": scene(
+        "a heterogeneous medium: a grid of density (two smooth blobs on a floor of 0.15, 24 x 24 x 20\n"
+        "     texels) filling part of a null-bounded cube (the grid's box is smaller than the cube: no\n"
+        "     medium outside it), grey albedo, under a rectangular area light.",
+        """    <shape type="cube">
+        <transform name="to_world"><scale value="0.98"/></transform>
+        <bsdf type="null"/>
+        <medium type="heterogeneous" name="interior">
+            <volume name="sigma_t" type="gridvolume">
+                <string name="filename" value="hetero_blob.vol"/>
+                <transform name="to_world">
+                    <scale x="1.6" y="1.6" z="1.4"/>
+                    <translate x="-0.8" y="-0.8" z="-0.9"/>
+                </transform>
+            </volume>
+            <float name="albedo" value="0.85"/>
+            <float name="scale" value="4"/>
+        </medium>
+    </shape>
+""" + FLOOR + AREA_LIGHT,
+    ),
+    "hetero_rgb": scene(
+        "a heterogeneous medium with RGB extinction (a 3-channel grid, 12^3) and an RGB albedo grid\n"
+        "     (3 channels, 12^3) placed by a to_world of its own (the whole cube), forward scattering,\n"
+        "     under a rectangular area light.",
+        """    <shape type="cube">
+        <transform name="to_world"><scale value="0.98"/></transform>
+        <bsdf type="null"/>
+        <medium type="heterogeneous" name="interior">
+            <volume name="sigma_t" type="gridvolume">
+                <string name="filename" value="hetero_rgb_sigma_t.vol"/>
+                <transform name="to_world">
+                    <scale x="1.8" y="1.5" z="1.6"/>
+                    <translate x="-0.9" y="-0.7" z="-0.95"/>
+                </transform>
+            </volume>
+            <volume name="albedo" type="gridvolume">
+                <string name="filename" value="hetero_rgb_albedo.vol"/>
+                <transform name="to_world">
+                    <scale value="1.96"/>
+                    <translate x="-0.98" y="-0.98" z="-0.98"/>
+                </transform>
+            </volume>
+            <float name="scale" value="3"/>
+            <phase type="hg"><float name="g" value="0.5"/></phase>
+        </medium>
+    </shape>
+""" + FLOOR + AREA_LIGHT,
+    ),
 }
 
 
@@ -199,6 +291,7 @@ def main():
     refs.HEADER = HEADER
     refs.object_share = lambda scene, image: None
     DIR.mkdir(parents=True, exist_ok=True)
+    write_grids()
     cases = sys.argv[1:] or sorted(SCENES)
     for case in cases:
         (DIR / f"{case}.xml").write_text(SCENES[case])

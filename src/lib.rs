@@ -29,3 +29,4 @@ pub mod scene;
 pub mod shape;
 pub mod spectrum;
 pub mod texture;
+pub mod volume;

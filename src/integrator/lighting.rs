@@ -172,7 +172,8 @@ pub fn light_sample_at(
 /// over the segments between surfaces, and of what each surface crossed passes (a `null`
 /// boundary or a mask's transparent part; anything else blocks), the medium changing at each
 /// crossing of an interface. Surfaces are met one closest hit at a time, since the segments
-/// between them must be known in order; at most `MAX_CROSSINGS` of them.
+/// between them must be known in order; at most `MAX_CROSSINGS` of them. A heterogeneous
+/// medium's transmittance is estimated (ratio tracking) with numbers from `rng`.
 #[allow(clippy::too_many_arguments)]
 pub fn transmittance_through_media(
     scene: &Scene,
@@ -181,6 +182,7 @@ pub fn transmittance_through_media(
     dist: f32,
     medium: u32,
     bias: f32,
+    rng: &mut crate::sampling::Rng32,
     stats: &mut RayStats,
 ) -> Color {
     let mut ray = from.spawn(wi, bias);
@@ -196,7 +198,7 @@ pub fn transmittance_through_media(
         }
         let hit = scene.intersect(&ray, t_max);
         if ray.medium != crate::geometry::NO_MEDIUM {
-            tr *= scene.media[ray.medium as usize].transmittance(hit.as_ref().map_or(t_max, |h| h.t));
+            tr *= scene.media[ray.medium as usize].transmittance(&ray, hit.as_ref().map_or(t_max, |h| h.t), rng);
             if tr == Color::ZERO {
                 return tr;
             }

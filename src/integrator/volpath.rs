@@ -22,8 +22,11 @@ use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec2, Vec3};
 use crate::medium::Phase;
 use crate::render::{RayIntegrator, RayStats};
-use crate::sampling::Sampler;
+use crate::sampling::{Rng32, Sampler};
 use crate::scene::Scene;
+
+/// The tag of the side stream (`Sampler::side_stream`) heterogeneous media draw from.
+pub const TRACKING_STREAM: u64 = 0x7472_6163_6b69_6e67;
 
 pub struct VolPathTracer {
     /// Longest path in bounces, medium scattering included (0 = emitters only).
@@ -45,6 +48,7 @@ impl VolPathTracer {
         phase: &Phase,
         u_pick: f32,
         u: Vec2,
+        tracking: &mut Rng32,
         stats: &mut RayStats,
     ) -> Color {
         let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
@@ -60,7 +64,7 @@ impl VolPathTracer {
                 let v = phase.p(wo, wi);
                 (Color::splat(v), 1.0, v)
             },
-            |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, medium, 0.0, stats)),
+            |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, medium, 0.0, tracking, stats)),
         )
     }
 }
@@ -81,13 +85,16 @@ impl RayIntegrator for VolPathTracer {
         let mut depth = 0;
         let mut layer = LayerPath::CAMERA;
         let has_media = scene.has_media();
+        // Numbers for heterogeneous media's tracking, whose count varies: a stream of the pixel
+        // sample's own, so the sampler's dimensions stay where they were.
+        let mut tracking = sampler.side_stream(TRACKING_STREAM);
         loop {
             stats.rays += 1;
             let hit = scene.intersect(&ray, f32::INFINITY);
             if ray.medium != NO_MEDIUM {
                 let medium = &scene.media[ray.medium as usize];
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                let ms = medium.sample_distance(t_max, beta, sampler.next_1d(), sampler.next_1d());
+                let ms = medium.sample_distance(&ray, t_max, beta, sampler.next_1d(), sampler.next_1d(), &mut tracking);
                 beta *= ms.weight;
                 if beta == Color::ZERO || !beta.is_finite() {
                     break;
@@ -101,7 +108,7 @@ impl RayIntegrator for VolPathTracer {
                     let phase = *medium.phase();
                     let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
                     layers[layer.direct()] +=
-                        beta * self.medium_direct(scene, p, wo, ray.medium, &phase, u_pick, u, stats);
+                        beta * self.medium_direct(scene, p, wo, ray.medium, &phase, u_pick, u, &mut tracking, stats);
                     let s = phase.sample(wo, sampler.next_2d());
                     layer.bounce(false);
                     specular_bounce = false;
@@ -170,7 +177,17 @@ impl RayIntegrator for VolPathTracer {
                         |wi, dist| {
                             if has_media {
                                 let medium = scene.medium_after(&hit, wi, ray.medium);
-                                (1.0, transmittance_through_media(scene, hit.origin(), wi, dist, medium, bias, stats))
+                                let tr = transmittance_through_media(
+                                    scene,
+                                    hit.origin(),
+                                    wi,
+                                    dist,
+                                    medium,
+                                    bias,
+                                    &mut tracking,
+                                    stats,
+                                );
+                                (1.0, tr)
                             } else {
                                 (visibility(scene, hit.origin(), wi, dist, bias, stats), Color::ONE)
                             }

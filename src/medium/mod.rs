@@ -4,18 +4,32 @@
 //! [`MediumInterface`] (a `null` boundary or glass) changes it. Media are a closed set, as
 //! shapes and lights are: an enum whose methods forward to each kind's file.
 
+pub mod heterogeneous;
 pub mod homogeneous;
 pub mod phase;
 
+pub use heterogeneous::{Heterogeneous, Volume, VolumeData};
 pub use homogeneous::{Homogeneous, MediumSample};
 pub use phase::{Phase, PhaseSample};
 
-use crate::geometry::NO_MEDIUM;
+use crate::geometry::{NO_MEDIUM, Ray};
 use crate::math::{Color, Vec3};
+use crate::sampling::Rng32;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A medium. Not `Copy`: a heterogeneous one shares its grids (`Arc`), and media are only ever
+/// borrowed from the scene.
+///
+/// Every query takes the ray (a unit direction for the homogeneous kind, whose distances are
+/// t itself) and a random stream for the kinds whose estimates draw a varying count of numbers
+/// (heterogeneous: one per tentative collision). The homogeneous kind draws nothing from it, so
+/// its images are the same bit for bit as before the stream existed.
+// A heterogeneous medium is a few hundred bytes (two placed volumes); a scene holds a handful of
+// media and rays borrow them, so the size costs nothing per ray.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Medium {
     Homogeneous(Homogeneous),
+    Heterogeneous(Heterogeneous),
 }
 
 impl Medium {
@@ -23,23 +37,36 @@ impl Medium {
     pub fn phase(&self) -> &Phase {
         match self {
             Medium::Homogeneous(m) => &m.phase,
+            Medium::Heterogeneous(m) => &m.phase,
         }
     }
 
-    /// The transmittance over distance `t` along a ray.
+    /// The transmittance along `ray` from t = 0 to `t_max` (an unbiased estimate where the
+    /// medium varies).
     #[inline]
-    pub fn transmittance(&self, t: f32) -> Color {
+    pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Rng32) -> Color {
         match self {
-            Medium::Homogeneous(m) => m.transmittance(t),
+            Medium::Homogeneous(m) => m.transmittance(t_max),
+            Medium::Heterogeneous(m) => m.transmittance(ray, t_max, rng),
         }
     }
 
-    /// Free-flight sampling along a segment of length `t_max` for light carried with
-    /// throughput `beta` (see `Homogeneous::sample_distance`).
+    /// Free-flight sampling along `ray` up to `t_max` for light carried with throughput `beta`
+    /// (see `Homogeneous::sample_distance` for the weights): `u_channel` and `u` are the
+    /// sampler's numbers, `rng` gives any further ones.
     #[inline]
-    pub fn sample_distance(&self, t_max: f32, beta: Color, u_channel: f32, u: f32) -> MediumSample {
+    pub fn sample_distance(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        beta: Color,
+        u_channel: f32,
+        u: f32,
+        rng: &mut Rng32,
+    ) -> MediumSample {
         match self {
             Medium::Homogeneous(m) => m.sample_distance(t_max, beta, u_channel, u),
+            Medium::Heterogeneous(m) => m.sample_distance(ray, t_max, beta, u, rng),
         }
     }
 }

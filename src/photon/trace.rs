@@ -340,7 +340,10 @@ pub fn trace_photon(
             // Through a medium: a free flight, which may end in a scattering event first.
             let medium = &scene.media[ray.medium as usize];
             let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            let ms = medium.sample_distance(t_max, flux, rng.uniform(), rng.uniform());
+            // A heterogeneous medium draws its further numbers from the photon's own stream (the
+            // homogeneous kind draws none, so its photons are as before).
+            let (u_channel, u) = (rng.uniform(), rng.uniform());
+            let ms = medium.sample_distance(&ray, t_max, flux, u_channel, u, rng);
             let before = flux;
             flux *= ms.weight;
             if ms.scattered {

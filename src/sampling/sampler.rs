@@ -115,6 +115,15 @@ impl Sampler {
         &mut self.rng
     }
 
+    /// A stream of this pixel sample's own beside the sampler's, for draws whose count varies
+    /// from sample to sample (a heterogeneous medium's tracking steps): seeded by (pixel seed,
+    /// sample index, `tag`), so drawing from it moves none of the sampler's dimensions and the
+    /// numbers depend on nothing but the sample.
+    #[inline]
+    pub fn side_stream(&self, tag: u64) -> Rng32 {
+        Rng32::new(hash_seed(&[self.pixel_seed, self.index as u64, tag]))
+    }
+
     #[inline(never)]
     fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
         let pair = self.pair;

@@ -11,6 +11,7 @@ pub mod error;
 pub mod footprint;
 pub mod mitsuba;
 pub mod native;
+pub mod volume_file;
 
 pub use desc::{BuiltScene, LoadOptions, SceneDescription};
 pub use error::SceneError;

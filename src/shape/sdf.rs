@@ -15,7 +15,7 @@ use crate::math::float::gamma;
 use crate::math::{Vec2, Vec3};
 
 /// Largest grid side: a voxel's cell index packs into 10 bits per axis.
-pub const MAX_GRID_SIDE: usize = 1024;
+pub use crate::volume::MAX_GRID_SIDE;
 
 /// Newton iterations stop when the step is below this, in ray parameter units (Mitsuba's).
 const SOLVE_EPSILON: f32 = 1e-5;
@@ -230,56 +230,15 @@ fn quadratic_roots(a: f32, b: f32, c: f32) -> [f32; 2] {
     [q / a, c / q]
 }
 
-/// What is wrong with a `.vol` grid file.
-#[derive(Debug, thiserror::Error, PartialEq)]
-#[error("{0}")]
-pub struct VolError(pub String);
+pub use crate::volume::VolError;
 
-/// Reads Mitsuba's binary grid volume format (`gridvolume`, `sdfgrid`): the bytes `VOL`, version
-/// 3, encoding 1 (dense 32-bit floats), the x, y and z resolutions and the channel count as
-/// 32-bit little-endian integers, a bounding box of six floats (not used: an SDF grid spans
-/// [0, 1]^3 of its object space), then the values, x fastest and channels innermost. An SDF grid
-/// has one channel and at least two samples along each axis.
+/// Reads Mitsuba's binary grid volume format (`crate::volume::parse_vol`, the reader every grid
+/// goes through) as an SDF grid: one channel and at least two samples along each axis. The
+/// file's bounding box is not used: an SDF grid spans [0, 1]^3 of its object space.
 pub fn parse_vol(bytes: &[u8]) -> Result<SdfGrid, VolError> {
-    let err = |m: String| Err(VolError(m));
-    if bytes.len() < 48 {
-        return err(format!("a .vol file has a 48-byte header; this one has {} bytes in all", bytes.len()));
-    }
-    if &bytes[0..3] != b"VOL" {
-        return err("not a Mitsuba .vol file (it does not start with `VOL`)".into());
-    }
-    if bytes[3] != 3 {
-        return err(format!("version {} of the .vol format is not supported (expected 3)", bytes[3]));
-    }
-    let int = |at: usize| i32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-    let encoding = int(4);
-    if encoding != 1 {
-        return err(format!("encoding {encoding} is not supported (expected 1: 32-bit floats)"));
-    }
-    let (x, y, z, channels) = (int(8), int(12), int(16), int(20));
-    if channels != 1 {
-        return err(format!("an SDF grid has 1 channel; this file has {channels}"));
-    }
-    for (axis, n) in [("x", x), ("y", y), ("z", z)] {
-        if !(2..=MAX_GRID_SIDE as i32).contains(&n) {
-            return err(format!("the {axis} resolution must be 2 to {MAX_GRID_SIDE}, found {n}"));
-        }
-    }
-    let (nx, ny, nz) = (x as usize, y as usize, z as usize);
-    let count = nx * ny * nz;
-    let data = &bytes[48..];
-    if data.len() != 4 * count {
-        return err(format!(
-            "a {nx} x {ny} x {nz} grid holds {} bytes of values; the file has {} (cut short or padded?)",
-            4 * count,
-            data.len()
-        ));
-    }
-    let values: Vec<f32> = data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return err(format!("value {i} of the grid is not a finite number"));
-    }
-    Ok(SdfGrid { nx, ny, nz, values })
+    let shape = crate::volume::VolShape { channels: &[1], min_side: 2, what: "an SDF grid" };
+    let g = crate::volume::parse_vol(bytes, shape)?;
+    Ok(SdfGrid { nx: g.nx, ny: g.ny, nz: g.nz, values: g.values })
 }
 
 #[cfg(test)]

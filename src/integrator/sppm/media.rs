@@ -79,6 +79,7 @@ impl Sppm {
         let config = &self.config;
         let bias = config.ray_bias;
         let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
+        let mut tracking = sampler.side_stream(crate::integrator::volpath::TRACKING_STREAM);
         if ray.medium == NO_MEDIUM {
             ray.medium = scene.camera_medium;
         }
@@ -98,7 +99,7 @@ impl Sppm {
             if ray.medium != NO_MEDIUM {
                 let medium = &scene.media[ray.medium as usize];
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                let ms = medium.sample_distance(t_max, beta, sampler.next_1d(), sampler.next_1d());
+                let ms = medium.sample_distance(&ray, t_max, beta, sampler.next_1d(), sampler.next_1d(), &mut tracking);
                 if ms.scattered {
                     // This scattering event is bounce depth + 1.
                     let Some(limit) = trace::photon_depth_limit(config.max_depth, depth + 1) else { break };
@@ -144,7 +145,9 @@ impl Sppm {
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, d| {
                             let m = scene.medium_after(&hit, wi, ray.medium);
-                            (1.0, transmittance_through_media(scene, hit.origin(), wi, d, m, bias, stats))
+                            let tr =
+                                transmittance_through_media(scene, hit.origin(), wi, d, m, bias, &mut tracking, stats);
+                            (1.0, tr)
                         },
                     );
                     add(layer.direct(), beta * direct);

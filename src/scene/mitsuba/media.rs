@@ -1,4 +1,6 @@
-//! Mitsuba 3's participating media: `<medium type="homogeneous">` with its `<phase>`
+//! Mitsuba 3's participating media: `<medium type="homogeneous">` and `<medium
+//! type="heterogeneous">` (its `sigma_t` and `albedo` a number, a colour, a `constvolume` or a
+//! `gridvolume` read from a `.vol` file, each volume with its own `to_world`) with its `<phase>`
 //! (`isotropic`, `hg`, `rayleigh`), nested in a shape as `interior` / `exterior` or in the
 //! sensor, or declared at the top with an id and referenced. Each `<medium>` element becomes one
 //! medium of the scene however often it is referenced.
@@ -7,9 +9,12 @@ use super::Build;
 use super::plugins::PluginKind;
 use super::props::{Cx, Props};
 use super::xml::El;
+use crate::geometry::Transform;
 use crate::math::Color;
+use crate::medium::{Heterogeneous, Volume, VolumeData};
 use crate::medium::{Homogeneous, Medium, MediumInterface, Phase};
 use crate::scene::SceneError;
+use crate::scene::footprint::FileKind;
 use crate::spectrum::SpectrumUse;
 
 impl<'a> Cx<'a> {
@@ -22,9 +27,11 @@ impl<'a> Cx<'a> {
         let p = self.props(el)?;
         let medium = match p.kind.as_str() {
             "homogeneous" => self.homogeneous(el, &p)?,
+            "heterogeneous" => self.heterogeneous(el, &p)?,
             other => {
-                let message = super::plugins::unknown(PluginKind::Medium, other)
-                    .unwrap_or_else(|| format!("medium `{other}` is not supported yet; expected homogeneous"));
+                let message = super::plugins::unknown(PluginKind::Medium, other).unwrap_or_else(|| {
+                    format!("medium `{other}` is not supported yet; expected homogeneous or heterogeneous")
+                });
                 return Err(self.err(el, message));
             }
         };
@@ -67,6 +74,93 @@ impl<'a> Cx<'a> {
         let phase = self.phase(p)?;
         let m = Homogeneous::new(sigma_t * scale, albedo, phase).map_err(|e| self.err(el, format!("medium: {e}")))?;
         Ok(Medium::Homogeneous(m))
+    }
+
+    fn heterogeneous(&mut self, el: &'a El, p: &Props<'a>) -> Result<Medium, SceneError> {
+        let sigma_t = self.medium_volume(p, "sigma_t", Color::ONE)?;
+        let albedo = self.medium_volume(p, "albedo", Color::splat(0.75))?;
+        let scale = self.float(p, "scale")?.unwrap_or(1.0);
+        // How lights are sampled from inside the medium does not change the image; Mitsuba's
+        // flag for RGB extinction only tells its integrator what to expect.
+        let _ = self.boolean(p, "sample_emitters")?;
+        let _ = self.boolean(p, "has_spectral_extinction")?;
+        let phase = self.phase(p)?;
+        let m = Heterogeneous::new(sigma_t, albedo, scale, phase).map_err(|e| self.err(el, format!("medium: {e}")))?;
+        Ok(Medium::Heterogeneous(m))
+    }
+
+    /// A heterogeneous medium's quantity: a number, `<rgb>` or `<spectrum>`, a `constvolume`,
+    /// or a `gridvolume` (its `.vol` file read and checked, errors naming the file); each volume
+    /// spans the unit cube of its `to_world`.
+    fn medium_volume(&mut self, p: &Props<'a>, name: &str, default: Color) -> Result<Volume, SceneError> {
+        if let Some(el) = self.prop(p, name) {
+            return Ok(Volume::constant(self.raw_color(el, name)?));
+        }
+        let Some(&(vol, at)) = self.object(p, Some(name), "volume").first() else {
+            return Ok(Volume::constant(default));
+        };
+        let vp = self.props(vol)?;
+        let to_world = self.transform(&vp, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
+        if !to_world.is_valid() {
+            return Err(self.err(vol, format!("the `{name}` volume's to_world is singular or not finite")));
+        }
+        let volume = match vp.kind.as_str() {
+            "constvolume" => {
+                let c = match self.prop(&vp, "value") {
+                    Some(el) => self.raw_color(el, name)?,
+                    None => Color::ONE,
+                };
+                Volume::placed(VolumeData::Constant(c), &to_world)
+            }
+            "gridvolume" => {
+                let (file, fel) = self.string(&vp, "filename")?.ok_or_else(|| {
+                    self.err(vol, "a gridvolume needs <string name=\"filename\" value=\"...vol\"/> (a `grid` object is Python-only)")
+                })?;
+                if let Some((f, fel)) = self.string(&vp, "filter_type")?
+                    && f != "trilinear"
+                {
+                    return Err(
+                        self.err(fel, format!("gridvolume `filter_type` `{f}` is not supported; expected trilinear"))
+                    );
+                }
+                if let Some((w, wel)) = self.string(&vp, "wrap_mode")?
+                    && w != "clamp"
+                {
+                    return Err(self.err(wel, format!("gridvolume `wrap_mode` `{w}` is not supported; expected clamp")));
+                }
+                // Colour conversion (`raw`) and hardware interpolation (`accel`) change nothing
+                // in an RGB renderer.
+                let _ = self.boolean(&vp, "raw")?;
+                let _ = self.boolean(&vp, "accel")?;
+                let use_grid_bbox = self.boolean(&vp, "use_grid_bbox")?.unwrap_or(false);
+                let path = self.resolve_file(fel, &file)?;
+                self.files.open(&path, FileKind::Volume)?;
+                let grid = crate::scene::volume_file::load_medium_grid(&path, name).map_err(|e| self.err(fel, e))?;
+                let mut to_world = to_world;
+                if use_grid_bbox {
+                    // The unit cube onto the box the file records, then `to_world`.
+                    let b = grid.bbox;
+                    let (lo, hi) = (crate::math::Vec3::new(b[0], b[1], b[2]), crate::math::Vec3::new(b[3], b[4], b[5]));
+                    let onto = Transform::scale(hi - lo).then(Transform::translate(lo));
+                    to_world = onto.then(to_world);
+                    if !to_world.is_valid() {
+                        return Err(self.err(
+                            fel,
+                            format!("grid volume `{}`: its bounding box is empty or not finite", path.display()),
+                        ));
+                    }
+                }
+                Volume::placed(VolumeData::Grid(grid), &to_world)
+            }
+            other => {
+                let message = super::plugins::unknown(PluginKind::Volume, other).unwrap_or_else(|| {
+                    format!("a `{other}` volume is not supported for `{name}`; expected constvolume or gridvolume")
+                });
+                return Err(self.err(at, message));
+            }
+        };
+        self.finish(&vp)?;
+        Ok(volume)
     }
 
     /// A medium's coefficient as written: a number, an `<rgb>`, a `<spectrum>`, or a

@@ -427,7 +427,11 @@ impl<'a> Cx<'a> {
     }
 
     /// A transform list's operations composed in the order listed.
-    fn transform(&self, ops: &Option<Vec<TransformOp>>, span: Range<usize>) -> Result<Transform, SceneError> {
+    pub(super) fn transform(
+        &self,
+        ops: &Option<Vec<TransformOp>>,
+        span: Range<usize>,
+    ) -> Result<Transform, SceneError> {
         let mut t = Transform::IDENTITY;
         for op in ops.iter().flatten() {
             t = t.then(match op {
