@@ -41,8 +41,12 @@ pub enum FileKind {
     Include,
     /// A spectrum data file (Mitsuba's `.spd`; counted as nothing: it becomes one colour).
     Spectrum,
-    /// A grid of values (Mitsuba's `.vol`, an SDF grid): counted by its size.
+    /// A grid of signed distances (Mitsuba's `.vol` for `sdfgrid`): counted at 16 times its size
+    /// (its voxels become primitives).
     Volume,
+    /// A grid of a participating medium's values (Mitsuba's `.vol` for `gridvolume`): held as
+    /// its 32-bit values, about its size, and a majorant grid of at most 16^3 values.
+    MediumGrid,
     /// A mesh, read in this format (the loader's choice, not the file name's).
     Mesh(MeshFormat),
     /// An image: a bitmap texture or an environment map.
@@ -179,6 +183,7 @@ impl FileBudget {
             FileKind::Mesh(_) => ledger.charge(Part::Meshes, bytes, what)?,
             FileKind::Image => ledger.charge(Part::Textures, bytes, what)?,
             FileKind::Volume => ledger.charge(Part::Meshes, bytes, what)?,
+            FileKind::MediumGrid => ledger.charge(Part::Textures, bytes, what)?,
         }
         if !listed {
             let i = ledger.footprint.files.len();
@@ -221,6 +226,7 @@ fn measure(path: &Path, kind: FileKind) -> u64 {
         FileKind::Image => image_size(path).map_or(0, |(w, h)| w.saturating_mul(h).saturating_mul(BYTES_PER_TEXEL)),
         // At most one 40-byte voxel (and its BVH share) per 4-byte value: an upper bound.
         FileKind::Volume => std::fs::metadata(path).map_or(0, |m| m.len().saturating_mul(16)),
+        FileKind::MediumGrid => std::fs::metadata(path).map_or(0, |m| m.len().saturating_add(4 * 16 * 16 * 16)),
     }
 }
 
@@ -394,6 +400,11 @@ mod tests {
         assert_eq!(f.meshes, 162 * BYTES_PER_VERTEX + 320 * BYTES_PER_TRIANGLE);
         let f = loaded("scenes/07-torus-knot.toml");
         assert_eq!(f.meshes, 1600 * 32 * (BYTES_PER_VERTEX + 2 * BYTES_PER_TRIANGLE));
+        // A medium's grid is held as its values (and a small majorant grid), not as primitives.
+        let f = loaded("tests/data/media/hetero_blob.xml");
+        let vol = std::fs::metadata(data("tests/data/media/hetero_blob.vol")).unwrap().len();
+        assert_eq!((f.meshes, f.textures), (0, vol + 4 * 16 * 16 * 16), "{f:?}");
+        assert_eq!(f.files.iter().filter(|r| r.kind == FileKind::MediumGrid).count(), 1);
         let f = loaded("scenes/15-materials.toml");
         assert!(
             f.textures > 0 && f.files[0].kind == FileKind::Scene && f.files[1..].iter().all(|r| r.bytes > 0),

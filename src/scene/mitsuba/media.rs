@@ -134,7 +134,7 @@ impl<'a> Cx<'a> {
                 let _ = self.boolean(&vp, "accel")?;
                 let use_grid_bbox = self.boolean(&vp, "use_grid_bbox")?.unwrap_or(false);
                 let path = self.resolve_file(fel, &file)?;
-                self.files.open(&path, FileKind::Volume)?;
+                self.files.open(&path, FileKind::MediumGrid)?;
                 let grid = crate::scene::volume_file::load_medium_grid(&path, name).map_err(|e| self.err(fel, e))?;
                 let mut to_world = to_world;
                 if use_grid_bbox {

@@ -206,7 +206,7 @@ impl<'a> Cx<'a> {
             Some(VolumeValue::Constant(c)) => VolumeData::Constant(c),
             Some(VolumeValue::File(file)) => {
                 let path = self.base.join(file);
-                self.files.open(&path, FileKind::Volume)?;
+                self.files.open(&path, FileKind::MediumGrid)?;
                 let grid = crate::scene::volume_file::load_medium_grid(&path, name).map_err(|e| self.at(span, e))?;
                 VolumeData::Grid(grid)
             }
