@@ -144,14 +144,15 @@ mod parameters {
     }
 
     fn load(text: &str, defines: &[(&str, &str)]) -> Result<caustic::scene::SceneDescription, String> {
-        let dir = std::env::temp_dir().join(format!("caustic-params-{}", std::process::id()));
+        // Each load its own folder: the tests run at the same time, and a mesh copied over while
+        // another load reads it would be read cut short.
+        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("caustic-params-{}-{n}", std::process::id()));
         std::fs::create_dir_all(dir.join("meshes")).unwrap();
         let blob = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/blob.ply");
         std::fs::copy(&blob, dir.join("meshes/blob.ply")).unwrap();
         std::fs::copy(&blob, dir.join("meshes/other.ply")).unwrap();
-        // Each load its own file: the tests run at the same time.
-        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let path = dir.join(format!("p{n}.toml"));
         std::fs::write(&path, text).unwrap();
         let o = LoadOptions {
