@@ -25,10 +25,13 @@ pub use volpath::VolPathTracer;
 pub use whitted::Whitted;
 
 use crate::film::Film;
+use crate::film::splat::SplatFilm;
 use crate::options::IntegratorKind;
-use crate::render::{RenderControl, RenderOutput, RenderSettings, render_rays_from};
+use crate::render::{Driver, PassOutcome, RenderControl, RenderOutput, RenderSettings, RenderStats, render_rays_from};
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
+use std::cell::RefCell;
+use std::ops::Range;
 
 /// One of caustic's integrators, ready to render.
 pub enum Integrator {
@@ -188,4 +191,26 @@ pub fn estimated_bytes(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSe
             sppm::estimated_bytes(settings.pixels(), c.max_photons_per_iter(), settings.layers)
         }
     }
+}
+
+/// Renders through the shared driver with a splat film beside the pixel film, as the integrators
+/// whose light paths land on any pixel do (`light`, `bdpt`, `vcm`): `pass` adds sample indices
+/// (or iterations) `range` to both, and the driver's progress counts them in `unit`. Returns the
+/// film and the stats with its sample count.
+pub(crate) fn render_splatted(
+    settings: &RenderSettings,
+    control: &RenderControl,
+    film: Film,
+    (name, unit): (&'static str, &'static str),
+    mut pass: impl FnMut(&Driver, &SplatFilm, &mut Film, Range<u32>) -> PassOutcome,
+) -> (Film, RenderStats) {
+    let first = settings.first_sample.saturating_add(film.min_samples());
+    let splats = SplatFilm::new(settings.width, settings.height, settings.origin, settings.filter, settings.layers);
+    let film = RefCell::new(film);
+    let mut driver = Driver::new(settings, control, name, unit, settings.pixels(), first);
+    let mut stats =
+        driver.run(|driver, range| pass(driver, &splats, &mut film.borrow_mut(), range), |f| f(&film.borrow()));
+    let film = film.into_inner();
+    stats.samples_per_pixel = film.min_samples();
+    (film, stats)
 }

@@ -40,7 +40,6 @@ use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, 
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
 use rayon::prelude::*;
-use std::cell::RefCell;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use strategy::{Context, LightVertex};
@@ -94,16 +93,13 @@ impl Bdpt {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        let first = settings.first_sample.saturating_add(film.min_samples());
-        let splats = SplatFilm::new(settings.width, settings.height, settings.origin, settings.filter, settings.layers);
-        let film = RefCell::new(film);
-        let mut driver = Driver::new(settings, control, "bdpt", "samples per pixel", settings.pixels(), first);
-        let mut stats = driver.run(
-            |driver, range| self.pass(scene, driver, &splats, &mut film.borrow_mut(), range),
-            |f| f(&film.borrow()),
+        let (film, stats) = crate::integrator::render_splatted(
+            settings,
+            control,
+            film,
+            ("bdpt", "samples per pixel"),
+            |driver, splats, film, range| self.pass(scene, driver, splats, film, range),
         );
-        let film = film.into_inner();
-        stats.samples_per_pixel = film.min_samples();
         RenderOutput::from_film(film, stats)
     }
 

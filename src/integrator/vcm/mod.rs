@@ -41,7 +41,6 @@ use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
 use grid::VertexGrid;
 use rayon::prelude::*;
-use std::cell::RefCell;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -159,18 +158,15 @@ impl Vcm {
         control: &RenderControl,
         film: Film,
     ) -> RenderOutput {
-        let first = settings.first_sample.saturating_add(film.min_samples());
-        let splats = SplatFilm::new(settings.width, settings.height, settings.origin, settings.filter, settings.layers);
-        let film = RefCell::new(film);
-        let paths = RefCell::new(LightPaths::default());
-        let mut driver = Driver::new(settings, control, "vcm", "iterations", settings.pixels(), first);
-        let mut stats = driver.run(
-            |driver, range| self.pass(scene, driver, &splats, &mut paths.borrow_mut(), &mut film.borrow_mut(), range),
-            |f| f(&film.borrow()),
+        let mut paths = LightPaths::default();
+        let (film, mut stats) = crate::integrator::render_splatted(
+            settings,
+            control,
+            film,
+            ("vcm", "iterations"),
+            |driver, splats, film, range| self.pass(scene, driver, splats, &mut paths, film, range),
         );
-        let film = film.into_inner();
-        stats.samples_per_pixel = film.min_samples();
-        stats.memory_bytes = paths.borrow().peak_bytes as u64;
+        stats.memory_bytes = paths.peak_bytes as u64;
         RenderOutput::from_film(film, stats)
     }
 
