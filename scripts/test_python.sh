@@ -1,11 +1,10 @@
 #!/usr/bin/env bash
-# Every test: the Rust suite (`cargo test --release`), then the Python package's, installed with
-# `pip install .` into a fresh virtual environment (target/python-venv) and run against the
-# `caustic` binary the Rust suite built, so the two are compared with each other.
+# The Python package's tests, after `cargo test --release` (the README's test command runs both):
+# the package installed with `pip install .` into a fresh virtual environment
+# (target/python-venv) and run against the `caustic` binary the Rust suite built, so the two are
+# compared with each other.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-
-cargo test --release
 
 venv=target/python-venv
 rm -rf "$venv"
