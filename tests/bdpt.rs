@@ -25,44 +25,15 @@ fn mean(img: &Image) -> f64 {
     luminance(img.mean()) as f64
 }
 
-/// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen
-/// from its centre: radiance 0.5 from direct light, 1 with all bounces (0.5 / (1 - 0.5)).
-fn furnace(max_depth: u32) -> String {
-    format!(
-        r#"
-[render]
-width = 8
-height = 8
-max_depth = {max_depth}
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, 1]
-fov = 60
-[materials.grey]
-type = "diffuse"
-color = [1, 1, 1]
-kd = 0.5
-[[lights]]
-type = "point"
-position = [0, 0, 0]
-intensity = 3.14159265
-[[objects]]
-type = "sphere"
-radius = 1
-material = "grey"
-"#
-    )
-}
-
 #[test]
 fn furnace_has_radiance_one_with_all_bounces_and_one_half_direct() {
-    let mut s = bdpt(&furnace(200), 64, 1);
+    let mut s = bdpt(&common::point_light_furnace(200), 64, 1);
     s.settings.layers = true;
     let out = render(&s, 2);
     let (gi, direct) = (mean(&out.image), mean(&out.layers[caustic::film::DIRECT]));
     assert!((gi - 1.0).abs() < 0.03, "all bounces: {gi}");
     assert!((direct - 0.5).abs() < 0.015, "direct layer: {direct}");
-    let direct_only = mean(&render(&bdpt(&furnace(1), 64, 2), 2).image);
+    let direct_only = mean(&render(&bdpt(&common::point_light_furnace(1), 64, 2), 2).image);
     assert!((direct_only - 0.5).abs() < 0.015, "max_depth 1: {direct_only}");
 }
 

@@ -32,50 +32,21 @@ fn bits(img: &Image) -> Vec<[u32; 3]> {
     img.pixels.iter().map(|c| c.to_array().map(f32::to_bits)).collect()
 }
 
-/// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen
-/// from its centre: radiance 0.5 from direct light, 1 with all bounces (0.5 / (1 - 0.5)).
-fn furnace(max_depth: u32) -> String {
-    format!(
-        r#"
-[render]
-width = 8
-height = 8
-max_depth = {max_depth}
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, 1]
-fov = 60
-[materials.grey]
-type = "diffuse"
-color = [1, 1, 1]
-kd = 0.5
-[[lights]]
-type = "point"
-position = [0, 0, 0]
-intensity = 3.14159265
-[[objects]]
-type = "sphere"
-radius = 1
-material = "grey"
-"#
-    )
-}
-
 #[test]
 fn furnace_has_radiance_one_with_all_bounces_and_one_half_direct() {
-    let mut s = scene(&furnace(200), IntegratorKind::Vcm, 64, 1);
+    let mut s = scene(&common::point_light_furnace(200), IntegratorKind::Vcm, 64, 1);
     s.settings.layers = true;
     let out = render(&s, 2);
     let (gi, direct) = (mean(&out.image), mean(&out.layers[caustic::film::DIRECT]));
     assert!((gi - 1.0).abs() < 0.03, "all bounces: {gi}");
     assert!((direct - 0.5).abs() < 0.015, "direct layer: {direct}");
-    let direct_only = mean(&render(&scene(&furnace(1), IntegratorKind::Vcm, 64, 2), 2).image);
+    let direct_only = mean(&render(&scene(&common::point_light_furnace(1), IntegratorKind::Vcm, 64, 2), 2).image);
     assert!((direct_only - 0.5).abs() < 0.015, "max_depth 1: {direct_only}");
 }
 
 #[test]
 fn the_merge_radius_starts_as_sppms_and_shrinks_with_alpha() {
-    let s = scene(&furnace(4), IntegratorKind::Vcm, 1, 1);
+    let s = scene(&common::point_light_furnace(4), IntegratorKind::Vcm, 1, 1);
     let Ok(Integrator::Vcm(vcm)) = Integrator::new(&s.integrator, &s.scene, &s.settings, &RenderControl::uncancelled())
     else {
         panic!("not a VCM integrator")
@@ -99,7 +70,7 @@ fn the_merge_radius_starts_as_sppms_and_shrinks_with_alpha() {
         photon: PhotonOptions { initial_radius: Some(0.01), ..Default::default() },
         ..Default::default()
     };
-    let s = common::scene_with(&furnace(4), &o);
+    let s = common::scene_with(&common::point_light_furnace(4), &o);
     let Ok(Integrator::Vcm(vcm)) = Integrator::new(&s.integrator, &s.scene, &s.settings, &RenderControl::uncancelled())
     else {
         panic!("not a VCM integrator")

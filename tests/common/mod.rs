@@ -53,3 +53,32 @@ pub fn bias(s: &LoadedScene) -> f32 {
 pub fn render_with<I: RayIntegrator>(s: &LoadedScene, integrator: &I) -> Image {
     render_rays(&s.scene, integrator, &s.settings, &RenderControl::uncancelled()).image
 }
+
+/// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen
+/// from its centre: radiance 0.5 from direct light, 1 with all bounces (0.5 / (1 - 0.5)).
+pub fn point_light_furnace(max_depth: u32) -> String {
+    format!(
+        r#"
+[render]
+width = 8
+height = 8
+max_depth = {max_depth}
+[camera]
+eye = [0, 0, 0]
+look_at = [0, 0, 1]
+fov = 60
+[materials.grey]
+type = "diffuse"
+color = [1, 1, 1]
+kd = 0.5
+[[lights]]
+type = "point"
+position = [0, 0, 0]
+intensity = 3.14159265
+[[objects]]
+type = "sphere"
+radius = 1
+material = "grey"
+"#
+    )
+}
