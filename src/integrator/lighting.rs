@@ -304,6 +304,43 @@ impl EveryLight {
     }
 }
 
+/// The light a path finds where its ray ends: the environment when it leaves the scene (`hit`
+/// None) or an emitter's front side, with the MIS weight against the light sample the last
+/// bounce took from `prev_p`, where it sampled the ray with density `prev_pdf` (weight 1 after a
+/// mirror or glass bounce, which took none). Returns the radiance and the weight apart, so
+/// callers multiply them into the throughput in one order.
+#[inline(always)]
+pub fn emission_found(
+    scene: &Scene,
+    ray_d: Vec3,
+    hit: Option<&Hit>,
+    prev_p: Vec3,
+    prev_pdf: f32,
+    specular_bounce: bool,
+) -> Option<(Color, f32)> {
+    let (li, le, light_pdf) = match hit {
+        None => {
+            let env = scene.environment?;
+            let le = scene.lights[env as usize].environment_radiance(ray_d);
+            if specular_bounce {
+                return Some((le, 1.0));
+            }
+            (env, le, scene.lights[env as usize].pdf_li(prev_p, prev_p, ray_d, ray_d))
+        }
+        Some(hit) => {
+            if !(hit.is_emitter() && hit.is_front(ray_d)) {
+                return None;
+            }
+            let le = scene.emitted(hit, -ray_d);
+            if specular_bounce {
+                return Some((le, 1.0));
+            }
+            (hit.light, le, scene.lights[hit.light as usize].pdf_li(prev_p, hit.p, hit.ng, ray_d))
+        }
+    };
+    Some((le, power_heuristic(prev_pdf, scene.direct_picker.prob(li as usize) * light_pdf)))
+}
+
 /// Veach's power heuristic (exponent 2) weight of a sample of density `a` against one of `b`.
 /// Written as a ratio so that densities whose squares overflow (an area light seen edge-on from
 /// a point far along a floor plane has a solid-angle density near 1e23) give 1 or 0, not

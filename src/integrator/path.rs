@@ -5,7 +5,7 @@
 //! area and environment lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
 
 use super::layers::LayerPath;
-use super::lighting::{direct_light, power_heuristic};
+use super::lighting::{direct_light, emission_found};
 use crate::film::Layers;
 use crate::geometry::Ray;
 use crate::material::bxdf::Transport;
@@ -36,34 +36,13 @@ impl RayIntegrator for PathTracer {
         let mut layer = LayerPath::CAMERA;
         loop {
             stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
-                // The ray leaves the scene: the environment, weighted against its light samples.
-                if let Some(env) = scene.environment {
-                    let le = scene.lights[env as usize].environment_radiance(ray.d);
-                    let w = if specular_bounce {
-                        1.0
-                    } else {
-                        let light_pdf = scene.direct_picker.prob(env as usize)
-                            * scene.lights[env as usize].pdf_li(prev_p, prev_p, ray.d, ray.d);
-                        power_heuristic(prev_pdf, light_pdf)
-                    };
-                    layers[layer.emitted()] += beta * le * w;
-                }
-                break;
-            };
-            let wo = -ray.d;
-            if hit.is_emitter() && hit.is_front(ray.d) {
-                let le = scene.emitted(&hit, wo);
-                let k = layer.emitted();
-                if specular_bounce {
-                    layers[k] += beta * le;
-                } else {
-                    let light = &scene.lights[hit.light as usize];
-                    let light_pdf =
-                        scene.direct_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
-                    layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
-                }
+            let hit = scene.intersect(&ray, f32::INFINITY);
+            if let Some((le, w)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
+                layers[layer.emitted()] += beta * le * w;
             }
+            // The ray leaves the scene.
+            let Some(hit) = hit else { break };
+            let wo = -ray.d;
             if depth >= self.max_depth {
                 break;
             }

@@ -15,7 +15,7 @@
 //! an emitter met after them needs. Russian roulette after three bounces, as the path tracer.
 
 use super::layers::LayerPath;
-use super::lighting::{bsdf_scatter, light_sample_at, power_heuristic, transmittance_through_media, visibility};
+use super::lighting::{bsdf_scatter, emission_found, light_sample_at, transmittance_through_media, visibility};
 use crate::film::Layers;
 use crate::geometry::{NO_MEDIUM, Ray, RayOrigin};
 use crate::material::bxdf::Transport;
@@ -122,34 +122,12 @@ impl RayIntegrator for VolPathTracer {
                     continue;
                 }
             }
-            let Some(hit) = hit else {
-                // The ray leaves the scene: the environment, weighted against its light samples.
-                if let Some(env) = scene.environment {
-                    let le = scene.lights[env as usize].environment_radiance(ray.d);
-                    let w = if specular_bounce {
-                        1.0
-                    } else {
-                        let light_pdf = scene.direct_picker.prob(env as usize)
-                            * scene.lights[env as usize].pdf_li(prev_p, prev_p, ray.d, ray.d);
-                        power_heuristic(prev_pdf, light_pdf)
-                    };
-                    layers[layer.emitted()] += beta * le * w;
-                }
-                break;
-            };
-            let wo = -ray.d;
-            if hit.is_emitter() && hit.is_front(ray.d) {
-                let le = scene.emitted(&hit, wo);
-                let k = layer.emitted();
-                if specular_bounce {
-                    layers[k] += beta * le;
-                } else {
-                    let light = &scene.lights[hit.light as usize];
-                    let light_pdf =
-                        scene.direct_picker.prob(hit.light as usize) * light.pdf_li(prev_p, hit.p, hit.ng, ray.d);
-                    layers[k] += beta * le * power_heuristic(prev_pdf, light_pdf);
-                }
+            if let Some((le, w)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
+                layers[layer.emitted()] += beta * le * w;
             }
+            // The ray leaves the scene.
+            let Some(hit) = hit else { break };
+            let wo = -ray.d;
             let bsdf = scene.bsdf(&hit, wo);
             if bsdf.is_invisible() {
                 // A medium's boundary: straight on, into the medium beyond, not a bounce.
