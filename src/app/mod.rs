@@ -538,11 +538,15 @@ fn render_description(
         say(
             display,
             format_args!(
-                "sppm took {} iterations of {:.0} photons{}, {:.1} iterations/s, working memory {:.1} MiB",
+                "sppm took {} iterations of {:.0} photons{}, {:.1} iterations/s,{} working memory {:.1} MiB",
                 stats.samples_per_pixel,
                 sppm.mean_photons_per_iter(),
                 if sppm.config.adaptive_photons { " on average (adaptive)" } else { "" },
                 stats.samples_per_pixel as f64 / stats.wall.as_secs_f64().max(1e-9),
+                match sppm.volume_radius() {
+                    Some((a, b)) => format!(" volume radius {a:.3e} to {b:.3e},"),
+                    None => String::new(),
+                },
                 stats.memory_bytes as f64 / 1048576.0
             ),
         );

@@ -42,7 +42,7 @@ use rayon::iter::Either;
 use rayon::prelude::*;
 use std::cell::{Cell, RefCell};
 use std::f32::consts::PI;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 /// SPPM settings.
 #[derive(Clone, Debug, PartialEq)]
@@ -94,6 +94,9 @@ pub struct Sppm {
     /// report).
     emitted: AtomicU64,
     iterations: AtomicU64,
+    /// The volume radius of the last render's first and last iterations (f32 bits; 0 without
+    /// media), for the report.
+    volume_radius: [AtomicU32; 2],
 }
 
 /// How many photons each iteration emits. With `SppmConfig::adaptive_photons`, the number
@@ -340,12 +343,23 @@ struct CameraSample {
 
 impl Sppm {
     pub fn new(config: SppmConfig) -> Self {
-        Sppm { config, emitted: AtomicU64::new(0), iterations: AtomicU64::new(0) }
+        Sppm {
+            config,
+            emitted: AtomicU64::new(0),
+            iterations: AtomicU64::new(0),
+            volume_radius: [AtomicU32::new(0), AtomicU32::new(0)],
+        }
     }
 
     /// Mean photons per iteration of the last render.
     pub fn mean_photons_per_iter(&self) -> f64 {
         self.emitted.load(Ordering::Relaxed) as f64 / self.iterations.load(Ordering::Relaxed).max(1) as f64
+    }
+
+    /// The volume radius of the last render's first and last iterations (`None` without media).
+    pub fn volume_radius(&self) -> Option<(f32, f32)> {
+        let [a, b] = self.volume_radius.each_ref().map(|r| f32::from_bits(r.load(Ordering::Relaxed)));
+        (a > 0.0).then_some((a, b))
     }
 
     /// Renders iterations up to `settings.spp` (or until the time limit), one camera sample per
@@ -367,6 +381,15 @@ impl Sppm {
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
             budget: PhotonBudget::new(&self.config),
+            volume_r1: match self.config.initial_radius {
+                Some(r) => r,
+                None if scene.has_media() => {
+                    let seed = hash_seed(&[settings.seed, VOLUME_PILOT_SEED]);
+                    let c = &self.config;
+                    media::first_volume_radius(scene, c.photons_per_iter, seed, c.ray_bias)
+                }
+                None => 0.0,
+            },
         });
         let iterations = Cell::new(0u32);
         // A render-farm shard runs iterations `first_sample..spp` as a progressive run of its
@@ -427,8 +450,14 @@ impl Sppm {
         }
         // With media, the photons scattered in them, gathered by the camera samples below.
         let volume = scene.has_media().then(|| {
-            let r1 = config.initial_radius.unwrap_or(VOLUME_RADIUS * diag);
-            media::VolumePhotons::split(&mut hits, r1, config.alpha, it, scene.bounds().min.min(Vec3::ZERO))
+            let r1 = state.volume_r1;
+            let v = media::VolumePhotons::split(&mut hits, r1, config.alpha, it, scene.bounds().min.min(Vec3::ZERO));
+            let slot = if done == 0 { 0 } else { 1 };
+            self.volume_radius[slot].store(v.r.to_bits(), Ordering::Relaxed);
+            if done == 0 {
+                self.volume_radius[1].store(v.r.to_bits(), Ordering::Relaxed);
+            }
+            v
         });
         // Pass 2: each pixel's camera sample: its emitted and direct light goes into the pixel,
         // and its visible point (a new one gets a radius) into a buffer kept between iterations.
@@ -677,6 +706,8 @@ struct State {
     layers: Vec<PixelLayers>,
     peak_bytes: usize,
     budget: PhotonBudget,
+    /// The first iteration's volume radius (scenes with media).
+    volume_r1: f32,
 }
 
 impl State {
@@ -709,9 +740,9 @@ impl State {
     }
 }
 
-/// The first iteration's volume radius, as a fraction of the scene's size (without
-/// `initial_radius`).
-const VOLUME_RADIUS: f32 = 0.0015;
+/// Tells the pilot photon pass that measures the volume radius (`media::first_volume_radius`)
+/// from every iteration's photons.
+const VOLUME_PILOT_SEED: u64 = 0x766f_6c75_6d65;
 
 /// A starting radius for a pixel whose first visible point is `dist` from the camera: about two
 /// pixel footprints there, kept between 0.05% and 2% of the scene's size so any scene scale works.
