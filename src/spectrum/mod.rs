@@ -15,10 +15,14 @@
 //! `dispersion` (indices of refraction over wavelength, named glasses).
 
 mod cie_tables;
+mod rgb;
 mod sampled;
 mod spd;
 
 pub use cie_tables::{CIE_MAX, CIE_MIN};
+pub use rgb::{
+    RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
+};
 pub use sampled::{
     LAMBDA_MAX, LAMBDA_MIN, N_WAVELENGTHS, SampledWavelengths, SpectrumSample, WavelengthDistribution, cie_xyz, d65,
     visible_pdf, xyz_to_color,
