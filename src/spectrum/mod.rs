@@ -14,11 +14,13 @@
 //! (RGB colours uplifted to smooth spectra, Jakob and Hanika 2019), `blackbody` and
 //! `dispersion` (indices of refraction over wavelength, named glasses).
 
+mod blackbody;
 mod cie_tables;
 mod rgb;
 mod sampled;
 mod spd;
 
+pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
