@@ -16,12 +16,14 @@
 
 mod blackbody;
 mod cie_tables;
+mod dispersion;
 mod rgb;
 mod sampled;
 mod spd;
 
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
+pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
 };
