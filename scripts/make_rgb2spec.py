@@ -28,6 +28,14 @@ flat spectrum at z index res/5 and walks up and down in z, each slice starting f
 solution of its neighbour (continuation), so that saturated colours are reached gradually. All
 res x res entries of a slice are solved at once with numpy.
 
+Cost and accuracy, measured on the project's 2-core VM while others were building: res 32
+(committed, 1.18 MB) takes 91 s wall (58 s CPU, 67 MB of memory); res 64 (9.4 MB, the size
+pbrt-v4 and Mitsuba use) 12 minutes. Trilinear lookups round-trip 4000 random sRGB colours to
+a mean of 9e-4 and a worst of 1.2e-2 to 2.1e-2 (two draws; res 32) or 2.8e-3 (res 64), the
+worst near white;
+rgb.rs refines constant colours to 1e-9 from the res-32 start (`--check N` prints the lookup
+figures).
+
 File layout (little-endian): b"RGB2SPEC", u32 version 1, u32 res, f32 z nodes [res], then
 f32 coefficients [3][res z][res y][res x][3]. Total 16 + 4 res + 36 res^3 bytes.
 """

@@ -4,10 +4,11 @@
 //! `SampledWavelengths`/`SampledSpectrum` (4th edition, sec. 4.5.4).
 //!
 //! Wavelengths come from pbrt-v4's visible-light distribution, pdf proportional to
-//! 1 / cosh^2(0.0072 (lambda - 538 nm)) over 360-830 nm, rather than uniformly: for the colour
-//! of a white furnace (D65 light through the CIE functions to sRGB) it cuts the standard
-//! deviation of one path's estimate by 2.5-3x, measured in
-//! `tests::visible_sampling_is_less_noisy_than_uniform`. The four wavelengths are the hero's
+//! 1 / cosh^2(0.0072 (lambda - 538 nm)) over 360-830 nm, rather than uniformly. Measured in
+//! `tests::visible_sampling_is_less_noisy_than_uniform` (100k paths): the standard deviation of
+//! one path's sRGB estimate of a white furnace's colour (D65 light) is (0.151, 0.031, 0.579)
+//! against (0.772, 0.413, 0.815) for uniform wavelengths, 5x, 13x and 1.4x less; for a
+//! grey-green reflectance under D65, (0.032, 0.015, 0.201) against (0.523, 0.402, 0.328). The four wavelengths are the hero's
 //! random number rotated by 1/4, 2/4, 3/4 (mod 1), each mapped through the inverse CDF, so they
 //! stratify the distribution and each has the same marginal pdf.
 //!

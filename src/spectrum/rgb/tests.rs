@@ -54,20 +54,28 @@ fn max_error(a: [f64; 3], b: [f32; 3]) -> f64 {
 /// spectrum stays within [0, 1].
 #[test]
 fn albedo_round_trip_within_1e_3() {
+    let colours = test_colours();
+    let start = std::time::Instant::now();
+    let spectra: Vec<RgbAlbedoSpectrum> =
+        colours.iter().map(|&c| RgbAlbedoSpectrum::new(Color::from_array(c))).collect();
+    eprintln!("albedo fit: {:.1} us per colour", start.elapsed().as_secs_f64() * 1e6 / colours.len() as f64);
     let mut worst = (0.0, [0.0; 3]);
-    for rgb in test_colours() {
-        let s = RgbAlbedoSpectrum::new(Color::from_array(rgb));
+    let mut worst_reachable = 0.0f64;
+    for (&rgb, s) in colours.iter().zip(&spectra) {
         let back = reflectance_colour(|l| s.eval(l));
         let e = max_error(back, rgb);
         if e > worst.0 {
             worst = (e, rgb);
+        }
+        if rgb != [0.999, 0.995, 1.0] {
+            worst_reachable = worst_reachable.max(e);
         }
         for i in 0..=470 {
             let v = s.eval(LAMBDA_MIN + i as f32);
             assert!((0.0..=1.0).contains(&v), "{rgb:?}: {v} at {} nm", 360 + i);
         }
     }
-    eprintln!("albedo round trip: worst {:.2e} at {:?}", worst.0, worst.1);
+    eprintln!("albedo round trip: worst {:.2e} at {:?}; {worst_reachable:.2e} without it", worst.0, worst.1);
     assert!(worst.0 < 1e-3, "worst {:.2e} at {:?}", worst.0, worst.1);
 }
 
