@@ -8,11 +8,29 @@
 //! (and other unitless colours) are first multiplied by the D65 illuminant, so that a flat
 //! spectrum of ones is white; emitted spectra are not, so a flat emission spectrum is the
 //! slightly purple colour of an equal-energy white in sRGB.
+//!
+//! The foundations of spectral rendering (issue 31), not yet used by the integrators: `sampled`
+//! (hero-wavelength sampling, `SpectrumSample`, the Monte Carlo conversion to colour), `rgb`
+//! (RGB colours uplifted to smooth spectra, Jakob and Hanika 2019), `blackbody` and
+//! `dispersion` (indices of refraction over wavelength, named glasses).
 
+mod blackbody;
 mod cie_tables;
+mod dispersion;
+mod rgb;
+mod sampled;
 mod spd;
 
+pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
+pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
+pub use rgb::{
+    RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
+};
+pub use sampled::{
+    LAMBDA_MAX, LAMBDA_MIN, N_WAVELENGTHS, SampledWavelengths, SpectrumSample, WavelengthDistribution, cie_xyz, d65,
+    visible_pdf, xyz_to_color,
+};
 pub use spd::{SpdError, parse_spd};
 
 use crate::math::Color;
