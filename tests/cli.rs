@@ -47,6 +47,8 @@ fn help_documents_every_option() {
         "--light-samples",
         "--caustic-k",
         "--caustic-radius",
+        "--volume-k",
+        "--volume-radius",
         "--filter",
         "--set",
         "--display-server",

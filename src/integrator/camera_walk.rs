@@ -58,6 +58,9 @@ pub struct CameraWalk {
 }
 
 /// Where the walk stopped: a surface, or a scattering point in a medium.
+// Returned by value once per vertex and matched at once: boxing the surface would allocate per
+// ray.
+#[allow(clippy::large_enum_variant)]
 pub enum Stop<'s> {
     Surface(WalkVertex<'s>),
     Medium(MediumVertex),
