@@ -218,6 +218,8 @@ impl RenderArgs {
             caustic_k,
             max_radius,
             caustic_radius,
+            volume_k,
+            volume_radius,
             photons_per_iter,
             initial_radius,
         } = photon;
@@ -249,6 +251,8 @@ impl RenderArgs {
         opt("max-radius", max_radius.map(|v| format!("{v:?}")));
         opt("caustic-k", caustic_k.map(|v| v.to_string()));
         opt("caustic-radius", caustic_radius.map(|v| format!("{v:?}")));
+        opt("volume-k", volume_k.map(|v| v.to_string()));
+        opt("volume-radius", volume_radius.map(|v| format!("{v:?}")));
         opt("iterations", iterations.map(|v| v.to_string()));
         opt("photons-per-iter", photons_per_iter.map(|v| v.to_string()));
         opt("initial-radius", initial_radius.map(|v| format!("{v:?}")));
@@ -582,6 +586,8 @@ mod tests {
             caustic_k: _,
             max_radius,
             caustic_radius: _,
+            volume_k: _,
+            volume_radius: _,
             photons_per_iter,
             initial_radius,
         } = photon;

@@ -60,7 +60,7 @@ impl IntegratorKind {
     /// Whether the integrator renders participating media (the others render a scene with media
     /// as if its media were not there, and the render says so).
     pub fn renders_media(self) -> bool {
-        matches!(self, IntegratorKind::Path | IntegratorKind::Volpath | IntegratorKind::Sppm)
+        matches!(self, IntegratorKind::Path | IntegratorKind::Volpath | IntegratorKind::Photon | IntegratorKind::Sppm)
     }
 
     /// The name on the command line and in scene files.
@@ -193,6 +193,14 @@ pub struct PhotonOptions {
     /// Largest radius of a caustic estimate, in scene units [default: 2% of the scene's size].
     #[arg(long, value_name = "R")]
     pub caustic_radius: Option<f32>,
+    /// Photons per volume radiance estimate in participating media (photon integrator)
+    /// [default: 64].
+    #[arg(long, value_name = "K")]
+    pub volume_k: Option<usize>,
+    /// Largest radius of a volume radiance estimate, in scene units [default: twice the
+    /// typical distance of the volume photons' k-th nearest neighbour].
+    #[arg(long, value_name = "R")]
+    pub volume_radius: Option<f32>,
     /// SPPM photons per iteration [default: one per pixel].
     #[arg(long, value_name = "N")]
     pub photons_per_iter: Option<u64>,
@@ -209,7 +217,7 @@ impl Options {
     pub fn unused_by(&self, kind: IntegratorKind) -> Vec<String> {
         use IntegratorKind::{Photon, Sppm, Vcm, Whitted};
         let p = &self.photon;
-        let given: [(&str, bool, &[IntegratorKind]); 13] = [
+        let given: [(&str, bool, &[IntegratorKind]); 15] = [
             ("--adc-bailout", self.adc_bailout.is_some(), &[Whitted]),
             ("--light-samples", self.light_samples.is_some(), &[Whitted, Photon]),
             ("--photons", p.photons.is_some(), &[Photon]),
@@ -221,6 +229,8 @@ impl Options {
             ("--max-radius", p.max_radius.is_some(), &[Photon]),
             ("--caustic-k", p.caustic_k.is_some(), &[Photon]),
             ("--caustic-radius", p.caustic_radius.is_some(), &[Photon]),
+            ("--volume-k", p.volume_k.is_some(), &[Photon]),
+            ("--volume-radius", p.volume_radius.is_some(), &[Photon]),
             ("--photons-per-iter", p.photons_per_iter.is_some(), &[Sppm]),
             ("--initial-radius", p.initial_radius.is_some(), &[Sppm, Vcm]),
         ];

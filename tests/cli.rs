@@ -47,6 +47,8 @@ fn help_documents_every_option() {
         "--light-samples",
         "--caustic-k",
         "--caustic-radius",
+        "--volume-k",
+        "--volume-radius",
         "--filter",
         "--set",
         "--display-server",
@@ -566,7 +568,7 @@ fn integrators_without_media_say_they_leave_them_out() {
     let light = run("light");
     assert!(
         light.contains("the light integrator does not render participating media")
-            && light.contains("rendered by: path, volpath, sppm"),
+            && light.contains("rendered by: path, volpath, photon, sppm"),
         "{light}"
     );
     assert!(dir.join("light.png").exists());

@@ -521,6 +521,15 @@ fn render_description(
                 s.build_time.as_secs_f64()
             ),
         );
+        if s.volume_stored > 0 {
+            say(
+                display,
+                format_args!(
+                    "volume photon map: {} photons; estimates of {} within {:.4}",
+                    s.volume_stored, pm.config.volume_k, pm.config.volume_radius
+                ),
+            );
+        }
     }
     let film = match &job {
         Some(job) => job.prior.clone(),

@@ -66,6 +66,8 @@ impl RenderId {
             caustic_k,
             max_radius,
             caustic_radius,
+            volume_k,
+            volume_radius,
             photons_per_iter,
             initial_radius,
         } = photon;
@@ -126,6 +128,8 @@ impl RenderId {
             ("caustic_k".into(), opt(caustic_k.map(|v| v.to_string()))),
             ("max_radius".into(), opt(max_radius.map(|v| format!("{v:?}")))),
             ("caustic_radius".into(), opt(caustic_radius.map(|v| format!("{v:?}")))),
+            ("volume_k".into(), opt(volume_k.map(|v| v.to_string()))),
+            ("volume_radius".into(), opt(volume_radius.map(|v| format!("{v:?}")))),
             ("photons_per_iter".into(), opt(photons_per_iter.map(|v| v.to_string()))),
             ("initial_radius".into(), opt(initial_radius.map(|v| format!("{v:?}")))),
         ];
@@ -341,6 +345,8 @@ mod tests {
                 caustic_k: Some(8),
                 max_radius: Some(0.2),
                 caustic_radius: Some(0.1),
+                volume_k: Some(16),
+                volume_radius: Some(0.3),
                 photons_per_iter: Some(300),
                 initial_radius: Some(0.05),
             },
@@ -373,6 +379,8 @@ mod tests {
             caustic_k,
             max_radius,
             caustic_radius,
+            volume_k,
+            volume_radius,
             photons_per_iter,
             initial_radius,
         } = photon;
@@ -402,6 +410,8 @@ mod tests {
             ("caustic_k", photon(PhotonOptions { caustic_k, ..nop() })),
             ("max_radius", photon(PhotonOptions { max_radius, ..nop() })),
             ("caustic_radius", photon(PhotonOptions { caustic_radius, ..nop() })),
+            ("volume_k", photon(PhotonOptions { volume_k, ..nop() })),
+            ("volume_radius", photon(PhotonOptions { volume_radius, ..nop() })),
             ("photons_per_iter", photon(PhotonOptions { photons_per_iter, ..nop() })),
             ("initial_radius", photon(PhotonOptions { initial_radius, ..nop() })),
         ];

@@ -262,7 +262,7 @@ impl EveryLight {
         EveryLight { light_samples: light_samples.max(1), area_lights, area_picker }
     }
 
-    /// The direct light at `hit`, drawing its numbers from `u` (a point on a light per call,
+    /// The direct light at `hit`, drawing its numbers from `rng` (a point on a light per call,
     /// and a light choice per picked sample).
     #[allow(clippy::too_many_arguments)]
     pub fn estimate(
@@ -275,9 +275,22 @@ impl EveryLight {
         rng: &mut crate::sampling::Rng32,
         stats: &mut RayStats,
     ) -> Color {
-        let one = |light: &Light, rng: &mut crate::sampling::Rng32, stats: &mut RayStats| {
-            light_sample(scene, light, 1.0, hit, bsdf, wo, rng.uniform2(), bias, false, stats)
-        };
+        self.sum(scene, rng, stats, |light, p_pick, u, _, stats| {
+            light_sample(scene, light, p_pick, hit, bsdf, wo, u, bias, false, stats)
+        })
+    }
+
+    /// The sum over the lights (see the type's docs) of `one(light, p_pick, u, rng, stats)`, one
+    /// light sample estimate (`light_sample_at`'s, at a surface or in a medium) with the point
+    /// on the light drawn by `u` and any further numbers (a heterogeneous medium's tracking)
+    /// from `rng`.
+    pub fn sum(
+        &self,
+        scene: &Scene,
+        rng: &mut crate::sampling::Rng32,
+        stats: &mut RayStats,
+        mut one: impl FnMut(&Light, f32, Vec2, &mut crate::sampling::Rng32, &mut RayStats) -> Color,
+    ) -> Color {
         let picked = !self.area_lights.is_empty();
         let mut sum = Color::ZERO;
         for light in &scene.lights {
@@ -287,7 +300,8 @@ impl EveryLight {
             let n_samples = if light.is_delta() { 1 } else { self.light_samples };
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
-                acc += one(light, rng, stats);
+                let u = rng.uniform2();
+                acc += one(light, 1.0, u, rng, stats);
             }
             sum += acc / n_samples as f32;
         }
@@ -296,7 +310,8 @@ impl EveryLight {
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
                 let Some((k, p)) = self.area_picker.pick(rng.uniform()) else { break };
-                acc += one(&scene.lights[self.area_lights[k] as usize], rng, stats) / p;
+                let u = rng.uniform2();
+                acc += one(&scene.lights[self.area_lights[k] as usize], 1.0, u, rng, stats) / p;
             }
             sum += acc / n_samples as f32;
         }

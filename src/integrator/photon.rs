@@ -19,11 +19,14 @@
 //! side and lying near its tangent plane (a disc-shaped search), so walls meeting at a corner do
 //! not leak light into each other. Everything is in physical units; nothing is scaled by hand.
 //!
+//! Participating media (`media`): a volume photon map beside the two, light samples at the
+//! camera path's scattering points, and final-gather rays that scatter in media.
+//!
 //! Depth: a photon remembers how often it scattered, and an estimate at bounce b of a camera
 //! path counts only photons of at most `max_depth - b` bounces, so every light path keeps to
 //! the limit the path tracer keeps to (`trace::photon_depth_limit`).
 
-use super::camera_walk::CameraWalk;
+use super::camera_walk::{CameraWalk, Stop};
 use super::lighting::EveryLight;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
@@ -45,6 +48,9 @@ use std::time::{Duration, Instant};
 
 mod fill;
 pub mod irradiance_cache;
+mod media;
+
+pub use media::DEFAULT_VOLUME_K;
 
 use irradiance_cache::{GatherSample, IrradianceCache};
 
@@ -71,6 +77,11 @@ pub struct PhotonConfig {
     pub max_radius: f32,
     /// Largest search radius of a caustic estimate.
     pub caustic_radius: f32,
+    /// Photons per volume radiance estimate (scenes with media).
+    pub volume_k: usize,
+    /// Largest search radius of a volume estimate; 0 until the volume map is built, which sets
+    /// the default from its photons' spacing (`media`).
+    pub volume_radius: f32,
     /// Cone filter constant k >= 1 (Jensen 2001 eq. 4.8).
     pub cone_k: f32,
     /// Shadow rays per area light at each shading point.
@@ -108,6 +119,8 @@ impl PhotonConfig {
             caustic_k: o.caustic_k.unwrap_or(64).max(1),
             max_radius: o.max_radius.unwrap_or(0.05 * diag),
             caustic_radius: o.caustic_radius.unwrap_or(0.02 * diag),
+            volume_k: o.volume_k.unwrap_or(DEFAULT_VOLUME_K).max(1),
+            volume_radius: o.volume_radius.unwrap_or(0.0),
             cone_k: 1.1,
             light_samples: desc.light_samples,
             max_depth: desc.depth_limit(desc.kind),
@@ -168,6 +181,8 @@ pub struct PhotonStats {
     pub build_time: Duration,
     pub global_bytes: usize,
     pub caustic_bytes: usize,
+    /// Photons in the volume map (scenes with media).
+    pub volume_stored: usize,
     /// Irradiance records made before rendering, and the time they took.
     pub cache_records: usize,
     pub cache_time: Duration,
@@ -177,6 +192,8 @@ pub struct PhotonIntegrator {
     pub config: PhotonConfig,
     global: PhotonMap,
     caustic: PhotonMap,
+    /// Photons scattered in media (empty without media).
+    volume: PhotonMap,
     /// Irradiance precomputed at a subset of the global photons (Christensen 1999): records
     /// whose `direction` is the surface normal. Final-gather rays read the nearest record
     /// instead of making a full radiance estimate.
@@ -229,8 +246,16 @@ impl PhotonIntegrator {
         let t0 = Instant::now();
         let bar = progress.phase("photons", config.photons);
         let watch = Watch { cancel, progress: Some(&bar) };
-        let global = trace::trace_global(scene, config.photons, config.seed, config.ray_bias, watch);
-        bar.finish(&format!("{} global photons traced, {} stored", global.emitted, global.hits.len()));
+        let store = if scene.has_media() { trace::Store::Volume } else { trace::Store::All };
+        let mut global = PhotonPass { emitted: config.photons, ..Default::default() };
+        trace::trace_global_into(scene, config.photons, config.seed, config.ray_bias, store, watch, &mut global.hits);
+        global.cancelled = watch.cancelled();
+        let volume_photons = media::split_volume(&mut global.hits);
+        bar.finish(&format!(
+            "{} global photons traced, {} stored",
+            global.emitted,
+            global.hits.len() + volume_photons.len()
+        ));
         if global.cancelled {
             return None;
         }
@@ -255,7 +280,12 @@ impl PhotonIntegrator {
         let (global_map, caustic_map) =
             rayon::join(|| PhotonMap::build_cancellable(gp, cancel), || PhotonMap::build_cancellable(cp, cancel));
         let (global_map, caustic_map) = (global_map?, caustic_map?);
+        let volume_map = PhotonMap::build_cancellable(volume_photons, cancel)?;
         bar.finish("photon maps built");
+        let mut config = config;
+        if config.volume_radius <= 0.0 {
+            config.volume_radius = media::default_volume_radius(&volume_map, config.volume_k);
+        }
         let records = global.hits.len().div_ceil(IRRADIANCE_STRIDE) as u64;
         let bar = progress.phase("gather", records);
         let (irradiance, irradiance_levels) = precompute_irradiance(
@@ -277,6 +307,7 @@ impl PhotonIntegrator {
             build_time: t1.elapsed(),
             global_bytes: global_map.memory_bytes(),
             caustic_bytes: caustic_map.memory_bytes(),
+            volume_stored: volume_map.len(),
             ..Default::default()
         };
         let a = config.cache_error;
@@ -285,6 +316,7 @@ impl PhotonIntegrator {
             config,
             global: global_map,
             caustic: caustic_map,
+            volume: volume_map,
             irradiance,
             irradiance_levels,
             cache: IrradianceCache::empty(a.max(1e-3)),
@@ -422,6 +454,7 @@ impl PhotonIntegrator {
         bounce: u32,
         bsdf: &Bsdf,
         wo: Vec3,
+        medium: u32,
         sampler: &mut Sampler,
         scratch: &mut Gathered,
         stats: &mut RayStats,
@@ -446,15 +479,18 @@ impl PhotonIntegrator {
             if beta == Color::ZERO {
                 continue;
             }
-            sum += beta * self.gather_ray(scene, hit, bounce, wi, sampler.rng(), scratch, stats).l;
+            sum += beta * self.gather_ray(scene, hit, bounce, wi, medium, sampler.rng(), scratch, stats).l;
         }
         sum / n.max(1) as f32
     }
 
-    /// One final-gather ray from `hit` along `wi`: followed through mirrors and glass (at most
-    /// four bounces), then the radiance leaving the first other surface read from the global map,
-    /// times the specular bounces' weights (and on through that surface's own mirror or glass
-    /// part, if it has one); and the distance to the first surface it met.
+    /// One final-gather ray from `hit` along `wi` (leaving medium `medium`, in which the camera
+    /// path arrived): followed through mirrors and glass (at most four bounces), then the
+    /// radiance leaving the first other surface read from the global map, times the specular
+    /// bounces' weights (and on through that surface's own mirror or glass part, if it has one);
+    /// and the distance to the first surface it met. Through a medium it samples a free flight
+    /// and, where it scatters, reads the volume map (every volume photon: the light samples at
+    /// `hit` count none of that light).
     #[allow(clippy::too_many_arguments)]
     fn gather_ray(
         &self,
@@ -462,20 +498,45 @@ impl PhotonIntegrator {
         hit: &Hit,
         bounce: u32,
         wi: Vec3,
+        medium: u32,
         rng: &mut crate::sampling::Rng32,
         scratch: &mut Gathered,
         stats: &mut RayStats,
     ) -> GatherSample {
+        let has_media = scene.has_media();
         let mut ray = hit.spawn(wi, self.config.ray_bias);
+        ray.medium = scene.medium_after(hit, wi, medium);
         let mut beta = Color::ONE;
         let mut dist = f32::INFINITY;
         let mut l = Color::ZERO;
-        for k in 0..4 {
+        let mut k = 0;
+        // Crossings of `null` boundaries, which are no bounce, are bounded apart.
+        let mut crossings = 0;
+        while k < 4 {
             // y is bounce `bounce + 1 + k` of the camera path: photons may add what the depth
             // limit leaves.
             let Some(depth) = trace::photon_depth_limit(self.config.max_depth, bounce + 1 + k) else { break };
             stats.rays += 1;
-            let Some(y) = scene.intersect(&ray, f32::INFINITY) else { break };
+            let found = scene.intersect(&ray, f32::INFINITY);
+            if ray.medium != crate::geometry::NO_MEDIUM {
+                let m = &scene.media[ray.medium as usize];
+                let t_max = found.as_ref().map_or(f32::INFINITY, |h| h.t);
+                let (u_channel, u) = (rng.uniform(), rng.uniform());
+                let ms = m.sample_distance(&ray, t_max, beta, u_channel, u, rng);
+                if ms.scattered {
+                    if k == 0 {
+                        dist = ms.t;
+                    }
+                    let est = self.volume_estimate(m.phase(), ray.at(ms.t), -ray.d, depth, true, scratch);
+                    l += beta * ms.tr_over_pdf * est;
+                    break;
+                }
+                beta *= ms.weight;
+                if beta == Color::ZERO || !beta.is_finite() {
+                    break;
+                }
+            }
+            let Some(y) = found else { break };
             if k == 0 {
                 dist = y.t * ray.d.length();
             }
@@ -485,20 +546,34 @@ impl PhotonIntegrator {
             if by.is_black() {
                 break;
             }
-            if by.is_specular_only() {
-                let Some(s) = by.sample(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
-                beta *= s.weight;
-                ray = y.spawn(s.wi, self.config.ray_bias);
+            if has_media && by.is_invisible() {
+                crossings += 1;
+                if crossings > crate::integrator::lighting::MAX_CROSSINGS {
+                    break;
+                }
+                let next = scene.medium_after(&y, ray.d, ray.medium);
+                ray = y.spawn(ray.d, self.config.ray_bias);
+                ray.medium = next;
                 continue;
             }
-            l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, depth, scratch);
-            // The mirror or glass part of a mixed material reflects more indirect light.
-            if !by.has_delta() {
-                break;
-            }
-            let Some(s) = by.sample_delta(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
-            beta *= s.weight;
-            ray = y.spawn(s.wi, self.config.ray_bias);
+            k += 1;
+            let wi_y = if by.is_specular_only() {
+                let Some(s) = by.sample(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
+                beta *= s.weight;
+                s.wi
+            } else {
+                l += beta * self.radiance_at_gather_hit(&y, &by, wo_y, depth, scratch);
+                // The mirror or glass part of a mixed material reflects more indirect light.
+                if !by.has_delta() {
+                    break;
+                }
+                let Some(s) = by.sample_delta(wo_y, rng.uniform(), rng.uniform2(), Transport::Radiance) else { break };
+                beta *= s.weight;
+                s.wi
+            };
+            let next = scene.medium_after(&y, wi_y, ray.medium);
+            ray = y.spawn(wi_y, self.config.ray_bias);
+            ray.medium = next;
         }
         GatherSample { l, dist }
     }
@@ -516,6 +591,7 @@ impl PhotonIntegrator {
         bounce: u32,
         bsdf: &Bsdf,
         wo: Vec3,
+        medium: u32,
         use_cache: bool,
         sampler: &mut Sampler,
         scratch: &mut Gathered,
@@ -528,7 +604,7 @@ impl PhotonIntegrator {
         {
             return albedo * e * std::f32::consts::FRAC_1_PI;
         }
-        self.final_gather(scene, hit, bounce, bsdf, wo, sampler, scratch, stats)
+        self.final_gather(scene, hit, bounce, bsdf, wo, medium, sampler, scratch, stats)
     }
 }
 
@@ -617,13 +693,34 @@ impl RayIntegrator for PhotonIntegrator {
     ) -> Layers {
         let mut layers = [Color::ZERO; 4];
         let c = &self.config;
-        let mut walk = CameraWalk::new(*ray, Color::ONE);
+        let has_media = scene.has_media();
+        let mut ray = *ray;
+        if ray.medium == crate::geometry::NO_MEDIUM {
+            ray.medium = scene.camera_medium;
+        }
+        let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS);
         loop {
-            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, stats: &mut RayStats| {
-                self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), stats)
+            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, medium, sampler: &mut Sampler, stats: &mut RayStats| {
+                if has_media {
+                    self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), stats)
+                } else {
+                    self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), stats)
+                }
             };
             let add = |k: usize, l: Color| layers[k] += l;
-            let Some(v) = walk.next_vertex(scene, c.max_depth, c.ray_bias, sampler, stats, add, direct) else { break };
+            let v = match walk.next_vertex(scene, c.max_depth, c.ray_bias, sampler, stats, add, direct) {
+                Some(Stop::Surface(v)) => v,
+                Some(Stop::Medium(m)) => {
+                    // Light scattered in a medium goes where SPPM puts it (`sppm::media`).
+                    let l = self.medium_radiance(scene, &m, sampler.rng(), scratch, stats);
+                    layers[walk.layer.other_photons()] += walk.beta * l;
+                    if m.marching {
+                        continue;
+                    }
+                    break;
+                }
+                None => break,
+            };
             let (hit, bsdf, wo, beta, layer) = (&v.hit, &v.bsdf, v.wo, walk.beta, walk.layer);
             let photon_depth = trace::photon_depth_limit(c.max_depth, v.bounce).unwrap_or(0);
             layers[layer.caustic_photons()] += beta
@@ -655,7 +752,8 @@ impl RayIntegrator for PhotonIntegrator {
             } else {
                 // The cache's records (made where camera paths through mirrors and glass land)
                 // are not read after a glossy bounce (see `indirect`).
-                self.indirect(scene, hit, v.bounce, bsdf, wo, !walk.glossy_prefix, sampler, scratch, stats)
+                let medium = walk.medium();
+                self.indirect(scene, hit, v.bounce, bsdf, wo, medium, !walk.glossy_prefix, sampler, scratch, stats)
             };
             layers[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
@@ -665,7 +763,7 @@ impl RayIntegrator for PhotonIntegrator {
             let Some(s) = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
                 break;
             };
-            walk.follow_delta(hit, &s, c.ray_bias);
+            walk.follow_delta(scene, hit, &s, c.ray_bias);
         }
         layers
     }

@@ -127,6 +127,9 @@ pub enum Store {
     /// `Indirect`, and every scattering event in a medium, the first included (flagged
     /// `VOLUME`): SPPM in a scene with media, whose in-scattered light comes from them.
     Media,
+    /// `All`, and every scattering event in a medium, the first included (flagged `VOLUME`):
+    /// the photon integrator's global and volume maps in a scene with media.
+    Volume,
 }
 
 const CHUNK: u64 = 4096;
@@ -219,7 +222,11 @@ pub fn trace_caustic(
                 let light = &scene.lights[li];
                 let (e, uv) = emit_towards(light, targets, &mut rng)?;
                 let flux = e.flux * light.texture_factor(uv, e.ray.d, scene.textures());
-                let ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+                let mut ray = if light.is_infinite() { scene.photon_entry(e.ray) } else { e.ray };
+                // As in the global pass: a light inside a medium emits into it.
+                if scene.has_media() {
+                    ray.medium = scene.medium_at(ray.o, ray.d);
+                }
                 Some((Emitted { ray, flux }, p, rng))
             },
             scene,
@@ -284,7 +291,7 @@ fn run_chunks(
             let mut out = Vec::with_capacity(match store {
                 Store::All => 2 * CHUNK as usize,
                 Store::Indirect => CHUNK as usize,
-                Store::Media => 4 * CHUNK as usize,
+                Store::Media | Store::Volume => 4 * CHUNK as usize,
                 Store::Caustic => 0,
             });
             let mut sources = Vec::new();
@@ -351,7 +358,7 @@ pub fn trace_photon(
                     return;
                 }
                 let p = ray.at(ms.t);
-                if store == Store::Media {
+                if matches!(store, Store::Media | Store::Volume) {
                     out.push(PhotonHit { p, dir: ray.d, flux, flags: VOLUME, depth: depth as u8, n: Vec3::ZERO });
                 }
                 let s = medium.phase().sample(-ray.d, rng.uniform2());
@@ -400,7 +407,7 @@ pub fn trace_photon(
                 } else {
                     0
                 };
-                if depth > 0 || store == Store::All {
+                if depth > 0 || matches!(store, Store::All | Store::Volume) {
                     // (`Store::Indirect` and `Store::Media` leave the first hit to direct light.)
                     out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
                 }

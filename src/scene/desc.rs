@@ -260,6 +260,8 @@ impl SceneDescription {
             caustic_k,
             max_radius,
             caustic_radius,
+            volume_k,
+            volume_radius,
             photons_per_iter,
             initial_radius,
         } = photon;
@@ -305,6 +307,8 @@ impl SceneDescription {
         p.caustic_k = caustic_k.or(p.caustic_k);
         p.max_radius = max_radius.or(p.max_radius);
         p.caustic_radius = caustic_radius.or(p.caustic_radius);
+        p.volume_k = volume_k.or(p.volume_k);
+        p.volume_radius = volume_radius.or(p.volume_radius);
         p.photons_per_iter = photons_per_iter.or(p.photons_per_iter);
         p.initial_radius = initial_radius.or(p.initial_radius);
     }
@@ -371,6 +375,7 @@ impl SceneDescription {
         for (what, v) in [
             ("max_radius", self.integrator.photon.max_radius),
             ("caustic_radius", self.integrator.photon.caustic_radius),
+            ("volume_radius", self.integrator.photon.volume_radius),
         ] {
             if let Some(r) = v
                 && !(r > 0.0 && r.is_finite())

@@ -46,6 +46,8 @@ pub(super) struct Candidate<'a> {
     pub dist: f32,
     /// Its bounce in the camera path (1 for the first surface).
     pub bounce: u32,
+    /// The medium the camera path arrived in.
+    pub medium: u32,
 }
 
 impl PhotonIntegrator {
@@ -54,12 +56,29 @@ impl PhotonIntegrator {
     /// gathered at; `None` when it ends elsewhere.
     pub(super) fn first_diffuse<'s>(&self, scene: &'s Scene, x: u32, y: u32, rng: &mut Rng32) -> Option<Candidate<'s>> {
         let mut ray = scene.camera.generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), Vec2::splat(0.5));
+        if ray.medium == crate::geometry::NO_MEDIUM {
+            ray.medium = scene.camera_medium;
+        }
         let mut dist = 0.0;
-        for depth in 0.. {
+        let mut depth = 0;
+        // Media are passed through (where records go is all that is chosen here); their
+        // `null` boundaries are no bounce.
+        let mut crossings = 0;
+        loop {
             let hit = scene.intersect(&ray, f32::INFINITY)?;
             dist += hit.t * ray.d.length();
             let wo = -ray.d;
             let bsdf = scene.bsdf(&hit, wo);
+            if scene.has_media() && bsdf.is_invisible() {
+                crossings += 1;
+                if crossings > crate::integrator::lighting::MAX_CROSSINGS {
+                    return None;
+                }
+                let medium = scene.medium_after(&hit, ray.d, ray.medium);
+                ray = hit.spawn(ray.d, self.config.ray_bias);
+                ray.medium = medium;
+                continue;
+            }
             if bsdf.is_black() || depth >= self.config.max_depth {
                 return None;
             }
@@ -69,12 +88,15 @@ impl PhotonIntegrator {
                     return None;
                 }
                 let s = bsdf.sample(wo, rng.uniform(), rng.uniform2(), Transport::Radiance)?;
+                let medium = scene.medium_after(&hit, s.wi, ray.medium);
                 ray = hit.spawn(s.wi, self.config.ray_bias);
+                ray.medium = medium;
+                depth += 1;
                 continue;
             }
-            return bsdf.lambert_albedo().is_some().then_some(Candidate { hit, bsdf, dist, bounce: depth + 1 });
+            let (bounce, medium) = (depth + 1, ray.medium);
+            return bsdf.lambert_albedo().is_some().then_some(Candidate { hit, bsdf, dist, bounce, medium });
         }
-        None
     }
 
     /// A record at `c` from a stratified gather of about `cache_rays` rays.
@@ -94,7 +116,7 @@ impl PhotonIntegrator {
                 samples.push(if below {
                     GatherSample { l: Color::ZERO, dist: f32::INFINITY }
                 } else {
-                    self.gather_ray(scene, &c.hit, c.bounce, wi, rng, scratch, &mut stats)
+                    self.gather_ray(scene, &c.hit, c.bounce, wi, c.medium, rng, scratch, &mut stats)
                 });
             }
         }

@@ -23,7 +23,7 @@
 mod grid;
 mod media;
 
-use super::camera_walk::CameraWalk;
+use super::camera_walk::{CameraWalk, Stop};
 use super::layers::LayerPath;
 use super::lighting::direct_light;
 use crate::film::{Film, Image, Layers};
@@ -612,20 +612,21 @@ impl Sppm {
                 ld += l;
                 ld_layers[k] += l;
             };
-            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, sampler: &mut Sampler, stats: &mut RayStats| {
+            // (Scenes with media take `camera_sample_media`: no medium is met here.)
+            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, _: u32, sampler: &mut Sampler, stats: &mut RayStats| {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
                 direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, stats)
             };
-            let Some(v) = walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct)
-            else {
-                break;
+            let v = match walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct) {
+                Some(Stop::Surface(v)) => v,
+                Some(Stop::Medium(_)) | None => break,
             };
             let choice = sampler.next_1d();
             let q = if v.bsdf.has_delta() && !v.last { v.bsdf.smooth_fraction(v.wo) } else { 1.0 };
             if choice >= q {
                 let sample = v.bsdf.sample_delta(v.wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = sample else { break };
-                walk.follow_delta(&v.hit, &s, config.ray_bias);
+                walk.follow_delta(scene, &v.hit, &s, config.ray_bias);
                 walk.beta /= 1.0 - q;
                 continue;
             }

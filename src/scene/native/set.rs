@@ -50,6 +50,8 @@ pub const ALIASES: &[(&str, &[(&str, &str)])] = &[
             ("caustic_k", "photon.caustic_k"),
             ("max_radius", "photon.max_radius"),
             ("caustic_radius", "photon.caustic_radius"),
+            ("volume_k", "photon.volume_k"),
+            ("volume_radius", "photon.volume_radius"),
             ("photons_per_iter", "photon.photons_per_iter"),
             ("initial_radius", "photon.initial_radius"),
         ],
