@@ -603,11 +603,15 @@ interior = "fog"
 
 /// Mean luminance of `s` rendered by `kind` with `seed`: `spp` camera samples per pixel (SPPM's
 /// iterations), `photons` for the photon integrator's global map, `per_iter` for SPPM's.
-fn render_media(s: &str, kind: IntegratorKind, seed: u64, spp: u32, photons: u64, per_iter: u64) -> f64 {
-    // SPPM starts its volume estimate (and its surface ones) at a radius of the fog's scale: its
-    // default, a fraction of a pixel's footprint, leaves most gathering spheres empty for many
-    // iterations, and its mean then has a heavy tail.
-    let initial_radius = (kind == IntegratorKind::Sppm).then_some(0.15);
+fn render_media(
+    s: &str,
+    kind: IntegratorKind,
+    seed: u64,
+    spp: u32,
+    photons: u64,
+    per_iter: u64,
+    radius: Option<f32>,
+) -> f64 {
     let photon = PhotonOptions {
         photons: (kind == IntegratorKind::Photon).then_some(photons),
         // Few caustic photons and gather rays, as in the matrix above: the light through glass
@@ -615,7 +619,7 @@ fn render_media(s: &str, kind: IntegratorKind, seed: u64, spp: u32, photons: u64
         caustic_photons: (kind == IntegratorKind::Photon).then_some(50_000),
         gather: (kind == IntegratorKind::Photon).then_some(4),
         photons_per_iter: (kind == IntegratorKind::Sppm).then_some(per_iter),
-        initial_radius,
+        initial_radius: radius.filter(|_| kind == IntegratorKind::Sppm),
         ..Default::default()
     };
     let o = Options { integrator: Some(kind), spp: Some(spp), seed: Some(seed), photon, ..Default::default() };
@@ -637,17 +641,22 @@ fn photon_mapping_and_sppm_agree_with_volpath_in_media() {
     let glass =
         "[[objects]]\ntype = \"sphere\"\ncenter = [0, 1.4, 0]\nradius = 0.4\nmaterial = \"test\"\nexterior = \"fog\"";
     let spot = "[[lights]]\ntype = \"spot\"\nposition = [0, 3.5, 0]\nlook_at = [0, 0, 0]\nangle = 12\nfalloff = 9\nintensity = 40";
+    // SPPM at its default radius in the area-lit cells; in the caustic's, where most of the fog
+    // is lit only by the few photons scattered out of the focused cone, its default radius
+    // (from the mean density of volume photons) leaves the dim fog noisy for 64 iterations
+    // (the bound grows to 7%): a larger one, as a long run's would be after its noise has gone.
     let cells = [
-        ("quad", media_scene(sphere, diffuse, light("quad"), 24), true),
-        ("envmap", media_scene(sphere, diffuse, light("envmap"), 24), true),
-        ("spot caustic", media_scene(glass, "type = \"dielectric\"\nior = 1.5", spot, 24), false),
+        ("quad", media_scene(sphere, diffuse, light("quad"), 24), true, None),
+        ("envmap", media_scene(sphere, diffuse, light("envmap"), 24), true, None),
+        ("spot caustic", media_scene(glass, "type = \"dielectric\"\nior = 1.5", spot, 24), false, Some(0.15)),
     ];
     let mut failures = Vec::new();
     let mut table = String::new();
-    for (name, s, by_volpath) in &cells {
+    for (name, s, by_volpath, radius) in &cells {
         let runs = |kind, spp, photons, per_iter| {
             let t = std::time::Instant::now();
-            let r = (11..11 + RUNS).map(|seed| render_media(s, kind, seed, spp, photons, per_iter)).collect::<Vec<_>>();
+            let r = (11..11 + RUNS).map(|seed| render_media(s, kind, seed, spp, photons, per_iter, *radius));
+            let r = r.collect::<Vec<_>>();
             eprintln!("{name} {kind:?}: {:.1} s", t.elapsed().as_secs_f64());
             r
         };

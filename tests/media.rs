@@ -401,15 +401,14 @@ fn sppm_default_volume_radius_keeps_noise_low() {
 
 /// Photon mapping with a volume photon map (light samples and volume estimates at points
 /// marched along camera rays through the fog) agrees with volpath's image (Mitsuba's) within 3%
-/// on the area-lit media scenes and the emitter inside fog. The volume estimate's radius blurs
-/// light across the fog's boundary, where the sphere of an estimate is partly outside the
-/// medium and holds no photons there: the mean falls as the radius grows (on `cube_area`, at 4
-/// spp: -3.0% at 500,000 photons, -1.9% at 2,000,000, -1.6% at 4,000,000).
+/// on the area-lit media scenes and the emitter inside fog, at the default 500,000 photons
+/// (measured +0.30%, +0.49%, -0.15%). Its estimate's sphere is cut by the surfaces near it as
+/// SPPM's is; before, the sphere stuck out of the fog at its faces and the mean fell with the
+/// radius (cube_area: -3.0% at 500,000 photons, -1.9% at 2,000,000).
 #[test]
 fn photon_mapping_agrees_with_volpath_in_media() {
     let mut failures = Vec::new();
-    // The emitter inside the fog puts most photons into it: fewer do.
-    for (case, photons) in [("cube_area", 2_000_000), ("opaque_inside", 2_000_000), ("emitter_inside", 500_000)] {
+    for (case, photons) in [("cube_area", 500_000), ("opaque_inside", 500_000), ("emitter_inside", 500_000)] {
         let o = Options {
             seed: Some(1),
             integrator: Some(IntegratorKind::Photon),

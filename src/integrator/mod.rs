@@ -10,6 +10,7 @@ pub mod light;
 pub mod lighting;
 pub mod path;
 pub mod photon;
+pub(crate) mod sphere_bounds;
 pub mod sppm;
 pub mod vcm;
 pub mod volpath;

@@ -527,7 +527,16 @@ impl PhotonIntegrator {
                     if k == 0 {
                         dist = ms.t;
                     }
-                    let est = self.volume_estimate(m.phase(), ray.at(ms.t), -ray.d, depth, true, scratch);
+                    let est = self.volume_estimate(
+                        scene,
+                        m.phase(),
+                        ray.at(ms.t),
+                        -ray.d,
+                        depth,
+                        true,
+                        rng.uniform2(),
+                        scratch,
+                    );
                     l += beta * ms.tr_over_pdf * est;
                     break;
                 }

@@ -19,7 +19,10 @@
 //! k - 1 over its volume estimates a Poisson density without bias, k over it by k / (k - 1)), or
 //! the maximum radius where fewer than k lie within it. The photons' flux holds the scattering
 //! coefficient (they are stored where they scatter), so the estimate is sigma_s times the
-//! in-scattered radiance, what the camera path's free-flight weight T / pdf multiplies.
+//! in-scattered radiance, what the camera path's free-flight weight T / pdf multiplies. The
+//! surfaces near x cut the ball (`SphereBounds`, as in SPPM): photons beyond their tangent
+//! planes are left out and the estimate divides by the volume of what is left, so the fog near
+//! its boundary is not darkened by the part of the ball outside it.
 //!
 //! Defaults: k = `DEFAULT_VOLUME_K`; the maximum radius is `RADIUS_FACTOR` times the median
 //! k-nearest radius measured at `RADIUS_PROBES` photons spread through the map (in the scale of
@@ -55,15 +58,15 @@ use super::PhotonIntegrator;
 use crate::geometry::{Hit, RayOrigin};
 use crate::integrator::camera_walk::MediumVertex;
 use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_through_media};
+use crate::integrator::sphere_bounds::SphereBounds;
 use crate::material::bsdf::Bsdf;
-use crate::math::{Color, Vec3};
+use crate::math::{Color, Vec2, Vec3};
 use crate::medium::Phase;
 use crate::photon::trace::{self, PhotonHit};
 use crate::photon::{Gathered, Photon, PhotonMap};
 use crate::render::RayStats;
 use crate::sampling::Rng32;
 use crate::scene::Scene;
-use std::f32::consts::PI;
 
 /// Medium vertices per camera segment through a homogeneous medium (see the notes).
 pub const MARCH_STEPS: u32 = 16;
@@ -111,13 +114,16 @@ impl PhotonIntegrator {
     /// sigma_s times the radiance scattered towards `wo` at `p` in a medium of phase function
     /// `phase`, from the volume photons of at most `depth` scattering events, depth 0 (single
     /// scattering) only `with_single`.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn volume_estimate(
         &self,
+        scene: &Scene,
         phase: &Phase,
         p: Vec3,
         wo: Vec3,
         depth: u32,
         with_single: bool,
+        u: Vec2,
         scratch: &mut Gathered,
     ) -> Color {
         let (k, max_r) = (self.config.volume_k, self.config.volume_radius);
@@ -130,6 +136,9 @@ impl PhotonIntegrator {
         }
         // Filled to k: the k-th photon sets the radius and is left out (see the module's notes).
         let (r2, skip) = if found.len() < k { (max_r * max_r, None) } else { (r2, Some(r2)) };
+        // The surfaces near p cut the sphere (`SphereBounds`): without, the fog within a radius
+        // of its boundary reads dark (-2% to -3% on a fog cube at a million photons).
+        let bounds = SphereBounds::probe(scene, p, r2.sqrt(), u);
         let mut skip = skip;
         let mut sum = Color::ZERO;
         for &(d2, i) in found {
@@ -139,12 +148,12 @@ impl PhotonIntegrator {
             }
             let ph = self.volume.photon(i);
             let d = trace::packed_depth(ph.flags());
-            if d > depth || (d == 0 && !with_single) {
+            if d > depth || (d == 0 && !with_single) || !bounds.keeps(ph.position()) {
                 continue;
             }
             sum += ph.power() * phase.p(wo, -ph.direction());
         }
-        sum / (4.0 / 3.0 * PI * r2 * r2.sqrt())
+        sum / bounds.volume
     }
 
     /// The light scattered towards the camera at medium vertex `v` (see the module's notes),
@@ -172,7 +181,7 @@ impl PhotonIntegrator {
             )
         });
         let depth = trace::photon_depth_limit(self.config.max_depth, v.bounce).unwrap_or(0);
-        let multiple = self.volume_estimate(&phase, v.p, v.wo, depth, false, scratch);
+        let multiple = self.volume_estimate(scene, &phase, v.p, v.wo, depth, false, rng.uniform2(), scratch);
         v.weight * single + v.tr_over_pdf * multiple
     }
 
