@@ -9,6 +9,11 @@
 //! - `DIRECT`: light emitted at the first hit, or reaching x straight from a light;
 //! - `CAUSTIC`: light reaching x after one or more delta bounces only (L S+ x);
 //! - `INDIRECT`: everything else (at least one more non-delta bounce after x).
+//!
+//! Light scattered in a participating medium is `INDIRECT` (`SPECULAR` when the camera path
+//! reached the medium through mirrors or glass), single scattering from the lights included:
+//! the photon integrators estimate a medium's light from volume photons of every kind at once,
+//! and every integrator puts it in the same layer.
 
 use crate::film::{CAUSTIC, DIRECT, INDIRECT, SPECULAR};
 
@@ -22,6 +27,8 @@ pub struct LayerPath {
     /// Bounces after the one that left x, and whether all of them were delta.
     after_x: u32,
     delta_since_x: bool,
+    /// The path has scattered in a medium: all its light from there on is `other_photons`'.
+    in_medium: bool,
 }
 
 impl Default for LayerPath {
@@ -32,7 +39,8 @@ impl Default for LayerPath {
 
 impl LayerPath {
     /// A camera ray before its first bounce.
-    pub const CAMERA: LayerPath = LayerPath { delta_prefix: false, left_x: false, after_x: 0, delta_since_x: true };
+    pub const CAMERA: LayerPath =
+        LayerPath { delta_prefix: false, left_x: false, after_x: 0, delta_since_x: true, in_medium: false };
 
     /// Records a bounce at the current vertex: `delta` when a mirror or glass lobe was sampled.
     pub fn bounce(&mut self, delta: bool) {
@@ -46,6 +54,13 @@ impl LayerPath {
         }
     }
 
+    /// Records a scattering event in a medium (a non-delta bounce whose light, and all the
+    /// path's light after it, is `other_photons`').
+    pub fn scatter_in_medium(&mut self) {
+        self.bounce(false);
+        self.in_medium = true;
+    }
+
     /// Whether a camera path in this state has bounced off a mirror or glass before x.
     pub fn delta_prefix(&self) -> bool {
         self.delta_prefix
@@ -53,7 +68,9 @@ impl LayerPath {
 
     /// The layer of light emitted at the vertex just reached (an emitter or the sky).
     pub fn emitted(&self) -> usize {
-        if self.delta_prefix {
+        if self.in_medium {
+            self.other_photons()
+        } else if self.delta_prefix {
             SPECULAR
         } else if !self.left_x || self.after_x == 0 {
             DIRECT
@@ -66,7 +83,9 @@ impl LayerPath {
 
     /// The layer of light sampled from the lights at the vertex just reached.
     pub fn direct(&self) -> usize {
-        if self.delta_prefix {
+        if self.in_medium {
+            self.other_photons()
+        } else if self.delta_prefix {
             SPECULAR
         } else if self.left_x {
             INDIRECT
@@ -78,7 +97,9 @@ impl LayerPath {
     /// The layer of caustic photons (those that came through mirrors and glass only) gathered
     /// at the vertex just reached.
     pub fn caustic_photons(&self) -> usize {
-        if self.delta_prefix {
+        if self.in_medium {
+            self.other_photons()
+        } else if self.delta_prefix {
             SPECULAR
         } else if self.left_x {
             INDIRECT
@@ -113,6 +134,25 @@ mod tests {
         p.bounce(false);
         p.bounce(false);
         assert_eq!((p.emitted(), p.direct()), (SPECULAR, SPECULAR));
+    }
+
+    #[test]
+    fn light_scattered_in_a_medium_is_indirect_or_specular() {
+        let mut p = LayerPath::CAMERA;
+        p.scatter_in_medium();
+        assert_eq!(
+            (p.emitted(), p.direct(), p.caustic_photons(), p.other_photons()),
+            (INDIRECT, INDIRECT, INDIRECT, INDIRECT)
+        );
+        // Still indirect after mirrors and surfaces beyond the medium vertex.
+        p.bounce(true);
+        p.bounce(false);
+        assert_eq!((p.emitted(), p.direct()), (INDIRECT, INDIRECT));
+        // Fog seen in a mirror is specular.
+        let mut q = LayerPath::CAMERA;
+        q.bounce(true);
+        q.scatter_in_medium();
+        assert_eq!((q.emitted(), q.direct(), q.other_photons()), (SPECULAR, SPECULAR, SPECULAR));
     }
 
     #[test]
