@@ -346,7 +346,7 @@ fn value_for(key: &'static str, noisy: bool) -> BoxedStrategy<String> {
             str_of(vec!["0", "2", "-1", "1.0", "4294967295", "100000000"]),
         ),
         "width" | "height" | "spp" | "spp_axis" | "max_depth" | "seed" | "light_samples" | "p" | "q" | "photons"
-        | "caustic_photons" | "gather" | "gather_k" | "caustic_k" => {
+        | "caustic_photons" | "gather" | "gather_k" | "caustic_k" | "volume_k" => {
             (prop_oneof![4 => (1u32..12).prop_map(|i| i.to_string()), 1 => whole()].boxed(), whole())
         }
         "transform" => (transform(noisy), any_value()),
@@ -399,7 +399,7 @@ fn value_for(key: &'static str, noisy: bool) -> BoxedStrategy<String> {
             str_of(vec!["[0.1]", "[\"a\", 1]", "0.5"]),
         ),
         "radius" | "fov" | "ior" | "tube" | "view_distance" | "focal_distance" | "max_radius" | "caustic_radius"
-        | "view_width" | "view_height" => {
+        | "volume_radius" | "view_width" | "view_height" => {
             (valid_number(if key == "fov" { Range::Degrees } else { Range::Positive }), number())
         }
         "angle" | "falloff" => (valid_number(Range::Degrees), number()),
@@ -444,8 +444,17 @@ const RENDER_KEYS: &[&str] = &[
     "crop",
     "sample_border",
 ];
-const PHOTON_KEYS: &[&str] =
-    &["photons", "caustic_photons", "gather", "gather_k", "caustic_k", "max_radius", "caustic_radius"];
+const PHOTON_KEYS: &[&str] = &[
+    "photons",
+    "caustic_photons",
+    "gather",
+    "gather_k",
+    "caustic_k",
+    "max_radius",
+    "caustic_radius",
+    "volume_k",
+    "volume_radius",
+];
 const CAMERA_KEYS: &[&str] = &[
     "eye",
     "look_at",
