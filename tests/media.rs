@@ -355,23 +355,25 @@ fn media_match_mitsuba_volpath() {
 /// radius: measured -0.07%, +0.36%, -0.32%).
 #[test]
 fn sppm_agrees_with_volpath_in_media() {
+    let photon = caustic::options::PhotonOptions { photons_per_iter: Some(20_000), ..Default::default() };
+    mean_agrees_with_volpath(IntegratorKind::Sppm, 256, photon);
+}
+
+/// Renders the area-lit media scenes and the emitter inside fog with `kind` at `spp` (seed 1,
+/// 64 x 64) and asserts each mean luminance within 3% of Mitsuba's volpath image.
+fn mean_agrees_with_volpath(kind: IntegratorKind, spp: u32, photon: caustic::options::PhotonOptions) {
     let mut failures = Vec::new();
     for case in ["cube_area", "opaque_inside", "emitter_inside"] {
-        let o = Options {
-            seed: Some(1),
-            integrator: Some(IntegratorKind::Sppm),
-            photon: caustic::options::PhotonOptions { photons_per_iter: Some(20_000), ..Default::default() },
-            ..Default::default()
-        };
-        let ours = common::mitsuba_refs::mean_luminance(&REFS.load(case, 64, 256, &o).render().image);
+        let o = Options { seed: Some(1), integrator: Some(kind), photon: photon.clone(), ..Default::default() };
+        let ours = common::mitsuba_refs::mean_luminance(&REFS.load(case, 64, spp, &o).render().image);
         let theirs = common::mitsuba_refs::mean_luminance(&REFS.reference(case));
         let rel = ours / theirs - 1.0;
-        eprintln!("{case:20} SPPM {ours:.5} vs volpath {theirs:.5} ({:+.2}%)", rel * 100.0);
+        eprintln!("{case:20} {kind:?} {ours:.5} vs volpath {theirs:.5} ({:+.2}%)", rel * 100.0);
         if rel.abs() >= 0.03 {
             failures.push(format!("{case}: {ours:.5} vs {theirs:.5} ({:+.2}%)", rel * 100.0));
         }
     }
-    assert!(failures.is_empty(), "SPPM differs from volpath:\n{}", failures.join("\n"));
+    assert!(failures.is_empty(), "{kind:?} differs from volpath:\n{}", failures.join("\n"));
 }
 
 /// SPPM's default volume radius follows the volume photons' density (two photons per sphere in
@@ -407,23 +409,8 @@ fn sppm_default_volume_radius_keeps_noise_low() {
 /// radius (cube_area: -3.0% at 500,000 photons, -1.9% at 2,000,000).
 #[test]
 fn photon_mapping_agrees_with_volpath_in_media() {
-    let mut failures = Vec::new();
-    for (case, photons) in [("cube_area", 500_000), ("opaque_inside", 500_000), ("emitter_inside", 500_000)] {
-        let o = Options {
-            seed: Some(1),
-            integrator: Some(IntegratorKind::Photon),
-            photon: caustic::options::PhotonOptions { photons: Some(photons), ..Default::default() },
-            ..Default::default()
-        };
-        let ours = common::mitsuba_refs::mean_luminance(&REFS.load(case, 64, 4, &o).render().image);
-        let theirs = common::mitsuba_refs::mean_luminance(&REFS.reference(case));
-        let rel = ours / theirs - 1.0;
-        eprintln!("{case:20} photon {ours:.5} vs volpath {theirs:.5} ({:+.2}%)", rel * 100.0);
-        if rel.abs() >= 0.03 {
-            failures.push(format!("{case}: {ours:.5} vs {theirs:.5} ({:+.2}%)", rel * 100.0));
-        }
-    }
-    assert!(failures.is_empty(), "photon mapping differs from volpath:\n{}", failures.join("\n"));
+    let photon = caustic::options::PhotonOptions { photons: Some(500_000), ..Default::default() };
+    mean_agrees_with_volpath(IntegratorKind::Photon, 4, photon);
 }
 
 /// The heterogeneous scenes of tests/data/media (a grid of density under an area light; RGB

@@ -7,7 +7,7 @@ use caustic::film::Image;
 use caustic::integrator::PhotonIntegrator;
 use caustic::integrator::photon::PhotonConfig;
 use caustic::math::{Color, Vec3, luminance};
-use caustic::options::Options;
+use caustic::options::{Options, PhotonOptions};
 use caustic::photon::trace::{self, CAUSTIC, DIRECT};
 use caustic::photon::{Gathered, Photon, PhotonMap};
 use caustic::render::{RenderControl, render_rays};
@@ -151,37 +151,14 @@ fn caustic_map_holds_only_specular_paths() {
     );
 }
 
-/// A closed diffuse sphere of albedo 0.5 and radius 1 around a point light of intensity pi, seen
-/// from its centre: radiance 0.5 from direct light, 1 with all bounces (0.5 / (1 - 0.5)).
+/// `common::point_light_furnace` (radiance 0.5 from direct light, 1 with all bounces) at 64 spp,
+/// with 400,000 photons and 32 gather rays.
 fn furnace(max_depth: u32) -> LoadedScene {
-    common::scene(&format!(
-        r#"
-[render]
-width = 8
-height = 8
-spp = 64
-max_depth = {max_depth}
-[render.photon]
-photons = 400000
-gather = 32
-[camera]
-eye = [0, 0, 0]
-look_at = [0, 0, 1]
-fov = 60
-[materials.grey]
-type = "diffuse"
-color = [1, 1, 1]
-kd = 0.5
-[[lights]]
-type = "point"
-position = [0, 0, 0]
-intensity = 3.14159265
-[[objects]]
-type = "sphere"
-radius = 1
-material = "grey"
-"#
-    ))
+    let photon = PhotonOptions { photons: Some(400_000), gather: Some(32), ..Default::default() };
+    common::scene_with(
+        &common::point_light_furnace(max_depth),
+        &Options { spp: Some(64), photon, ..Default::default() },
+    )
 }
 
 #[test]

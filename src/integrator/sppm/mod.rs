@@ -452,11 +452,10 @@ impl Sppm {
         let volume = scene.has_media().then(|| {
             let r1 = state.volume_r1;
             let v = media::VolumePhotons::split(&mut hits, r1, config.alpha, it, scene.bounds().min.min(Vec3::ZERO));
-            let slot = if done == 0 { 0 } else { 1 };
-            self.volume_radius[slot].store(v.r.to_bits(), Ordering::Relaxed);
             if done == 0 {
-                self.volume_radius[1].store(v.r.to_bits(), Ordering::Relaxed);
+                self.volume_radius[0].store(v.r.to_bits(), Ordering::Relaxed);
             }
+            self.volume_radius[1].store(v.r.to_bits(), Ordering::Relaxed);
             v
         });
         // Pass 2: each pixel's camera sample: its emitted and direct light goes into the pixel,
