@@ -23,6 +23,7 @@ fn sppm_with(s: &LoadedScene, iterations: u32, photons: u64, adaptive: bool) -> 
     let config = SppmConfig {
         photons_per_iter: photons,
         adaptive_photons: adaptive,
+        indirect_reach: if adaptive { caustic::integrator::sppm::INDIRECT_REACH } else { 1.0 },
         initial_radius: None,
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),

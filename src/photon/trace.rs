@@ -34,6 +34,10 @@ pub const CAUSTIC: u8 = 2;
 /// Flag: a scattering event in a participating medium (`Store::Media` only; never in a packed
 /// photon map).
 pub const VOLUME: u8 = 4;
+/// Flag: the photon came from the light through specular or glossy bounces only, none diffuse
+/// and none in a medium (a superset of `CAUSTIC`): light that may still be focused, which SPPM
+/// keeps in its pixels' narrow disc (`integrator::sppm`). Never in a packed photon map.
+pub const FOCUSED: u8 = 8;
 
 /// Photon depths are stored up to this (a photon scatters at most `MAX_BOUNCES` times, and a
 /// map keeps six bits of it).
@@ -52,7 +56,7 @@ pub fn photon_depth_limit(max_depth: u32, bounce: u32) -> Option<u32> {
 /// A photon map's flags byte: the flags in the low two bits, the depth in the other six.
 #[inline]
 pub fn packed_flags(h: &PhotonHit) -> u8 {
-    h.flags | h.depth << 2
+    (h.flags & (DIRECT | CAUSTIC)) | h.depth << 2
 }
 
 /// The depth stored in a photon map's flags byte (`packed_flags`).
@@ -339,6 +343,8 @@ pub fn trace_photon(
 ) {
     let caustic_only = store == Store::Caustic;
     let mut only_specular = true;
+    // No diffuse bounce and no scattering in a medium so far (`FOCUSED`).
+    let mut only_focusing = true;
     // Scattering events so far (passing through a mask is none).
     let mut depth = 0;
     for _ in 0..MAX_BOUNCES {
@@ -373,6 +379,7 @@ pub fn trace_photon(
                 }
                 depth += 1;
                 only_specular = false;
+                only_focusing = false;
                 ray = Ray { o: p, d: s.wi, medium: ray.medium };
                 continue;
             }
@@ -403,7 +410,9 @@ pub fn trace_photon(
                 let flags = if depth == 0 {
                     DIRECT
                 } else if caustic {
-                    CAUSTIC
+                    CAUSTIC | FOCUSED
+                } else if only_focusing {
+                    FOCUSED
                 } else {
                     0
                 };
@@ -416,6 +425,9 @@ pub fn trace_photon(
         let Some((wi, scattered, flags)) = scatter_photon(&bsdf, wo, flux, rng) else { return };
         if !flags.is_null() {
             depth += 1;
+        }
+        if flags.is_diffuse() {
+            only_focusing = false;
         }
         if !flags.is_specular() {
             only_specular = false;

@@ -12,6 +12,14 @@
 //! 3. `update_statistics`: every pixel collects the photons within its radius r and updates its
 //!    photon count N, radius r and flux tau with alpha = 2/3 (Hachisuka 2008 eq. 6-7 and 9-10).
 //!
+//! By default (no `photons_per_iter` given: docs/scene-format.md, "What SPPM does by default")
+//! the photons per iteration follow the measured error budget (`PhotonBudget`), and each pixel
+//! keeps two progressive estimates: photons whose light may still be focused (those that came
+//! only through mirrors, glass and glossy surfaces) within its radius r, and the other photons (smooth indirect light, whose estimate
+//! within r is blotchy) within a disc `INDIRECT_REACH` times wider. Each disc has its own photon
+//! count, radius and flux and shrinks by the photons it takes (Hachisuka 2008's update applied
+//! to each), so each converges as SPPM does, and their sum to the image.
+//!
 //! Pixels query the photons (rather than photons the pixels), so every pixel sums its photons in
 //! a fixed order and the image is the same for any thread count. Memory is the per-pixel state
 //! plus one iteration's visible points and photons, whatever the number of iterations.
@@ -53,6 +61,10 @@ pub struct SppmConfig {
     /// four times `photons_per_iter`: what SPPM does unless the scene or the command line sets
     /// the number.
     pub adaptive_photons: bool,
+    /// Photons that met a diffuse surface or a medium on their way are gathered into a second
+    /// estimate whose disc starts this many times wider than the pixel's radius and shrinks by
+    /// its own photons (`PixelStats`); 1 keeps one disc for all photons (the classic algorithm).
+    pub indirect_reach: f32,
     /// Search radius every pixel starts with; `None` derives it per pixel (see `initial_radius`).
     pub initial_radius: Option<f32>,
     /// Fraction of new photons kept (Hachisuka 2008): 2/3.
@@ -70,6 +82,7 @@ impl SppmConfig {
         SppmConfig {
             photons_per_iter: desc.photon.photons_per_iter.unwrap_or(pixels).max(1),
             adaptive_photons: desc.photon.photons_per_iter.is_none(),
+            indirect_reach: if desc.photon.photons_per_iter.is_none() { INDIRECT_REACH } else { 1.0 },
             initial_radius: desc.photon.initial_radius,
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
@@ -86,6 +99,10 @@ impl SppmConfig {
         }
     }
 }
+
+/// How much wider than the pixel's radius the disc of indirect photons starts in SPPM's default
+/// policy (BENCHMARKS.md, issue 32, has the measurement that chose it).
+pub const INDIRECT_REACH: f32 = 3.0;
 
 /// The SPPM integrator.
 pub struct Sppm {
@@ -226,26 +243,27 @@ fn fixed_square(x: f32) -> u64 {
 /// iteration (photons are stored up to a few times each as they bounce).
 pub fn estimated_bytes(pixels: u64, photons_per_iter: u64, layers: bool) -> u64 {
     let layer_bytes = if layers { std::mem::size_of::<PixelLayers>() } else { 0 };
-    let per_pixel =
-        (std::mem::size_of::<PixelStats>() + std::mem::size_of::<Option<VisiblePoint>>() + layer_bytes) as u64;
+    // (The wide disc counted whether or not the render has one.)
+    let per_pixel = (std::mem::size_of::<PixelStats>()
+        + std::mem::size_of::<Disc>()
+        + std::mem::size_of::<Option<VisiblePoint>>()
+        + layer_bytes) as u64;
     let per_photon = 3 * (std::mem::size_of::<PhotonHit>() + std::mem::size_of::<(Vec3, u32)>() + 4) as u64;
     pixels.saturating_mul(per_pixel).saturating_add(photons_per_iter.saturating_mul(per_photon))
 }
 
-/// What one pixel has gathered so far.
+/// One progressive density estimate of a pixel: its photon count, radius and flux.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PixelStats {
-    /// Sum over iterations of emitted and direct light.
-    pub ld: Color,
+pub struct Disc {
     /// Accumulated photon count N (fractional after the alpha reduction).
     pub n: f32,
-    /// Current search radius; 0 until the pixel has had a visible point.
+    /// Current search radius; 0 until the pixel has had a visible point (or when unused).
     pub r: f32,
     /// Accumulated flux tau (already rescaled to the current radius).
     pub tau: Color,
 }
 
-impl PixelStats {
+impl Disc {
     /// The progressive radiance estimate update for one iteration in which `m` photons within
     /// radius r brought flux `phi` (Hachisuka 2008 eq. 6, 7, 9 and 10): keep a fraction alpha of
     /// the new photons, shrink the disc so its density matches, and scale the flux to the
@@ -264,22 +282,44 @@ impl PixelStats {
         ratio
     }
 
-    /// Radiance after `iterations` iterations of photons whose flux was already divided by the
-    /// number emitted per iteration.
-    pub fn radiance(&self, iterations: u32) -> Color {
+    /// The flux `tau` of this disc as radiance after `iterations` iterations (photon flux
+    /// already divided by the number emitted per iteration).
+    pub fn radiance(&self, tau: Color, iterations: u32) -> Color {
+        if self.r > 0.0 { tau / (iterations.max(1) as f32 * PI * self.r * self.r) } else { Color::ZERO }
+    }
+}
+
+/// What one pixel has gathered so far.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelStats {
+    /// Sum over iterations of emitted and direct light.
+    pub ld: Color,
+    /// The estimate within the pixel's radius: every photon with `indirect_reach` 1, focused
+    /// photons only otherwise. (The wide disc's estimate is kept apart, in `State::wide`, so
+    /// that the classic algorithm's memory stays as it was.)
+    pub near: Disc,
+}
+
+impl PixelStats {
+    /// Radiance after `iterations` iterations, with the pixel's wide disc if it has one.
+    pub fn radiance(&self, wide: Option<&Disc>, iterations: u32) -> Color {
         let it = iterations.max(1) as f32;
-        let photon = if self.r > 0.0 { self.tau / (it * PI * self.r * self.r) } else { Color::ZERO };
-        self.ld / it + photon
+        let l = self.ld / it + self.near.radiance(self.near.tau, iterations);
+        match wide {
+            Some(w) => l + w.radiance(w.tau, iterations),
+            None => l,
+        }
     }
 }
 
 /// A pixel's light split into layers (kept only when layers are asked for): emitted and
-/// directly sampled light, and the accumulated flux (never `DIRECT`: first hits are not
-/// gathered), each flux part rescaled with the pixel's radius like `tau`.
+/// directly sampled light, and the accumulated flux of each disc (never `DIRECT`: first hits
+/// are not gathered), each flux part rescaled with its disc like the disc's `tau`.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelLayers {
     ld: Layers,
-    tau: Layers,
+    near: Layers,
+    wide: Layers,
 }
 
 /// A camera path's first non-specular hit. It keeps the hit, not its BSDF: the BSDF is made
@@ -375,6 +415,7 @@ impl Sppm {
         let n_pixels = settings.pixels() as usize;
         let state = RefCell::new(State {
             pixels: vec![PixelStats::default(); n_pixels],
+            wide: Vec::new(),
             points: Vec::new(),
             hits: Vec::new(),
             grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
@@ -466,7 +507,7 @@ impl Sppm {
         let (rays, nonfinite, direct_dev, points) = state
             .pixels
             .par_iter_mut()
-            .zip(layers_of(&mut state.layers, n_pixels))
+            .zip(optional_of(&mut state.layers, n_pixels))
             .zip(state.points.par_iter_mut())
             .enumerate()
             .with_min_len(64)
@@ -493,9 +534,9 @@ impl Sppm {
                     nonfinite = 1;
                 }
                 if let Some((_, dist)) = sample.point
-                    && px.r == 0.0
+                    && px.near.r == 0.0
                 {
-                    px.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
+                    px.near.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
                 }
                 *point = sample.point.map(|(v, _)| v);
                 (stats, nonfinite, dev, u64::from(point.is_some()))
@@ -513,15 +554,30 @@ impl Sppm {
         // of a larger radius reads more. Cells as large as the largest radius made every pixel
         // scan photons far out of its reach; cells of the mean radius, 27 cells' scattered
         // reads per pixel (BENCHMARKS.md, issue 29).
+        // A pixel's wide disc starts at its first gather, `indirect_reach` times its radius then.
+        let reach = config.indirect_reach;
+        if reach > 1.0 {
+            state.wide.resize(n_pixels, Disc::default());
+            for (w, p) in state.wide.iter_mut().zip(&state.pixels) {
+                if w.r == 0.0 {
+                    w.r = reach * p.near.r;
+                }
+            }
+        }
         let (sum, n) = state
             .pixels
             .iter()
             .zip(vps)
-            .filter(|(_, v)| v.is_some())
-            .fold((0.0f64, 0u64), |(s, n), (p, _)| (s + f64::from(p.r), n + 1));
+            .enumerate()
+            .filter(|(_, (_, v))| v.is_some())
+            .fold((0.0f64, 0u64), |(s, n), (k, (p, _))| {
+                let r = state.wide.get(k).map_or(p.near.r, |w| w.r.max(p.near.r));
+                (s + f64::from(r), n + 1)
+            });
         let cell = if n > 0 { 2.0 * (sum / n as f64) as f32 } else { 0.0 };
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
+            + state.wide.len() * std::mem::size_of::<Disc>()
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
             + hits.capacity() * std::mem::size_of::<PhotonHit>();
@@ -530,36 +586,48 @@ impl Sppm {
             state.grid.rebuild(&hits, cell, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
             bytes += grid.memory_bytes();
-            let layers = layers_of(&mut state.layers, n_pixels);
+            let layers = optional_of(&mut state.layers, n_pixels);
+            let wide = optional_of(&mut state.wide, n_pixels);
             photon_dev = state
                 .pixels
                 .par_iter_mut()
                 .zip(layers)
+                .zip(wide)
                 .zip(vps.par_iter())
                 .with_min_len(64)
-                .map(|((px, layers), vp)| {
+                .map(|(((px, layers), wide), vp)| {
                     let Some(v) = vp else { return 0 };
-                    let (m, phi, phi_caustic) = gather(scene, v, px.r, grid, &hits);
-                    let total = v.beta * phi;
-                    if !total.is_finite() {
+                    let mut unused = Disc::default();
+                    let wide = wide.unwrap_or(&mut unused);
+                    let g = gather(scene, v, px.near.r, wide.r, grid, &hits);
+                    let (g_near, g_wide) = (v.beta * g.near, v.beta * g.wide);
+                    if !(g_near.is_finite() && g_wide.is_finite()) {
                         driver.record(&RayStats::default(), 1, 0);
                         return 0;
                     }
                     // This iteration's photon estimate against the running one, both over the
-                    // disc of the current radius.
+                    // discs of the current radii.
                     let dev = if done > 0 {
-                        fixed_square((luminance(total) - luminance(px.tau) / prior) / (PI * px.r * px.r))
+                        let now = px.near.radiance(g_near, 1) + wide.radiance(g_wide, 1);
+                        let mean = px.near.radiance(px.near.tau, 1) + wide.radiance(wide.tau, 1);
+                        fixed_square(luminance(now) - luminance(mean) / prior)
                     } else {
                         0
                     };
-                    let ratio = px.update(m, total, config.alpha);
+                    let ratio_near = px.near.update(g.m_near, g_near, config.alpha);
+                    let ratio_wide = wide.update(g.m_wide, g_wide, config.alpha);
                     if let Some(l) = layers {
-                        let caustic = v.beta * phi_caustic;
+                        let caustic = v.beta * g.near_caustic;
                         let mut parts = [Color::ZERO; 4];
                         parts[v.layer.caustic_photons()] += caustic;
-                        parts[v.layer.other_photons()] += total - caustic;
-                        for (t, p) in l.tau.iter_mut().zip(parts) {
-                            *t = (*t + p) * ratio;
+                        parts[v.layer.other_photons()] += g_near - caustic;
+                        for (t, p) in l.near.iter_mut().zip(parts) {
+                            *t = (*t + p) * ratio_near;
+                        }
+                        let mut parts = [Color::ZERO; 4];
+                        parts[v.layer.other_photons()] += g_wide;
+                        for (t, p) in l.wide.iter_mut().zip(parts) {
+                            *t = (*t + p) * ratio_wide;
                         }
                     }
                     dev
@@ -647,11 +715,27 @@ impl Sppm {
     }
 }
 
-/// The photons within radius `r` of visible point `v`: (M, their count, which sets the radius
-/// schedule; the flux the BSDF passes towards the camera; its part that came only through
-/// mirrors and glass).
-fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> (u32, Color, Color) {
-    let (mut m, mut phi, mut phi_caustic) = (0u32, Color::ZERO, Color::ZERO);
+/// What a pixel's discs took from one iteration's photons (`gather`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Gathered {
+    /// Photons within the pixel's radius (M of its schedule) and the flux the BSDF passes
+    /// towards the camera from those the near disc estimates, with its part that came only
+    /// through mirrors and glass.
+    m_near: u32,
+    near: Color,
+    near_caustic: Color,
+    /// The same of the wide disc (nothing when it is unused).
+    m_wide: u32,
+    wide: Color,
+}
+
+/// The photons around visible point `v`: within radius `r` every photon, or with a wide disc of
+/// radius `r_wide` > 0 the focused photons (`trace::FOCUSED`: caustics, and light through glossy
+/// surfaces) within `r` and the others within `r_wide`. Every
+/// photon within a disc counts in its M (Hachisuka and Jensen 2009; pbrt-v4), whether or not
+/// the BSDF passes its light.
+fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> Gathered {
+    let mut g = Gathered::default();
     let bsdf = scene.bsdf(&v.at.hit(), v.wo);
     let p = v.at.p;
     // Photons from behind pass only through a transmitting surface (rough glass).
@@ -660,11 +744,26 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[Ph
     // A Lambertian BSDF's value is the same for every direction above the surface: worked out
     // once (the same value `f` gives each photon), not per photon.
     let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
-    grid.for_each_within(p, r, |i| {
+    let wide = r_wide > 0.0;
+    let r2 = r * r;
+    grid.for_each_within(p, if wide { r_wide.max(r) } else { r }, |i| {
         let ph = &hits[i as usize];
-        // Every photon in range counts in M (Hachisuka and Jensen 2009; pbrt-v4), whether or
-        // not the BSDF passes its light.
-        m += 1;
+        // Light that may still be focused (through mirrors, glass or glossy surfaces only) stays in
+        // the near disc; light after a diffuse bounce is smooth enough for the wide one.
+        let focused = ph.flags & trace::FOCUSED != 0;
+        let caustic = ph.flags & trace::CAUSTIC != 0;
+        let within_r = !wide || (ph.p - p).length_squared() <= r2;
+        if within_r {
+            g.m_near += 1;
+        }
+        if wide {
+            if focused && !within_r {
+                return;
+            }
+            if !focused {
+                g.m_wide += 1;
+            }
+        }
         if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
             return;
         }
@@ -675,27 +774,33 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, grid: &PhotonGrid, hits: &[Ph
             None => bsdf.f(v.wo, wi, Transport::Radiance),
         };
         if f != Color::ZERO {
-            phi += f * ph.flux;
-            if ph.flags & trace::CAUSTIC != 0 {
-                phi_caustic += f * ph.flux;
+            if wide && !focused {
+                g.wide += f * ph.flux;
+            } else {
+                g.near += f * ph.flux;
+                if caustic {
+                    g.near_caustic += f * ph.flux;
+                }
             }
         }
     });
-    (m, phi, phi_caustic)
+    g
 }
 
-/// The layers of each pixel, or `None` for every pixel when there are none.
-fn layers_of(layers: &mut [PixelLayers], n: usize) -> impl IndexedParallelIterator<Item = Option<&mut PixelLayers>> {
-    if layers.is_empty() {
+/// Each pixel's element of `v`, or `None` for every pixel when `v` is empty.
+fn optional_of<T: Send>(v: &mut [T], n: usize) -> impl IndexedParallelIterator<Item = Option<&mut T>> {
+    if v.is_empty() {
         Either::Right((0..n).into_par_iter().map(|_| None))
     } else {
-        Either::Left(layers.par_iter_mut().map(Some))
+        Either::Left(v.par_iter_mut().map(Some))
     }
 }
 
 /// The per-pixel state of a render.
 struct State {
     pixels: Vec<PixelStats>,
+    /// Each pixel's wide disc (`SppmConfig::indirect_reach`), empty when there is none.
+    wide: Vec<Disc>,
     /// This iteration's visible points, one per pixel, and photon grid (buffers kept between
     /// iterations).
     points: Vec<Option<VisiblePoint>>,
@@ -714,7 +819,7 @@ impl State {
     fn image(&self, settings: &RenderSettings, iterations: u32) -> Image {
         let mut img = Image::new(settings.width, settings.height);
         for (k, p) in self.pixels.iter().enumerate() {
-            let c = p.radiance(iterations);
+            let c = p.radiance(self.wide.get(k), iterations);
             img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
         }
         img
@@ -724,9 +829,8 @@ impl State {
         let mut img = Image::new(settings.width, settings.height);
         let it = iterations.max(1) as f32;
         for (k, (p, l)) in self.pixels.iter().zip(&self.layers).enumerate() {
-            let area = it * PI * p.r * p.r;
-            let flux = |t: Color| if p.r > 0.0 { t / area } else { Color::ZERO };
-            let c = l.ld[layer] / it + flux(l.tau[layer]);
+            let wide = self.wide.get(k).map_or(Color::ZERO, |w| w.radiance(l.wide[layer], iterations));
+            let c = l.ld[layer] / it + p.near.radiance(l.near[layer], iterations) + wide;
             img.pixels[k] = if c.is_finite() { c } else { Color::ZERO };
         }
         img
@@ -799,16 +903,71 @@ mod tests {
             hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
         ];
         let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &v, 0.5, &grid, &hits);
-        assert_eq!(m, 3);
-        assert!((phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
+        let g = gather(&scene, &v, 0.5, 0.0, &grid, &hits);
+        assert_eq!(g.m_near, 3);
+        assert!((g.near.r() - 0.5 / PI).abs() < 1e-6, "{g:?}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let deep = [PhotonHit { depth: 3, ..hits[0] }];
         let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, &grid, &deep);
-        assert_eq!((m, phi), (1, Color::ZERO));
-        let (m, phi, _) = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, &grid, &deep);
-        assert!(m == 1 && (phi.r() - 0.5 / PI).abs() < 1e-6, "{phi}");
+        let g = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, 0.0, &grid, &deep);
+        assert_eq!((g.m_near, g.near), (1, Color::ZERO));
+        let g = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, 0.0, &grid, &deep);
+        assert!(g.m_near == 1 && (g.near.r() - 0.5 / PI).abs() < 1e-6, "{g:?}");
+    }
+
+    #[test]
+    fn indirect_photons_are_gathered_over_the_wide_disc() {
+        let scene = grey_quad();
+        let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
+        let v = VisiblePoint {
+            at: Shading::of(&hit.unwrap()),
+            wo: Vec3::Z,
+            beta: Color::ONE,
+            layer: LayerPath::CAMERA,
+            photon_depth: trace::MAX_PHOTON_DEPTH as u8,
+        };
+        let hit = |x: f32, flags: u8| PhotonHit {
+            p: Vec3::new(x, 0.0, 0.0),
+            dir: -Vec3::Z,
+            flux: Color::ONE,
+            flags,
+            depth: 1,
+            n: Vec3::Z,
+        };
+        let hits = [
+            hit(0.1, 0),               // indirect within r: the wide disc's
+            hit(0.4, 0),               // indirect within the wide disc only
+            hit(0.15, trace::CAUSTIC | trace::FOCUSED), // caustic within r: the near disc's
+            hit(0.5, trace::FOCUSED),                   // focused beyond r: left out
+            hit(0.7, 0),               // beyond both
+        ];
+        let grid = PhotonGrid::build(&hits, 1.2, Vec3::splat(-1.0));
+        let f = 0.5 / PI;
+        let g = gather(&scene, &v, 0.2, 0.6, &grid, &hits);
+        // M of the near disc: every photon within r; of the wide disc: its own photons.
+        assert_eq!((g.m_near, g.m_wide), (2, 2));
+        assert!((g.near.r() - f).abs() < 1e-6 && g.near_caustic == g.near, "{g:?}");
+        assert!((g.wide.r() - 2.0 * f).abs() < 1e-6, "{g:?}");
+        // Light through a glossy surface only (focused, not a caustic) stays near too.
+        let glossy = [hit(0.1, trace::FOCUSED)];
+        let grid_glossy = PhotonGrid::build(&glossy, 1.2, Vec3::splat(-1.0));
+        let g = gather(&scene, &v, 0.2, 0.6, &grid_glossy, &glossy);
+        assert!((g.m_near, g.m_wide) == (1, 0) && (g.near.r() - f).abs() < 1e-6 && g.near_caustic == Color::ZERO);
+        // Without a wide disc: every photon within r in the near one.
+        let g = gather(&scene, &v, 0.2, 0.0, &grid, &hits);
+        assert_eq!((g.m_near, g.m_wide, g.wide), (2, 0, Color::ZERO));
+        assert!((g.near.r() - 2.0 * f).abs() < 1e-6 && (g.near_caustic.r() - f).abs() < 1e-6, "{g:?}");
+        // Each disc shrinks by its own photons: a pixel whose near disc is empty still has its
+        // wide disc shrink as photons come into it (where one schedule for both would keep a
+        // shadowed pixel's wide disc taking a bright neighbour's light for ever).
+        let mut p = PixelStats { ld: Color::ZERO, near: Disc { n: 0.0, r: 0.2, tau: Color::ZERO } };
+        let mut wide = Disc { n: 0.0, r: 0.6, tau: Color::ZERO };
+        assert_eq!(p.near.update(0, Color::ZERO, 2.0 / 3.0), 1.0);
+        let ratio = wide.update(3, Color::splat(3.0), 2.0 / 3.0);
+        assert!((ratio - 2.0 / 3.0).abs() < 1e-6 && (wide.r * wide.r - 0.36 * 2.0 / 3.0).abs() < 1e-6);
+        assert_eq!((p.near.r, p.near.n), (0.2, 0.0));
+        let l = p.radiance(Some(&wide), 1);
+        assert!((l.r() - 2.0 / (PI * wide.r * wide.r)).abs() < 1e-4, "{l}");
     }
 
     #[test]
@@ -816,6 +975,7 @@ mod tests {
         let config = SppmConfig {
             photons_per_iter: 6400,
             adaptive_photons: true,
+            indirect_reach: 1.0,
             initial_radius: None,
             alpha: 2.0 / 3.0,
             max_depth: 5,
@@ -866,18 +1026,19 @@ mod tests {
     fn update_follows_hachisuka_formulas() {
         // N = 10, r = 1, tau = 5; M = 6 new photons with flux 3, alpha = 2/3:
         // N' = 10 + 4 = 14, r'^2 = r^2 N'/(N + M) = 14/16, tau' = (5 + 3) 14/16 = 7.
-        let mut p = PixelStats { ld: Color::ZERO, n: 10.0, r: 1.0, tau: Color::splat(5.0) };
-        p.update(6, Color::splat(3.0), 2.0 / 3.0);
-        assert!((p.n - 14.0).abs() < 1e-6);
-        assert!((p.r * p.r - 14.0 / 16.0).abs() < 1e-6);
-        assert!((p.tau.r() - 7.0).abs() < 1e-6);
+        let mut d = Disc { n: 10.0, r: 1.0, tau: Color::splat(5.0) };
+        d.update(6, Color::splat(3.0), 2.0 / 3.0);
+        assert!((d.n - 14.0).abs() < 1e-6);
+        assert!((d.r * d.r - 14.0 / 16.0).abs() < 1e-6);
+        assert!((d.tau.r() - 7.0).abs() < 1e-6);
         // No photons: nothing changes.
-        let before = p;
-        p.update(0, Color::ZERO, 2.0 / 3.0);
-        assert_eq!((p.n, p.r, p.tau), (before.n, before.r, before.tau));
+        let before = d;
+        d.update(0, Color::ZERO, 2.0 / 3.0);
+        assert_eq!((d.n, d.r, d.tau), (before.n, before.r, before.tau));
+        let mut p = PixelStats { ld: Color::ZERO, near: d };
         // The estimate: tau / (iterations pi r^2) plus the mean direct light.
         p.ld = Color::splat(4.0);
-        let l = p.radiance(2);
+        let l = p.radiance(None, 2);
         assert!((l.r() - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
     }
 }
