@@ -186,3 +186,31 @@ fn a_render_resumed_from_its_checkpoint_is_the_uninterrupted_render() {
         assert!(bits(&resumed) == bits(&whole), "{}: the resumed render differs", kind.name());
     }
 }
+
+/// VCM with one light path per m camera paths (`LightBudget`, the multiple importance weights of
+/// `MisFactors::with_light_fraction`): still the furnace's closed forms, and the same mean as one
+/// light path per pixel on the caustic scene, where light tracing, connections and merges carry
+/// much of the light (so weights that did not add up to one would show).
+#[test]
+fn fewer_light_paths_than_camera_paths_leave_the_image_unbiased() {
+    let with_divisor = |text: &str, m: u32, spp: u32, seed: u64| {
+        let s = scene(text, IntegratorKind::Vcm, spp, seed);
+        let Ok(Integrator::Vcm(mut vcm)) =
+            Integrator::new(&s.integrator, &s.scene, &s.settings, &RenderControl::uncancelled())
+        else {
+            panic!("not a VCM integrator")
+        };
+        vcm.config.light_divisor = Some(m);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let film = caustic::film::Film::new(s.settings.width, s.settings.height, false);
+        mean(&pool.install(|| vcm.render(&s.scene, &s.settings, &RenderControl::uncancelled(), film)).image)
+    };
+    for m in [3, 8] {
+        let gi = with_divisor(&common::point_light_furnace(200), m, 64, 1);
+        assert!((gi - 1.0).abs() < 0.03, "m = {m}: furnace {gi}");
+    }
+    let one = (with_divisor(CAUSTICS, 1, 64, 11) + with_divisor(CAUSTICS, 1, 64, 12)) / 2.0;
+    let four = (with_divisor(CAUSTICS, 4, 128, 13) + with_divisor(CAUSTICS, 4, 128, 14)) / 2.0;
+    eprintln!("caustic scene: one light path per pixel {one:.5}, per four pixels {four:.5}");
+    assert!((four - one).abs() < 0.02 * one, "m = 4: {four} vs m = 1: {one}");
+}

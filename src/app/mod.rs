@@ -566,9 +566,13 @@ fn render_description(
         say(
             display,
             format_args!(
-                "vcm took {n} iterations of {} light paths, {:.1} iterations/s, merge radius {:.3e} to {:.3e}, \
+                "vcm took {n} iterations of {} light paths ({}), {:.1} iterations/s, merge radius {:.3e} to {:.3e}, \
                  working memory {:.1} MiB",
-                settings.pixels(),
+                settings.pixels().div_ceil(u64::from(vcm.light_divisor().max(1))),
+                match (vcm.light_divisor(), vcm.config.light_divisor) {
+                    (m, None) => format!("one per {m} camera paths after the first two iterations, chosen"),
+                    (m, Some(_)) => format!("one per {m} camera paths"),
+                },
                 n as f64 / stats.wall.as_secs_f64().max(1e-9),
                 vcm.config.radius(settings.first_sample),
                 vcm.config.radius(last),

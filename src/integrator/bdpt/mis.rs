@@ -25,6 +25,15 @@
 //!   SmallVCM's pixel-area densities over its light-path count.
 //! - Lights at infinity (environment, directional) and an orthographic camera emit parallel
 //!   rays: their first segment has no 1 / distance^2 (the report's sec. 5.1).
+//! - VCM may trace fewer light paths than camera paths (`vcm::LightBudget`): a fraction rho of
+//!   the camera paths then connect to a light path, and there are rho x pixels light paths to
+//!   splat and merge. Every technique that uses a light subpath (connections with s >= 2, light
+//!   tracing, merges) then has rho times the samples, and the two that do not (a camera path
+//!   hitting a light, s = 0, and next-event estimation, s = 1) keep theirs. The partial sums
+//!   count techniques relative to a connection, so only the camera-only techniques change: they
+//!   weigh `camera_only` = mis(1 / rho) more, which enters at the light subpath's start (its
+//!   partial sums there are the s = 1 and s = 0 terms) and, inverted, where a camera-only
+//!   technique weighs the others.
 
 /// The power heuristic's exponent 2.
 #[inline(always)]
@@ -56,19 +65,31 @@ pub struct MisFactors {
     pub vc: f64,
     /// Full-film pixels over light paths per sample index (see the module header).
     pub camera_scale: f64,
+    /// mis(1 / rho): the weight of the camera-only techniques relative to those of a light
+    /// subpath, when a fraction rho of camera paths connect to one (1 when all do; see the
+    /// module header).
+    pub camera_only: f64,
 }
 
 impl MisFactors {
     /// Bidirectional path tracing: connections only.
     pub fn connections_only(camera_scale: f64) -> Self {
-        MisFactors { vm: 0.0, vc: 0.0, camera_scale }
+        MisFactors { vm: 0.0, vc: 0.0, camera_scale, camera_only: 1.0 }
     }
 
     /// Vertex connection and merging with merge radius `radius` and `light_paths` light paths
     /// per iteration (the report's eq. 20 with one connection and `light_paths` merges).
     pub fn with_merging(radius: f64, light_paths: f64, camera_scale: f64) -> Self {
         let eta = std::f64::consts::PI * radius * radius * light_paths;
-        MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale }
+        MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale, camera_only: 1.0 }
+    }
+
+    /// The same when only a fraction `rho` in (0, 1] of the camera paths connect to a light
+    /// subpath and there are `rho` times the light paths the factors were made for (module
+    /// header). `vm`, `vc` and `camera_scale` stay those of one light path per camera path:
+    /// they weigh techniques of light subpaths against each other, whose counts all scale alike.
+    pub fn with_light_fraction(self, rho: f64) -> Self {
+        MisFactors { camera_only: mis(1.0 / rho), ..self }
     }
 }
 
@@ -89,8 +110,9 @@ impl SubpathMis {
         if !(emission_pdf > 0.0) {
             return SubpathMis::default();
         }
-        let d_vc = if delta { 0.0 } else { mis(if finite { cos } else { 1.0 } / emission_pdf) };
-        SubpathMis { d_vcm: mis(direct_pdf / emission_pdf), d_vc, d_vm: d_vc * f.vc }
+        // (The terms of the two camera-only techniques, scaled by their relative count.)
+        let d_vc = if delta { 0.0 } else { mis(if finite { cos } else { 1.0 } / emission_pdf) * f.camera_only };
+        SubpathMis { d_vcm: mis(direct_pdf / emission_pdf) * f.camera_only, d_vc, d_vm: d_vc * f.vc }
     }
 
     /// A camera path's start: `pdf` is the density of its first direction (solid angle; for an
@@ -145,8 +167,9 @@ impl SubpathMis {
 /// choice probabilities. Eq. 42-43. A camera that sees an emitter directly is not weighted
 /// (there is no technique that connects a light point to the camera).
 #[inline]
-pub fn emitter_weight(cam: &SubpathMis, direct_pdf: f64, emission_pdf: f64) -> f64 {
-    let w_camera = mis(direct_pdf) * cam.d_vcm + mis(emission_pdf) * cam.d_vc;
+pub fn emitter_weight(cam: &SubpathMis, direct_pdf: f64, emission_pdf: f64, f: &MisFactors) -> f64 {
+    // Next-event estimation is camera-only as this technique is; the rest use light subpaths.
+    let w_camera = mis(direct_pdf) * cam.d_vcm + mis(emission_pdf) * cam.d_vc / f.camera_only;
     1.0 / (1.0 + w_camera)
 }
 
@@ -175,7 +198,7 @@ pub fn light_sample_weight(
     }
     let w_light = mis(bsdf_pdf / direct_pdf);
     let ratio = emission_pdf * cos_camera.abs() / (direct_pdf * cos_light.abs().max(MIN_COS));
-    let w_camera = mis(ratio) * (f.vm + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf));
+    let w_camera = mis(ratio) * (f.vm + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
     1.0 / (w_light + 1.0 + w_camera)
 }
 
@@ -263,6 +286,8 @@ mod tests {
         camera: f64,
         /// pi r^2 light paths, or None without merging.
         eta: Option<f64>,
+        /// The fraction of camera paths that connect to a light subpath (and of light paths).
+        rho: f64,
     }
 
     impl Path {
@@ -285,6 +310,7 @@ mod tests {
                 direct_w: r(0.1, 5.0),
                 camera: r(0.1, 20.0),
                 eta,
+                rho: 1.0,
             };
             for i in 0..=n {
                 p.cos_prev[i] = r(0.05, 1.0);
@@ -304,10 +330,11 @@ mod tests {
         }
 
         fn factors(&self) -> MisFactors {
-            match self.eta {
-                Some(eta) => MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale: 1.0 },
+            let f = match self.eta {
+                Some(eta) => MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale: 1.0, camera_only: 1.0 },
                 None => MisFactors::connections_only(1.0),
-            }
+            };
+            f.with_light_fraction(self.rho)
         }
 
         fn finite_light(&self) -> bool {
@@ -387,7 +414,8 @@ mod tests {
             for i in s..n {
                 p *= self.rev(i);
             }
-            Some(p)
+            // Techniques of a light subpath have rho times the samples.
+            Some(if s >= 2 { p * self.rho } else { p })
         }
 
         /// The density of merging at surface vertex i (light path to v_i, camera path to v_i).
@@ -396,7 +424,7 @@ mod tests {
             if self.delta[i] {
                 return None;
             }
-            let mut p = eta;
+            let mut p = eta * self.rho;
             for j in 0..=i {
                 p *= self.fwd(j);
             }
@@ -459,7 +487,7 @@ mod tests {
                     let emission = self.pick_e * self.pdf_pos * self.pdf_dir;
                     let direct = self.direct();
                     let cam = self.camera_subpath(0, self.finite_light());
-                    emitter_weight(&cam, direct, emission)
+                    emitter_weight(&cam, direct, emission, &f)
                 } else if s == 1 {
                     let cam = self.camera_subpath(1, true);
                     let (direct_w, emission, cos_light) = match self.light {
@@ -520,7 +548,9 @@ mod tests {
             let light = kinds[trial / 6 % 4];
             let orthographic = trial % 5 == 0;
             let eta = (trial % 3 == 0).then(|| 0.01 + rng.uniform() as f64);
-            let path = Path::random(&mut rng, n, light, orthographic, eta);
+            let mut path = Path::random(&mut rng, n, light, orthographic, eta);
+            // Fewer light paths than camera paths in half the trials (with and without merging).
+            path.rho = [1.0, 0.25, 1.0 / 16.0, 1.0][trial % 4];
             let t = path.techniques();
             let total: f64 = t.iter().map(|(_, p, _)| mis(*p)).sum();
             let sum: f64 = t.iter().map(|(_, _, w)| w).sum();

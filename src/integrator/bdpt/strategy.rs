@@ -35,6 +35,10 @@ pub struct Context<'a> {
     /// Full-film pixels over light paths per sample index: the weight of one light path's
     /// splat (the camera's importance is normalised over the full film, see `camera::importance`).
     pub light_scale: f32,
+    /// What a connection to a light subpath's vertex is multiplied by: the inverse of the
+    /// probability that the camera path was given a light subpath (VCM's light budget; 1 in
+    /// bidirectional path tracing).
+    pub connection_scale: f32,
 }
 
 impl<'a> Context<'a> {
@@ -49,6 +53,7 @@ impl<'a> Context<'a> {
             ray_bias,
             factors: factors.unwrap_or(MisFactors::connections_only(scale)),
             light_scale: scale as f32,
+            connection_scale: 1.0,
         }
     }
 }
@@ -275,7 +280,7 @@ pub fn environment_weight(ctx: &Context, env: usize, from: Vec3, d: Vec3, mis: &
     let light = &scene.lights[env];
     let direct = light.pdf_li(from, from, d, d) as f64 * scene.direct_picker.prob(env) as f64;
     let emission = emission_pdf(light, &Ray::new(from, -d), -d) * scene.light_picker.prob(env) as f64;
-    mis::emitter_weight(mis, direct, emission)
+    mis::emitter_weight(mis, direct, emission, &ctx.factors)
 }
 
 /// The weight of a camera path (partial sums `arrived`, after arriving) that left `from` along
@@ -288,7 +293,7 @@ pub fn area_light_weight(ctx: &Context, hit: &Hit, from: Vec3, d: Vec3, dist2: f
     let direct = light.pdf_li(from, hit.p, hit.ng, d) as f64 * cos / (dist2 as f64).max(f64::MIN_POSITIVE);
     let emission = emission_pdf(light, &Ray::new(hit.p, -d), hit.ng);
     let (pick_d, pick_e) = (scene.direct_picker.prob(i) as f64, scene.light_picker.prob(i) as f64);
-    mis::emitter_weight(arrived, direct * pick_d, emission * pick_e)
+    mis::emitter_weight(arrived, direct * pick_d, emission * pick_e, &ctx.factors)
 }
 
 /// Next-event estimation at camera vertex `x` (s = 1): one light chosen by `u_pick`, a point of

@@ -120,6 +120,15 @@ pub fn trace_light_path<'a>(
     }
 }
 
+/// What a camera subpath's techniques found apart, for VCM's light budget (`vcm::LightBudget`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CameraTally {
+    /// Light of the camera-only techniques: emitters hit and light samples (all layers).
+    pub camera_only: Color,
+    /// Rays traced by connections to the light subpath.
+    pub connection_rays: u64,
+}
+
 /// Traces the camera subpath of `ray` (its numbers from `sampler`, which made the ray) and
 /// returns the light its techniques gather, by layer: emitters it hits, a light sample at each
 /// vertex, connections to `light_path` (vertices of one light subpath with their BSDFs in
@@ -131,6 +140,7 @@ pub fn trace_camera_path<'a>(
     light_path: &[LightVertex],
     light_bsdfs: &[Bsdf<'a>],
     stats: &mut RayStats,
+    tally: &mut CameraTally,
     mut merge: impl FnMut(&CameraVertex<'a, '_>, &mut Layers, &mut RayStats),
 ) -> Layers {
     let scene = ctx.scene;
@@ -155,7 +165,9 @@ pub fn trace_camera_path<'a>(
                     } else {
                         strategy::environment_weight(ctx, env as usize, last_p, ray.d, &mis)
                     };
-                    layers[layer.emitted()] += beta * le * w as f32;
+                    let c = beta * le * w as f32;
+                    layers[layer.emitted()] += c;
+                    tally.camera_only += c;
                 }
             }
             break;
@@ -174,7 +186,9 @@ pub fn trace_camera_path<'a>(
                 } else {
                     strategy::area_light_weight(ctx, &hit, last_p, ray.d, dist2, &arrived)
                 };
-                layers[layer.emitted()] += beta * le * w as f32;
+                let c = beta * le * w as f32;
+                layers[layer.emitted()] += c;
+                tally.camera_only += c;
             }
         }
         if depth > ctx.max_depth {
@@ -184,16 +198,20 @@ pub fn trace_camera_path<'a>(
         if bsdf.has_smooth() {
             let x = CameraVertex { hit: &hit, bsdf: &bsdf, wo, beta, mis: arrived, depth, layer };
             let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-            layers[layer.direct()] += strategy::light_sample(ctx, &x, u_pick, u, stats);
+            let c = strategy::light_sample(ctx, &x, u_pick, u, stats);
+            layers[layer.direct()] += c;
+            tally.camera_only += c;
+            let before = stats.total();
             for (y, y_bsdf) in light_path.iter().zip(light_bsdfs) {
                 // Light vertices come in order of depth: the rest are deeper still.
                 if y.depth + depth > ctx.max_depth {
                     break;
                 }
                 if let Some((c, k)) = strategy::connect(ctx, &x, y, y_bsdf, stats) {
-                    layers[k] += c;
+                    layers[k] += c * ctx.connection_scale;
                 }
             }
+            tally.connection_rays += stats.total() - before;
             merge(&x, &mut layers, stats);
         }
         let (uc, u) = (sampler.next_1d(), sampler.next_2d());

@@ -564,16 +564,13 @@ impl Sppm {
                 }
             }
         }
-        let (sum, n) = state
-            .pixels
-            .iter()
-            .zip(vps)
-            .enumerate()
-            .filter(|(_, (_, v))| v.is_some())
-            .fold((0.0f64, 0u64), |(s, n), (k, (p, _))| {
+        let (sum, n) = state.pixels.iter().zip(vps).enumerate().filter(|(_, (_, v))| v.is_some()).fold(
+            (0.0f64, 0u64),
+            |(s, n), (k, (p, _))| {
                 let r = state.wide.get(k).map_or(p.near.r, |w| w.r.max(p.near.r));
                 (s + f64::from(r), n + 1)
-            });
+            },
+        );
         let cell = if n > 0 { 2.0 * (sum / n as f64) as f32 } else { 0.0 };
         // Pass 3: each pixel gathers the photons within its radius and updates its statistics.
         let mut bytes = state.pixels.len() * std::mem::size_of::<PixelStats>()
@@ -935,11 +932,11 @@ mod tests {
             n: Vec3::Z,
         };
         let hits = [
-            hit(0.1, 0),               // indirect within r: the wide disc's
-            hit(0.4, 0),               // indirect within the wide disc only
+            hit(0.1, 0),                                // indirect within r: the wide disc's
+            hit(0.4, 0),                                // indirect within the wide disc only
             hit(0.15, trace::CAUSTIC | trace::FOCUSED), // caustic within r: the near disc's
             hit(0.5, trace::FOCUSED),                   // focused beyond r: left out
-            hit(0.7, 0),               // beyond both
+            hit(0.7, 0),                                // beyond both
         ];
         let grid = PhotonGrid::build(&hits, 1.2, Vec3::splat(-1.0));
         let f = 0.5 / PI;

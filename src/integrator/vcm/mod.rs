@@ -34,15 +34,17 @@ use super::bdpt::{LightPathBuffer, mis, subpath};
 use crate::film::splat::{DRAIN_PATHS, SplatFilm};
 use crate::film::{Film, Layers};
 use crate::material::bxdf::Transport;
+use crate::math::luminance;
 use crate::math::{Color, Vec2, Vec3};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
 use grid::VertexGrid;
+use rayon::iter::Either;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// Paths traced together by one worker (light paths, or pixels' camera paths).
 const CHUNK: u64 = 256;
@@ -67,6 +69,8 @@ pub struct VcmConfig {
     pub initial_radius: f32,
     /// Radius reduction: r_i = r_0 (i + 1)^((alpha - 1) / 2).
     pub alpha: f32,
+    /// One light path per this many camera paths (`LightBudget`); `None` chooses it.
+    pub light_divisor: Option<u32>,
 }
 
 impl VcmConfig {
@@ -77,6 +81,7 @@ impl VcmConfig {
             ray_bias: desc.ray_bias(scene),
             initial_radius: desc.photon.initial_radius.unwrap_or_else(|| scene_radius(scene, settings)),
             alpha: DEFAULT_ALPHA,
+            light_divisor: None,
         }
     }
 
@@ -115,6 +120,75 @@ fn scene_radius(scene: &Scene, settings: &RenderSettings) -> f32 {
 /// The VCM integrator.
 pub struct Vcm {
     pub config: VcmConfig,
+    /// The light budget of the last render (`LightBudget`): camera paths per light path.
+    divisor: AtomicU32,
+}
+
+/// How many camera paths share one light path (issue 26): tracing a light path per pixel is
+/// what VCM needs where light tracing and merging carry the image (caustics seen in glossy
+/// surfaces), and light it pays for and does not use on glossy scenes lit by area lights or the
+/// sky, whose light the camera-only techniques (emitters hit, next-event estimation) find.
+///
+/// With one light path per m camera paths (`MisFactors::with_light_fraction`), the variance of
+/// the techniques of light subpaths grows about m times and their cost falls m times, while the
+/// camera-only techniques keep both. A pilot of two iterations with one light path per pixel
+/// measures, per pixel, each part's variance per iteration (half the squared difference of the
+/// two iterations' values: V_c for the camera-only part, V_l for the rest, summed over pixels)
+/// and each part's cost in rays (C_c: camera paths and their light samples; C_l: light paths,
+/// their splats, the connections' shadow rays and the merges at `MERGE_COST` each); the error
+/// after a given time, (V_c + m V_l) (C_c + C_l / m), is least at m = sqrt(V_c C_l / (V_l C_c)),
+/// rounded and kept within 1..=`MAX_LIGHT_DIVISOR`.
+///
+/// The pilot is the render's iterations 0 and 1 (kept in the image when the render starts
+/// there), so every shard and every resumed run finds the same m, and an image is the same
+/// whatever the split.
+struct LightBudget;
+
+impl LightBudget {
+    /// The most camera paths per light path.
+    const MAX_DIVISOR: u32 = 16;
+    /// What evaluating one light vertex within the merge radius costs, in rays (estimated: a
+    /// BSDF evaluation, a reverse density and a weight, against a ray's traversal).
+    const MERGE_COST: f64 = 0.25;
+
+    /// m from the pilot's two iterations: each pixel's camera-only part and whole value (any
+    /// measure of light, here luminance), and the costs of both iterations.
+    fn divisor(parts: [(&[f32], &[f32]); 2], camera_rays: u64, light_work: f64) -> u32 {
+        let (mut v_c, mut v_l) = (0.0f64, 0.0f64);
+        let [(c0, t0), (c1, t1)] = parts;
+        for k in 0..c0.len().min(c1.len()).min(t0.len()).min(t1.len()) {
+            let (a, b) = (f64::from(c0[k]), f64::from(c1[k]));
+            let (la, lb) = (f64::from(t0[k]) - a, f64::from(t1[k]) - b);
+            if a.is_finite() && b.is_finite() && la.is_finite() && lb.is_finite() {
+                v_c += (a - b) * (a - b) / 2.0;
+                v_l += (la - lb) * (la - lb) / 2.0;
+            }
+        }
+        let c_c = camera_rays as f64;
+        if !(v_l > 0.0) || !(c_c > 0.0) {
+            return Self::MAX_DIVISOR;
+        }
+        let m = (v_c * light_work / (v_l * c_c)).sqrt();
+        if !m.is_finite() {
+            return 1;
+        }
+        (m.round() as u32).clamp(1, Self::MAX_DIVISOR)
+    }
+}
+
+/// Iterations of the pilot that sets the light budget.
+const PILOT_ITERATIONS: u32 = 2;
+
+/// What a pilot iteration measures (`LightBudget`).
+#[derive(Default)]
+struct Probe {
+    /// Each pixel's camera-only light (luminance, filter weight included).
+    camera_only: Vec<f32>,
+    /// Rays of camera paths and their light samples.
+    camera_rays: u64,
+    /// Rays of light paths, splats and connections, and merge candidates.
+    light_rays: u64,
+    merges: u64,
 }
 
 /// Working memory of a VCM render of `pixels` pixels: the light vertices of one iteration (a few
@@ -159,13 +233,25 @@ impl Vcm {
         film: Film,
     ) -> RenderOutput {
         let mut paths = LightPaths::default();
+        // The light budget, and the pilot's iterations while they wait to be used.
+        let mut budget: Option<(u32, Vec<Film>)> = self.config.light_divisor.map(|m| (m.max(1), Vec::new()));
         let (film, mut stats) = crate::integrator::render_splatted(
             settings,
             control,
             film,
             ("vcm", "iterations"),
-            |driver, splats, film, range| self.pass(scene, driver, splats, &mut paths, film, range),
+            |driver, splats, film, range| {
+                if budget.is_none() {
+                    match self.pilot(scene, driver, splats, &mut paths, range.start == 0) {
+                        Some(b) => budget = Some(b),
+                        None => return PassOutcome::Interrupted { taken: 0 },
+                    }
+                }
+                let (m, pilot) = budget.as_mut().expect("set above");
+                self.pass(scene, driver, splats, &mut paths, film, range, *m, pilot)
+            },
         );
+        self.divisor.store(budget.map_or(0, |b| b.0), Ordering::Relaxed);
         stats.memory_bytes = paths.peak_bytes as u64;
         RenderOutput::from_film(film, stats)
     }
@@ -180,15 +266,27 @@ impl Vcm {
         paths: &mut LightPaths,
         film: &mut Film,
         range: Range<u32>,
+        m: u32,
+        pilot: &mut Vec<Film>,
     ) -> PassOutcome {
         let mut pass = Film::new(film.width, film.height, film.has_layers());
         let mut done = 0;
         for it in range.clone() {
-            if !self.iteration(scene, driver, splats, paths, &mut pass, it) {
+            // The pilot's iterations are the render's first two (`LightBudget`).
+            if (it as usize) < pilot.len() {
+                pass.add(&pilot[it as usize]);
+                done += 1;
+                continue;
+            }
+            let divisor = if it < PILOT_ITERATIONS { 1 } else { m };
+            if !self.iteration(scene, driver, splats, paths, &mut pass, it, divisor, None, true) {
                 splats.clear();
                 break;
             }
             done += 1;
+        }
+        if range.end >= PILOT_ITERATIONS {
+            pilot.clear();
         }
         for t in &mut pass.tiles {
             t.count.iter_mut().for_each(|c| *c = done);
@@ -197,8 +295,56 @@ impl Vcm {
         if done < range.len() as u32 { PassOutcome::Interrupted { taken: done } } else { PassOutcome::Complete }
     }
 
-    /// Iteration `it`: light paths, their grid, camera paths; its light is drained into `pass`.
-    /// Returns false, leaving `pass` as it was, when the render was cancelled during it.
+    /// The light budget (`LightBudget`) from iterations 0 and 1 rendered with one light path per
+    /// pixel, with those iterations' films when `keep` (the render starts there; otherwise
+    /// they only measure, and do not count in the progress). `None` when cancelled.
+    fn pilot(
+        &self,
+        scene: &Scene,
+        driver: &Driver,
+        splats: &SplatFilm,
+        paths: &mut LightPaths,
+        keep: bool,
+    ) -> Option<(u32, Vec<Film>)> {
+        let settings = driver.settings;
+        let mut films = Vec::new();
+        let mut probes = Vec::new();
+        for it in 0..PILOT_ITERATIONS {
+            let mut film = Film::new(settings.width, settings.height, settings.layers);
+            let mut probe = Probe::default();
+            if !self.iteration(scene, driver, splats, paths, &mut film, it, 1, Some(&mut probe), keep) {
+                splats.clear();
+                return None;
+            }
+            films.push(film);
+            probes.push(probe);
+        }
+        let totals: Vec<Vec<f32>> = films
+            .iter()
+            .map(|f| {
+                let mut f = f.clone();
+                for t in &mut f.tiles {
+                    t.count.iter_mut().for_each(|c| *c = 1);
+                }
+                f.image().pixels.iter().map(|&c| luminance(c)).collect()
+            })
+            .collect();
+        let camera_rays = probes.iter().map(|p| p.camera_rays).sum();
+        let light_work =
+            probes.iter().map(|p| p.light_rays as f64 + p.merges as f64 * LightBudget::MERGE_COST).sum::<f64>();
+        let m = LightBudget::divisor(
+            [(&probes[0].camera_only, &totals[0]), (&probes[1].camera_only, &totals[1])],
+            camera_rays,
+            light_work,
+        );
+        Some((m, if keep { films } else { Vec::new() }))
+    }
+
+    /// Iteration `it` with one light path per `m` camera paths: light paths, their grid, camera
+    /// paths; its light is drained into `pass`. `probe` measures it for the light budget;
+    /// `count` records its samples in the progress. Returns false, leaving `pass` as it was,
+    /// when the render was cancelled during it.
+    #[allow(clippy::too_many_arguments)]
     fn iteration(
         &self,
         scene: &Scene,
@@ -207,17 +353,30 @@ impl Vcm {
         paths: &mut LightPaths,
         pass: &mut Film,
         it: u32,
+        m: u32,
+        mut probe: Option<&mut Probe>,
+        count: bool,
     ) -> bool {
         let settings = driver.settings;
         let pixels = settings.pixels();
         let radius = self.config.radius(it);
         let full = scene.camera.width as f64 * scene.camera.height as f64;
-        let factors = mis::MisFactors::with_merging(radius as f64, pixels as f64, full / pixels.max(1) as f64);
-        let ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
+        // One light path per `m` camera paths: camera path k connects to light path k / m in the
+        // iterations where k + it is a multiple of m, so each connects in one iteration of m
+        // (and its connections count m times), and every light path is used once.
+        let light_paths = pixels.div_ceil(u64::from(m));
+        let factors = mis::MisFactors::with_merging(radius as f64, pixels as f64, full / pixels.max(1) as f64)
+            .with_light_fraction(1.0 / f64::from(m));
+        let mut ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
+        ctx.light_scale = (full / light_paths.max(1) as f64) as f32;
+        ctx.connection_scale = m as f32;
         // The iteration's sums gather here and join the pass only when it is whole.
         let mut sums = Film::new(pass.width, pass.height, pass.has_layers());
-        if !self.light_pass(&ctx, driver, splats, paths, &mut sums, it) {
+        let Some(light_rays) = self.light_pass(&ctx, driver, splats, paths, &mut sums, it, light_paths) else {
             return false;
+        };
+        if let Some(p) = probe.as_deref_mut() {
+            p.light_rays += light_rays;
         }
         paths.positions.clear();
         paths.positions.extend(paths.vertices.iter().map(|v| v.hit.p));
@@ -229,7 +388,7 @@ impl Vcm {
             + paths.grid.memory_bytes()
             + paths.merges.capacity() * std::mem::size_of::<MergeVertex>();
         paths.peak_bytes = paths.peak_bytes.max(bytes);
-        if !self.camera_pass(&ctx, driver, splats, paths, it, radius) {
+        if !self.camera_pass(&ctx, driver, splats, paths, it, radius, m, probe, count) {
             return false;
         }
         splats.drain_into(&mut sums);
@@ -247,9 +406,11 @@ impl Vcm {
         paths: &mut LightPaths,
         sums: &mut Film,
         it: u32,
-    ) -> bool {
+        light_paths: u64,
+    ) -> Option<u64> {
         let settings = driver.settings;
-        let pixels = settings.pixels();
+        let pixels = light_paths;
+        let mut rays = 0;
         let width = settings.width as u64;
         let film_width = ctx.scene.camera.width as u64;
         paths.vertices.clear();
@@ -290,9 +451,10 @@ impl Vcm {
                 })
                 .collect();
             if interrupted.load(Ordering::Relaxed) {
-                return false;
+                return None;
             }
             for (vertices, lengths, stats, bad) in traced {
+                rays += stats.total();
                 for n in lengths {
                     let end = paths.ends.last().copied().unwrap_or(0) + n;
                     paths.ends.push(end);
@@ -303,7 +465,7 @@ impl Vcm {
             splats.drain_into(sums);
             batch = batch_end;
         }
-        true
+        Some(rays)
     }
 
     /// Traces each pixel's camera subpath of iteration `it`, connecting it to the pixel's own
@@ -316,14 +478,28 @@ impl Vcm {
         paths: &LightPaths,
         it: u32,
         radius: f32,
+        m: u32,
+        probe: Option<&mut Probe>,
+        count: bool,
     ) -> bool {
         let settings = driver.settings;
         let pixels = settings.pixels();
         let interrupted = AtomicBool::new(false);
-        (0..pixels.div_ceil(CHUNK)).into_par_iter().for_each(|c| {
+        // With a probe, each chunk's pixels' camera-only light and its counts.
+        let probing = probe.is_some();
+        let mut camera_only = if probing { vec![0.0f32; pixels as usize] } else { Vec::new() };
+        let chunks = camera_only.par_chunks_mut(CHUNK as usize).map(Some);
+        let chunks = if probing {
+            Either::Left(chunks)
+        } else {
+            Either::Right((0..pixels.div_ceil(CHUNK) as usize).into_par_iter().map(|_| None::<&mut [f32]>))
+        };
+        let counts = chunks.enumerate().map(|(c, mut out)| {
+            let c = c as u64;
+            let mut tally = (0u64, 0u64, 0u64);
             if driver.cancelled() {
                 interrupted.store(true, Ordering::Relaxed);
-                return;
+                return tally;
             }
             let mut stats = RayStats::default();
             let mut own = LightPathBuffer::default();
@@ -333,10 +509,15 @@ impl Vcm {
             for k in from..to {
                 let (x, y) = ((k % settings.width as u64) as u32, (k / settings.width as u64) as u32);
                 let (mut sampler, ray, weight) = settings.camera_sample(ctx.scene, x, y, it);
-                // The BSDFs of this pixel's light path, for connections.
+                // The BSDFs of this pixel's light path, for connections, if it has one.
                 own.clear();
-                own.vertices.extend_from_slice(paths.path(k as usize));
+                if (k + u64::from(it)).is_multiple_of(u64::from(m)) {
+                    own.vertices.extend_from_slice(paths.path((k / u64::from(m)) as usize));
+                }
                 own.bsdfs.extend(own.vertices.iter().map(|v| ctx.scene.bsdf(&v.hit, v.wo)));
+                let mut found = subpath::CameraTally::default();
+                let mut merges = 0u64;
+                let before = stats.total();
                 let mut layers = subpath::trace_camera_path(
                     ctx,
                     &mut sampler,
@@ -344,7 +525,8 @@ impl Vcm {
                     &own.vertices,
                     &own.bsdfs,
                     &mut stats,
-                    |x, layers, _| merge(ctx, x, paths, radius, layers),
+                    &mut found,
+                    |x, layers, _| merges += u64::from(merge(ctx, x, paths, radius, layers)),
                 );
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);
@@ -352,9 +534,24 @@ impl Vcm {
                 if !splats.add_pixel(x, y, &layers) {
                     bad += 1;
                 }
+                if let Some(out) = out.as_deref_mut() {
+                    out[(k - from) as usize] = luminance(found.camera_only * weight);
+                    tally.0 += stats.total() - before - found.connection_rays;
+                    tally.1 += found.connection_rays;
+                    tally.2 += merges;
+                }
             }
-            driver.record(&stats, bad, to - from);
+            driver.record(&stats, bad, if count { to - from } else { 0 });
+            tally
         });
+        let (camera_rays, connection_rays, merges) =
+            counts.reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        if let Some(p) = probe {
+            p.camera_only = camera_only;
+            p.camera_rays += camera_rays;
+            p.light_rays += connection_rays;
+            p.merges += merges;
+        }
         !interrupted.load(Ordering::Relaxed)
     }
 }
@@ -381,14 +578,16 @@ impl MergeVertex {
 /// Merges camera vertex `x` with every light vertex within `radius` (the report's eq. 37-39:
 /// each merge weighted against the connections and other merges that make the same path),
 /// adding the estimate by layer to `layers`.
-fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: f32, layers: &mut Layers) {
+fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: f32, layers: &mut Layers) -> u32 {
     let r2 = radius * radius;
+    let mut candidates = 0;
     let p = x.hit.p;
     // The density estimate's kernel and the number of light paths.
     let norm = 1.0 / (std::f32::consts::PI * r2 * paths.ends.len().max(1) as f32);
     let mut sum = [Color::ZERO; 4];
     paths.grid.for_each_within(p, r2, |slot| {
         let y = &paths.merges[slot];
+        candidates += 1;
         if y.depth + x.depth > ctx.max_depth + 1 {
             return;
         }
@@ -403,11 +602,17 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
     for (l, s) in layers.iter_mut().zip(sum) {
         *l += x.beta * s * norm;
     }
+    candidates
 }
 
 impl Vcm {
+    /// Camera paths per light path in the last render (`LightBudget`; 0 before any).
+    pub fn light_divisor(&self) -> u32 {
+        self.divisor.load(Ordering::Relaxed)
+    }
+
     /// Made for `scene` rendered with `settings` from the description `desc`.
     pub fn new(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Self {
-        Vcm { config: VcmConfig::new(desc, scene, settings) }
+        Vcm { config: VcmConfig::new(desc, scene, settings), divisor: AtomicU32::new(0) }
     }
 }
