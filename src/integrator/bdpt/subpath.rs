@@ -133,6 +133,7 @@ pub struct CameraTally {
 /// returns the light its techniques gather, by layer: emitters it hits, a light sample at each
 /// vertex, connections to `light_path` (vertices of one light subpath with their BSDFs in
 /// `light_bsdfs`) and what `merge` adds at each vertex with a non-delta part.
+#[allow(clippy::too_many_arguments)]
 pub fn trace_camera_path<'a>(
     ctx: &Context<'a>,
     sampler: &mut Sampler,

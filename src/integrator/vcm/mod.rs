@@ -258,6 +258,7 @@ impl Vcm {
 
     /// Runs iterations `range` and adds them to `film`; an interrupted pass keeps the iterations
     /// it finished.
+    #[allow(clippy::too_many_arguments)]
     fn pass(
         &self,
         scene: &Scene,
@@ -398,6 +399,7 @@ impl Vcm {
 
     /// Traces the light subpaths of iteration `it`, splatting their connections to the camera
     /// (drained into `sums`) and keeping their vertices in `paths`.
+    #[allow(clippy::too_many_arguments)]
     fn light_pass<'a>(
         &self,
         ctx: &Context<'a>,
@@ -470,6 +472,7 @@ impl Vcm {
 
     /// Traces each pixel's camera subpath of iteration `it`, connecting it to the pixel's own
     /// light path and merging it with every light vertex within `radius`; adds it to its pixel.
+    #[allow(clippy::too_many_arguments)]
     fn camera_pass(
         &self,
         ctx: &Context,
