@@ -68,7 +68,7 @@ impl PixelSampler {
     }
 
     /// The sampler of sample `index` of this pixel.
-    #[inline]
+    #[inline(always)]
     pub fn sampler(&mut self, index: u32) -> Sampler {
         let group = group_of(self.kind, index, self.strata);
         if self.group != Some(group) {
