@@ -308,6 +308,16 @@ impl Packets {
         let r = PacketRay::new(ray);
         let mut best = None;
         for p in &self.packets {
+            if p.lanes == 1 {
+                // One primitive left over: its scalar test, whose operations a lane repeats,
+                // is a quarter of the packet's work (the same hit, and tested in the same turn).
+                let i = p.prim[0] as usize;
+                if let Some(h) = shapes[i].intersect(ray, shear, *closest) {
+                    *closest = h.t;
+                    best = Some((i, h));
+                }
+                continue;
+            }
             let live = (1u32 << p.lanes) - 1;
             let (mask, t, u, v, scalar) = match &p.kind {
                 Kind::Quads(q) => {
@@ -358,6 +368,13 @@ impl Packets {
     pub(super) fn occluded(&self, shapes: &[CompactShape], ray: &Ray, shear: &RayShear, t_max: f32) -> bool {
         let r = PacketRay::new(ray);
         for p in &self.packets {
+            if p.lanes == 1 {
+                // As in `intersect`: a lone primitive by its scalar test.
+                if shapes[p.prim[0] as usize].intersect(ray, shear, t_max).is_some() {
+                    return true;
+                }
+                continue;
+            }
             let live = (1u32 << p.lanes) - 1;
             let (mask, scalar) = match &p.kind {
                 Kind::Quads(q) => (q.hits(&r, t_max).0.bitmask(), 0),
