@@ -333,16 +333,18 @@ impl Packets {
                     (m.bitmask(), t, Vec4::ZERO, Vec4::ZERO, 0)
                 }
             };
-            let mut mask = mask & live;
-            if mask | scalar == 0 {
+            // Lanes hit or left to the scalar test, in lane order (a lane in neither has no hit).
+            let mut todo = (mask | scalar) & live;
+            if todo == 0 {
                 continue;
             }
             let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
-            for k in 0..p.lanes as usize {
-                let bit = 1 << k;
-                let hit = if scalar & bit != 0 {
+            while todo != 0 {
+                let k = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let hit = if scalar & (1 << k) != 0 {
                     shapes[p.prim[k] as usize].intersect(ray, shear, *closest)
-                } else if mask & bit != 0 && t[k] < *closest {
+                } else if t[k] < *closest {
                     Some(PrimHit { t: t[k], u: u[k], v: v[k] })
                 } else {
                     None
@@ -351,7 +353,6 @@ impl Packets {
                     *closest = h.t;
                     best = Some((p.prim[k] as usize, h));
                 }
-                mask &= !bit;
             }
         }
         for &i in &self.others {
