@@ -32,6 +32,8 @@ pub struct Bvh {
     prims: Primitives,
     /// `for_each_crossing` finds every crossing (no leaf is a cylinder).
     crossings_enumerable: bool,
+    /// Some primitive's test reads a ray's `RayShear` (`CompactShape::uses_shear`: triangles).
+    triangles: bool,
     /// For at most `LINEAR_MAX` bounded primitives: all of them, four at a time.
     packets: Option<Packets>,
 }
@@ -63,8 +65,9 @@ impl Bvh {
         drop(order);
         let shapes: Vec<CompactShape> = (0..n).into_par_iter().map(|i| prims.compact(i, meshes)).collect();
         let crossings_enumerable = shapes.par_iter().all(CompactShape::crossings_enumerable);
+        let triangles = shapes.par_iter().any(CompactShape::uses_shear);
         let packets = (bounded <= LINEAR_MAX).then(|| Packets::new(&shapes[..bounded]));
-        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable, packets }
+        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable, triangles, packets }
     }
 
     /// The unbounded primitives (planes), after the tree's.
@@ -123,6 +126,12 @@ impl Bvh {
         self.nodes.capacity() * std::mem::size_of::<WideNode>()
     }
 
+    /// The ray's triangle-test constants, made only when the tree holds a triangle.
+    #[inline(always)]
+    fn shear(&self, ray: &Ray) -> RayShear {
+        if self.triangles { RayShear::new(ray) } else { RayShear::UNUSED }
+    }
+
     /// Closest hit in (0, t_max): the primitive's index (into `prims()`) and its hit.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
@@ -134,7 +143,7 @@ impl Bvh {
     /// `intersect` over the primitives in the tree only (what `intersect_unbounded` leaves out).
     #[inline]
     pub fn intersect_tree(&self, ray: &Ray, t_max: f32) -> Option<(u32, PrimHit)> {
-        let shear = RayShear::new(ray);
+        let shear = self.shear(ray);
         let mut closest = t_max;
         if let Some(p) = &self.packets {
             return p.intersect(&self.shapes, ray, &shear, &mut closest).map(|(i, h)| (i as u32, h));
@@ -186,7 +195,7 @@ impl Bvh {
         if !self.crossings_enumerable {
             return None;
         }
-        let shear = RayShear::new(ray);
+        let shear = self.shear(ray);
         let mut leaf = |first: usize, count: usize, t: &mut f32| {
             (first..first + count).any(|i| !self.shapes[i].for_each_crossing(ray, &shear, *t, |h| visit(i as u32, h)))
         };
@@ -209,7 +218,7 @@ impl Bvh {
     /// True when anything is hit in (0, t_max). Stops at the first hit found.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let shear = RayShear::new(ray);
+        let shear = self.shear(ray);
         let leaf = |first: usize, count: usize, t: &mut f32| {
             self.shapes[first..first + count].iter().any(|p| p.intersect(ray, &shear, *t).is_some())
         };

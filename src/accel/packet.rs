@@ -308,6 +308,16 @@ impl Packets {
         let r = PacketRay::new(ray);
         let mut best = None;
         for p in &self.packets {
+            if p.lanes == 1 {
+                // One primitive left over: its scalar test, whose operations a lane repeats,
+                // is a quarter of the packet's work (the same hit, and tested in the same turn).
+                let i = p.prim[0] as usize;
+                if let Some(h) = shapes[i].intersect(ray, shear, *closest) {
+                    *closest = h.t;
+                    best = Some((i, h));
+                }
+                continue;
+            }
             let live = (1u32 << p.lanes) - 1;
             let (mask, t, u, v, scalar) = match &p.kind {
                 Kind::Quads(q) => {
@@ -323,16 +333,18 @@ impl Packets {
                     (m.bitmask(), t, Vec4::ZERO, Vec4::ZERO, 0)
                 }
             };
-            let mut mask = mask & live;
-            if mask | scalar == 0 {
+            // Lanes hit or left to the scalar test, in lane order (a lane in neither has no hit).
+            let mut todo = (mask | scalar) & live;
+            if todo == 0 {
                 continue;
             }
             let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
-            for k in 0..p.lanes as usize {
-                let bit = 1 << k;
-                let hit = if scalar & bit != 0 {
+            while todo != 0 {
+                let k = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let hit = if scalar & (1 << k) != 0 {
                     shapes[p.prim[k] as usize].intersect(ray, shear, *closest)
-                } else if mask & bit != 0 && t[k] < *closest {
+                } else if t[k] < *closest {
                     Some(PrimHit { t: t[k], u: u[k], v: v[k] })
                 } else {
                     None
@@ -341,7 +353,6 @@ impl Packets {
                     *closest = h.t;
                     best = Some((p.prim[k] as usize, h));
                 }
-                mask &= !bit;
             }
         }
         for &i in &self.others {
@@ -358,6 +369,13 @@ impl Packets {
     pub(super) fn occluded(&self, shapes: &[CompactShape], ray: &Ray, shear: &RayShear, t_max: f32) -> bool {
         let r = PacketRay::new(ray);
         for p in &self.packets {
+            if p.lanes == 1 {
+                // As in `intersect`: a lone primitive by its scalar test.
+                if shapes[p.prim[0] as usize].intersect(ray, shear, t_max).is_some() {
+                    return true;
+                }
+                continue;
+            }
             let live = (1u32 << p.lanes) - 1;
             let (mask, scalar) = match &p.kind {
                 Kind::Quads(q) => (q.hits(&r, t_max).0.bitmask(), 0),

@@ -97,7 +97,7 @@ impl Tile {
     /// Adds one sample (its layers) to pixel `k` of the tile. A sample that is not finite counts
     /// as black (as pbrt-v4 does), so the pixel still has the number of samples it was given and
     /// one bad value cannot spoil it; `false` tells the caller to report it.
-    #[inline]
+    #[inline(always)]
     pub fn add(&mut self, k: usize, layers: &Layers) -> bool {
         self.count[k] += 1;
         let c = layers[0] + layers[1] + layers[2] + layers[3];

@@ -21,7 +21,7 @@ use crate::material::bxdf::Transport;
 use crate::math::{Color, Frame, Vec2, Vec3};
 use crate::progress::Progress;
 use crate::sampling::warp::{concentric_disk, uniform_cone};
-use crate::sampling::{Rng32, hash_seed};
+use crate::sampling::{Rng32, SeedPrefix};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -159,11 +159,13 @@ pub fn trace_global_into(
     watch: Watch,
     hits: &mut Vec<PhotonHit>,
 ) {
+    // Every photon's stream is hash_seed(&[seed, 1, i]); the shared parts are mixed once.
+    let stream = SeedPrefix::new(&[seed, 1]);
     run_chunks(
         0,
         n_emit,
         |i| {
-            let mut rng = Rng32::new(hash_seed(&[seed, 1, i]));
+            let mut rng = Rng32::new(stream.hash(&[i]));
             let (li, p) = scene.light_picker.pick(rng.uniform())?;
             let light = &scene.lights[li];
             let (u_pos, u_dir) = (rng.uniform2(), rng.uniform2());
@@ -214,6 +216,8 @@ pub fn trace_caustic(
     // The first batch emits as many as are wanted; later ones what the hits per photon so far
     // say is missing, with a tenth more (the batch size changes the work, not the result).
     let mut batch = n_store.max(CHUNK * 4);
+    // Every photon's stream is hash_seed(&[seed, 2, i]); the shared parts are mixed once.
+    let stream = SeedPrefix::new(&[seed, 2]);
     while (hits.len() as u64) < n_store && emitted < cap && !watch.cancelled() {
         let n = batch.min(cap - emitted);
         let (mut h, mut s) = (Vec::new(), Vec::new());
@@ -221,7 +225,7 @@ pub fn trace_caustic(
             emitted,
             n,
             |i| {
-                let mut rng = Rng32::new(hash_seed(&[seed, 2, i]));
+                let mut rng = Rng32::new(stream.hash(&[i]));
                 let (li, p) = scene.light_picker.pick(rng.uniform())?;
                 let light = &scene.lights[li];
                 let (e, uv) = emit_towards(light, targets, &mut rng)?;

@@ -44,10 +44,10 @@ pub fn add_first_hits(scene: &Scene, settings: &RenderSettings, film: &mut Film,
             for i in 0..tile.width {
                 let k = (j * tile.width + i) as usize;
                 let (x, y) = (tile.x0 + i, tile.y0 + j);
-                let seed = settings.pixel_seed(x, y);
+                let mut pixel = settings.pixel_sampler(x, y);
                 let from = settings.first_sample.saturating_add(before[k]);
                 for index in from..settings.first_sample.saturating_add(tile.count[k]) {
-                    let (_, ray, weight) = settings.camera_sample_of(scene, x, y, seed, index);
+                    let (_, ray, weight) = settings.camera_sample_of(scene, x, y, &mut pixel, index);
                     aovs.first_hit_values(&first_hit(scene, &ray), &mut values);
                     tile.add_first_hit(k, &values, weight);
                 }

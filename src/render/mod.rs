@@ -18,7 +18,7 @@ use crate::film::filter::{FilterTable, Window};
 use crate::film::{Film, Image, Layers};
 use crate::geometry::Ray;
 use crate::progress::Display;
-use crate::sampling::{Sampler, SamplerKind};
+use crate::sampling::{PixelSampler, Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::scene::desc::Sampling;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -108,20 +108,29 @@ impl RenderSettings {
     /// filter around the pixel's centre (filter importance sampling, `film::filter`).
     #[inline]
     pub fn camera_sample(&self, scene: &Scene, x: u32, y: u32, index: u32) -> (Sampler, Ray, f32) {
-        self.camera_sample_of(scene, x, y, self.pixel_seed(x, y), index)
+        self.camera_sample_of(scene, x, y, &mut self.pixel_sampler(x, y), index)
     }
 
-    /// The seed of film pixel (x, y)'s samples, for `camera_sample_of`.
+    /// The samplers of image pixel (x, y), for `camera_sample_of`: what a pixel's samples
+    /// share is computed once for all of them.
     #[inline]
-    pub fn pixel_seed(&self, x: u32, y: u32) -> u64 {
-        Sampler::pixel_seed(self.seed, x + self.origin.0, y + self.origin.1)
+    pub fn pixel_sampler(&self, x: u32, y: u32) -> PixelSampler {
+        let seed = Sampler::pixel_seed(self.seed, x + self.origin.0, y + self.origin.1);
+        PixelSampler::new(self.sampler, seed, self.strata)
     }
 
-    /// `camera_sample` with the pixel's seed (`pixel_seed`) computed once for all its samples.
+    /// `camera_sample` with the pixel's samplers (`pixel_sampler`) made once for all its samples.
     #[inline]
-    pub fn camera_sample_of(&self, scene: &Scene, x: u32, y: u32, pixel_seed: u64, index: u32) -> (Sampler, Ray, f32) {
+    pub fn camera_sample_of(
+        &self,
+        scene: &Scene,
+        x: u32,
+        y: u32,
+        pixel: &mut PixelSampler,
+        index: u32,
+    ) -> (Sampler, Ray, f32) {
         let (x, y) = (x + self.origin.0, y + self.origin.1);
-        let mut sampler = Sampler::for_pixel(self.sampler, pixel_seed, index, self.strata);
+        let mut sampler = pixel.sampler(index);
         let jitter = sampler.pixel();
         let (offset, weight) = if self.antialias {
             self.filter.sample(jitter, x, y, &self.window)

@@ -93,7 +93,7 @@ fn render_tile<I: RayIntegrator>(
             let (x, y) = (tile.x0 + i, tile.y0 + j);
             let k = (j * tile.width + i) as usize;
             let next = settings.first_sample.saturating_add(tile.count[k]);
-            let pixel_seed = settings.pixel_seed(x, y);
+            let mut pixel = settings.pixel_sampler(x, y);
             let mut trace = |(mut sampler, ray, weight): (Sampler, Ray, f32)| {
                 if first_hits {
                     aovs.first_hit_values(&super::aov::first_hit(scene, &ray), &mut values);
@@ -113,12 +113,12 @@ fn render_tile<I: RayIntegrator>(
             let mut index = next;
             while range.end.saturating_sub(index) >= CAMERA_BATCH as u32 {
                 let batch: [_; CAMERA_BATCH] =
-                    std::array::from_fn(|b| settings.camera_sample_of(scene, x, y, pixel_seed, index + b as u32));
+                    std::array::from_fn(|b| settings.camera_sample_of(scene, x, y, &mut pixel, index + b as u32));
                 batch.into_iter().for_each(&mut trace);
                 index += CAMERA_BATCH as u32;
             }
             for index in index..range.end {
-                trace(settings.camera_sample_of(scene, x, y, pixel_seed, index));
+                trace(settings.camera_sample_of(scene, x, y, &mut pixel, index));
             }
         }
     }

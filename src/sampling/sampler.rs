@@ -6,7 +6,7 @@
 //! Its state depends only on (seed, pixel, index), so images do not depend on thread count or on
 //! how samples are split into passes.
 
-use super::{Rng32, hash_seed, permutation_element};
+use super::{Rng32, SeedPrefix, hash_seed, permutation_element};
 use glam::Vec2;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
@@ -33,42 +33,89 @@ impl std::str::FromStr for SamplerKind {
 pub struct Sampler {
     kind: SamplerKind,
     rng: Rng32,
-    pixel_seed: u64,
+    /// `hash_seed` after the pixel's seed: the sample's streams hash on from it.
+    pixel: SeedPrefix,
     index: u32,
     /// Strata per axis for the jittered sampler.
     strata: u32,
     /// Which 2-D pair is next (0 = pixel, 1 = lens, ...).
     pair: u32,
+    /// The scramble of the pixel pair (`scramble(0)`), which a `PixelSampler` keeps from one
+    /// sample of the pixel to the next.
+    pixel_scramble: u32,
 }
 
 /// Sobol dimensions available per seed; sample indices beyond 2^16 move on to a fresh seed.
 const SOBOL_INDEX_BITS: u32 = 16;
 
+/// The samplers of one pixel's samples, made one after another: what they share (the pixel's
+/// hash prefix, the pixel pair's stratum permutation or Sobol scramble for a run of indices) is
+/// computed once rather than per sample. Each `sampler(index)` equals `Sampler::new` with the
+/// same arguments.
+pub struct PixelSampler {
+    kind: SamplerKind,
+    pixel: SeedPrefix,
+    strata: u32,
+    /// The set (jittered) or block (Sobol) whose pixel-pair scramble is `scramble`.
+    group: Option<u32>,
+    scramble: u32,
+}
+
+impl PixelSampler {
+    #[inline]
+    pub fn new(kind: SamplerKind, pixel_seed: u64, strata: u32) -> Self {
+        PixelSampler { kind, pixel: SeedPrefix::new(&[pixel_seed]), strata: strata.max(1), group: None, scramble: 0 }
+    }
+
+    /// The sampler of sample `index` of this pixel.
+    #[inline(always)]
+    pub fn sampler(&mut self, index: u32) -> Sampler {
+        let group = group_of(self.kind, index, self.strata);
+        if self.group != Some(group) {
+            self.group = Some(group);
+            self.scramble = scramble(self.pixel, 0, group);
+        }
+        Sampler::with_scramble(self.kind, self.pixel, index, self.strata, self.scramble)
+    }
+}
+
+/// Which run of sample indices shares one stratum permutation (jittered: the set of N^2) or one
+/// Sobol scramble (the block of 2^16).
+#[inline]
+fn group_of(kind: SamplerKind, index: u32, strata: u32) -> u32 {
+    match kind {
+        SamplerKind::Jittered => {
+            let n2 = strata * strata;
+            // Strata counts are mostly powers of two, whose divisions are shifts.
+            if strata.is_power_of_two() { index >> n2.trailing_zeros() } else { index / n2 }
+        }
+        SamplerKind::Sobol => index >> SOBOL_INDEX_BITS,
+    }
+}
+
+/// The seed of pair `pair`'s stratum permutation (jittered) or Sobol scramble in `group`.
+#[inline]
+fn scramble(pixel: SeedPrefix, pair: u32, group: u32) -> u32 {
+    (pixel.hash(&[pair as u64, group as u64]) >> 32) as u32
+}
+
 impl Sampler {
     /// The sampler for sample `index` of pixel (x, y). `strata` is N for N x N jittered strata;
     /// indices k N^2 .. (k+1) N^2 - 1 form the k-th stratified set.
     pub fn new(kind: SamplerKind, seed: u64, x: u32, y: u32, index: u32, strata: u32) -> Self {
-        Self::for_pixel(kind, Self::pixel_seed(seed, x, y), index, strata)
+        PixelSampler::new(kind, Self::pixel_seed(seed, x, y), strata).sampler(index)
     }
 
     /// The seed of pixel (x, y)'s samples: computed once per pixel by callers that take many
-    /// samples of it (`for_pixel`).
+    /// samples of it (`PixelSampler`).
     #[inline]
     pub fn pixel_seed(seed: u64, x: u32, y: u32) -> u64 {
         hash_seed(&[seed, x as u64, y as u64])
     }
 
-    /// `new` for the pixel whose `pixel_seed` is given.
     #[inline]
-    pub fn for_pixel(kind: SamplerKind, pixel_seed: u64, index: u32, strata: u32) -> Self {
-        Sampler {
-            kind,
-            rng: Rng32::new(hash_seed(&[pixel_seed, index as u64])),
-            pixel_seed,
-            index,
-            strata: strata.max(1),
-            pair: 0,
-        }
+    fn with_scramble(kind: SamplerKind, pixel: SeedPrefix, index: u32, strata: u32, pixel_scramble: u32) -> Self {
+        Sampler { kind, rng: Rng32::new(pixel.hash(&[index as u64])), pixel, index, strata, pair: 0, pixel_scramble }
     }
 
     /// Position within the pixel, in [0,1)^2.
@@ -121,15 +168,22 @@ impl Sampler {
     /// numbers depend on nothing but the sample.
     #[inline]
     pub fn side_stream(&self, tag: u64) -> Rng32 {
-        Rng32::new(hash_seed(&[self.pixel_seed, self.index as u64, tag]))
+        Rng32::new(self.pixel.hash(&[self.index as u64, tag]))
     }
 
     #[inline(never)]
     fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
         let pair = self.pair;
         self.pair += 1;
+        if self.kind == SamplerKind::Jittered && !stratified_pair {
+            return self.rng.uniform2();
+        }
+        let scramble = if pair == 0 {
+            self.pixel_scramble
+        } else {
+            scramble(self.pixel, pair, group_of(self.kind, self.index, self.strata))
+        };
         match self.kind {
-            SamplerKind::Jittered if !stratified_pair => self.rng.uniform2(),
             SamplerKind::Jittered => {
                 // Samples come in sets of N^2, one per stratum. Within a set, each pair visits
                 // the strata in its own per-pixel random order, so a partial set (a time budget,
@@ -140,13 +194,8 @@ impl Sampler {
                 // Strata counts are mostly powers of two, whose divisions are shifts (a divide
                 // is a tenth of a pinhole camera sample).
                 let pow2 = self.strata.is_power_of_two();
-                let (set, k) = if pow2 {
-                    (self.index >> n2.trailing_zeros(), self.index & (n2 - 1))
-                } else {
-                    (self.index / n2, self.index % n2)
-                };
-                let perm_seed = (hash_seed(&[self.pixel_seed, pair as u64, set as u64]) >> 32) as u32;
-                let s = permutation_element(k, n2, perm_seed);
+                let k = if pow2 { self.index & (n2 - 1) } else { self.index % n2 };
+                let s = permutation_element(k, n2, scramble);
                 let (sx, sy) = if pow2 {
                     (s & (self.strata - 1), s >> self.strata.trailing_zeros())
                 } else {
@@ -157,12 +206,10 @@ impl Sampler {
                 Vec2::new(((sx as f32 + j.x) * inv).min(ONE_MINUS_EPS), ((sy as f32 + j.y) * inv).min(ONE_MINUS_EPS))
             }
             SamplerKind::Sobol => {
-                let block = self.index >> SOBOL_INDEX_BITS;
                 let i = self.index & ((1 << SOBOL_INDEX_BITS) - 1);
-                let s = (hash_seed(&[self.pixel_seed, pair as u64, block as u64]) >> 32) as u32;
                 Vec2::new(
-                    sobol_burley::sample(i, 0, s).min(ONE_MINUS_EPS),
-                    sobol_burley::sample(i, 1, s).min(ONE_MINUS_EPS),
+                    sobol_burley::sample(i, 0, scramble).min(ONE_MINUS_EPS),
+                    sobol_burley::sample(i, 1, scramble).min(ONE_MINUS_EPS),
                 )
             }
         }
@@ -188,6 +235,24 @@ mod tests {
                 for _ in 0..3 {
                     assert_eq!(a.next_2d(), b.next_2d());
                     assert_eq!(a.rng().next_u32(), b.rng().next_u32());
+                }
+            }
+        }
+    }
+
+    /// One pixel's samplers made in turn, across sets and Sobol blocks, are those made alone.
+    #[test]
+    fn a_pixel_sampler_makes_the_samplers_new_makes() {
+        for kind in [SamplerKind::Jittered, SamplerKind::Sobol] {
+            for strata in [1, 3, 4] {
+                let mut pixel = PixelSampler::new(kind, Sampler::pixel_seed(9, 2, 7), strata);
+                for index in (0..40).chain([65_530, 65_536, 65_537, 200_000, 7]) {
+                    let mut a = pixel.sampler(index);
+                    let mut b = Sampler::new(kind, 9, 2, 7, index, strata);
+                    assert_eq!(a.pixel(), b.pixel());
+                    assert_eq!(a.lens(), b.lens());
+                    assert_eq!(a.next_2d(), b.next_2d());
+                    assert_eq!(a.side_stream(3).next_u32(), b.side_stream(3).next_u32());
                 }
             }
         }

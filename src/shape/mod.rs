@@ -114,6 +114,20 @@ impl CompactShape {
         }
     }
 
+    /// True for shapes whose test reads the ray's `RayShear` (a traversal meeting none skips
+    /// making it).
+    pub fn uses_shear(&self) -> bool {
+        match self {
+            CompactShape::Triangle(_) => true,
+            CompactShape::Sphere(_)
+            | CompactShape::Quad(_)
+            | CompactShape::Disk(_)
+            | CompactShape::Cylinder { .. }
+            | CompactShape::Plane(_)
+            | CompactShape::SdfVoxel(_) => false,
+        }
+    }
+
     /// False for shapes a ray can cross more than once that `for_each_crossing` does not walk.
     pub fn crossings_enumerable(&self) -> bool {
         match self {

@@ -22,6 +22,10 @@ pub struct RayShear {
 }
 
 impl RayShear {
+    /// What a traversal passes when it meets no triangle: nothing reads it, so the divisions of
+    /// `new` are not made (a quarter of a small scene's shadow ray).
+    pub const UNUSED: RayShear = RayShear { kx: 0, ky: 1, kz: 2, sx: 0.0, sy: 0.0, sz: 0.0 };
+
     #[inline]
     pub fn new(ray: &Ray) -> Self {
         let a = ray.d.abs();
