@@ -55,6 +55,7 @@ impl RenderId {
             ambient: _,
             transparent_shadows: _,
             ray_bias: _,
+            spectral,
         } = integrator;
         let PhotonOptions {
             photons,
@@ -133,6 +134,11 @@ impl RenderId {
             ("photons_per_iter".into(), opt(photons_per_iter.map(|v| v.to_string()))),
             ("initial_radius".into(), opt(initial_radius.map(|v| format!("{v:?}")))),
         ];
+        // Named only when on, so that RGB renders keep the identities of partial files written
+        // before spectral mode existed.
+        if *spectral {
+            fields.push(("spectral".into(), "true".into()));
+        }
         let mut defines = defines.to_vec();
         defines.sort();
         for (k, v) in defines {

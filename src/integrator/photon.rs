@@ -713,7 +713,7 @@ impl RayIntegrator for PhotonIntegrator {
                 if has_media {
                     self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), stats)
                 } else {
-                    self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), stats)
+                    self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), None, stats)
                 }
             };
             let add = |k: usize, l: Color| layers[k] += l;

@@ -206,6 +206,7 @@ impl Sppm {
                         hit.p,
                         u,
                         false,
+                        None,
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, d| {
                             let m = scene.medium_after(&hit, wi, ray.medium);

@@ -614,7 +614,7 @@ impl Sppm {
             // (Scenes with media take `camera_sample_media`: no medium is met here.)
             let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, _: u32, sampler: &mut Sampler, stats: &mut RayStats| {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-                direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, stats)
+                direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, None, stats)
             };
             let v = match walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct) {
                 Some(Stop::Surface(v)) => v,

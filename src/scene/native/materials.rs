@@ -258,7 +258,7 @@ impl<'a> Cx<'a> {
     ) -> Result<Material, SceneError> {
         let d = &p.desc;
         let two_sided = d.two_sided.unwrap_or(true);
-        let with_sides = |model: Plain| Material { model: model.into(), two_sided };
+        let with_sides = |model: Plain| Material { model: model.into(), two_sided, dispersion: None };
         let unit = Param::Const(Color::ONE);
         Ok(match p.kind {
             kind @ ("diffuse" | "reflective" | "transparent" | "dielectric") => {

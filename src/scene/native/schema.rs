@@ -157,6 +157,8 @@ pub struct RenderDesc {
     pub sample_border: Option<bool>,
     /// AOVs to write beside the image, as `--aov` takes them.
     pub aov: Option<Spanned<String>>,
+    /// Spectral rendering instead of RGB.
+    pub spectral: Option<bool>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -189,6 +191,7 @@ impl RenderDesc {
             filter,
             sample_border: _,
             aov: _,
+            spectral,
             photon,
         } = self;
         Options {
@@ -210,6 +213,7 @@ impl RenderDesc {
             // Where a render is shown is the user's choice, not the scene's: a scene file from
             // elsewhere does not open network connections.
             display_server: None,
+            spectral: *spectral,
 
             photon: photon.clone(),
         }
