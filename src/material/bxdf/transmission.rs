@@ -15,8 +15,8 @@ pub struct Transmission {
 
 impl Lobe for Transmission {
     #[inline]
-    fn lifted(self, _wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
-        self
+    fn lifted(self, _wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
+        Transmission { eta: self.eta * eta_ratio, ..self }
     }
 
     #[inline]
