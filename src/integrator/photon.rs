@@ -248,7 +248,16 @@ impl PhotonIntegrator {
         let watch = Watch { cancel, progress: Some(&bar) };
         let store = if scene.has_media() { trace::Store::Volume } else { trace::Store::All };
         let mut global = PhotonPass { emitted: config.photons, ..Default::default() };
-        trace::trace_global_into(scene, config.photons, config.seed, config.ray_bias, store, watch, &mut global.hits);
+        trace::trace_global_into(
+            scene,
+            config.photons,
+            config.seed,
+            config.ray_bias,
+            store,
+            false,
+            watch,
+            &mut global.hits,
+        );
         global.cancelled = watch.cancelled();
         let volume_photons = media::split_volume(&mut global.hits);
         bar.finish(&format!(
@@ -709,7 +718,13 @@ impl RayIntegrator for PhotonIntegrator {
         }
         let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS);
         loop {
-            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, medium, sampler: &mut Sampler, stats: &mut RayStats| {
+            let direct = |hit: &Hit,
+                          bsdf: &Bsdf,
+                          wo: Vec3,
+                          medium,
+                          _: Option<&_>,
+                          sampler: &mut Sampler,
+                          stats: &mut RayStats| {
                 if has_media {
                     self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), stats)
                 } else {
