@@ -62,9 +62,8 @@ impl IntegratorKind {
     /// (`SceneDescription::build`).
     pub fn renders_spectrally(self) -> bool {
         match self {
-            IntegratorKind::Path | IntegratorKind::Sppm => true,
+            IntegratorKind::Path | IntegratorKind::Photon | IntegratorKind::Sppm => true,
             IntegratorKind::Whitted
-            | IntegratorKind::Photon
             | IntegratorKind::Volpath
             | IntegratorKind::Light
             | IntegratorKind::Bdpt
@@ -169,7 +168,7 @@ pub struct Options {
     pub display_server: Option<String>,
 
     /// Render spectrally: each path carries wavelengths instead of RGB channels, so that
-    /// dispersive glass splits white light (path and sppm integrators; see
+    /// dispersive glass splits white light (path, photon and sppm integrators; see
     /// docs/scene-format.md) [default: RGB].
     // A flag that gives `Some(true)`.
     #[arg(long, num_args = 0, default_missing_value = "true")]

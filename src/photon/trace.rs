@@ -133,6 +133,25 @@ pub enum Store {
     Volume,
 }
 
+/// How a pass's photons carry colour: RGB, or (spectral mode) wavelengths of their own, stored
+/// converted to linear sRGB (which may be negative in a channel: SPPM's hits are floats) or to
+/// CIE XYZ (never negative: the packed powers of a photon map).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhotonColour {
+    Rgb,
+    SpectralSrgb,
+    SpectralXyz,
+}
+
+/// The `PhotonColour` of a pass: RGB unless `spectral`, then XYZ when `xyz`.
+pub fn spectral_store(spectral: bool, xyz: bool) -> PhotonColour {
+    match (spectral, xyz) {
+        (false, _) => PhotonColour::Rgb,
+        (true, false) => PhotonColour::SpectralSrgb,
+        (true, true) => PhotonColour::SpectralXyz,
+    }
+}
+
 const CHUNK: u64 = 4096;
 /// Bounces after which a photon is dropped (Russian roulette ends nearly all paths long before).
 pub const MAX_BOUNCES: u32 = 64;
@@ -141,15 +160,14 @@ pub const MAX_BOUNCES: u32 = 64;
 /// surfaces with offset `bias`.
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
     let mut hits = Vec::new();
-    trace_global_into(scene, n_emit, seed, bias, Store::All, false, watch, &mut hits);
+    trace_global_into(scene, n_emit, seed, bias, Store::All, PhotonColour::Rgb, watch, &mut hits);
     PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
 /// `trace_global` storing the hits `store` names into `hits` (its old contents replaced, its
-/// buffer kept: SPPM traces a pass per iteration into the same one). With `spectral`, each
-/// photon samples wavelengths of its own (`crate::spectrum::lanes`) and is stored with its
-/// power converted to linear sRGB (which may be negative in a channel: the map of SPPM keeps
-/// floats).
+/// buffer kept: SPPM traces a pass per iteration into the same one). In spectral mode
+/// (`colour`), each photon samples wavelengths of its own (`crate::spectrum::lanes`) and is
+/// stored with its power converted as `colour` says.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_global_into(
     scene: &Scene,
@@ -157,7 +175,7 @@ pub fn trace_global_into(
     seed: u64,
     bias: f32,
     store: Store,
-    spectral: bool,
+    colour: PhotonColour,
     watch: Watch,
     hits: &mut Vec<PhotonHit>,
 ) {
@@ -178,7 +196,7 @@ pub fn trace_global_into(
         },
         scene,
         store,
-        spectral,
+        colour,
         1.0 / n_emit.max(1) as f32,
         bias,
         watch,
@@ -205,6 +223,7 @@ pub fn trace_caustic(
     cap: u64,
     seed: u64,
     bias: f32,
+    colour: PhotonColour,
     watch: Watch,
 ) -> PhotonPass {
     if targets.is_empty() || n_store == 0 {
@@ -238,7 +257,7 @@ pub fn trace_caustic(
             },
             scene,
             Store::Caustic,
-            false,
+            colour,
             1.0,
             bias,
             Watch { progress: None, ..watch },
@@ -283,7 +302,7 @@ fn run_chunks(
     emit: impl Fn(u64) -> Option<(Emitted, f32, Rng32)> + Sync,
     scene: &Scene,
     store: Store,
-    spectral: bool,
+    colour: PhotonColour,
     scale: f32,
     bias: f32,
     watch: Watch,
@@ -314,12 +333,13 @@ fn run_chunks(
                     let mut flux = e.flux / p_light;
                     // Spectral photons draw their wavelengths after everything RGB ones draw at
                     // emission, so RGB photons are as they were.
-                    let wl = spectral.then(|| Wavelengths::sample(rng.uniform()));
+                    let wl = (colour != PhotonColour::Rgb).then(|| Wavelengths::sample(rng.uniform()));
                     if let Some(wl) = &wl {
                         flux = wl.illuminant(flux);
                     }
                     if flux.max_element() > 0.0 && flux.is_finite() {
-                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, wl, &mut out);
+                        let xyz = colour == PhotonColour::SpectralXyz;
+                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, wl, xyz, &mut out);
                         if store == Store::Caustic {
                             sources.resize(out.len(), i);
                         }
@@ -344,7 +364,8 @@ fn run_chunks(
 
 /// Follows one photon, appending its stored hits to `out`. In spectral mode (`wl`) `flux` holds
 /// the power at the photon's wavelengths, BSDFs are lifted to them (dispersive glass keeps the
-/// hero alone), and each stored hit's power is converted to linear sRGB.
+/// hero alone), and each stored hit's power is converted to linear sRGB, or with `xyz` to CIE
+/// XYZ.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_photon(
     scene: &Scene,
@@ -354,9 +375,11 @@ pub fn trace_photon(
     store: Store,
     bias: f32,
     mut wl: Option<Wavelengths>,
+    xyz: bool,
     out: &mut Vec<PhotonHit>,
 ) {
     let stored = |flux: Color, wl: &Option<Wavelengths>| match wl {
+        Some(wl) if xyz => Color::from_array(wl.to_xyz(flux).map(|c| c.max(0.0))),
         Some(wl) => wl.to_srgb(flux),
         None => flux,
     };

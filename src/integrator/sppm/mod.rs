@@ -448,7 +448,16 @@ impl Sppm {
         let mut hits = std::mem::take(&mut state.hits);
         let store = if scene.has_media() { trace::Store::Media } else { trace::Store::Indirect };
         let photons = state.budget.photons;
-        trace::trace_global_into(scene, photons, seed, config.ray_bias, store, config.spectral, watch, &mut hits);
+        trace::trace_global_into(
+            scene,
+            photons,
+            seed,
+            config.ray_bias,
+            store,
+            trace::spectral_store(config.spectral, false),
+            watch,
+            &mut hits,
+        );
         if watch.cancelled() {
             return false;
         }
