@@ -260,3 +260,78 @@ fn bad_dispersion_is_an_error() {
     let ok = format!("{base}dispersion = {{ cauchy = [1.5046, 0.0042] }}\n");
     assert!(caustic::app::load_toml_str(&ok, "s.toml", std::path::Path::new("."), &Options::default()).is_ok());
 }
+
+/// The Cornell box under its area light with a dense-flint sphere on the floor: its caustic
+/// disperses.
+fn dispersive_cornell() -> String {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/11-cornell-area.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    format!(
+        "{text}\n[materials.flint]\ntype = \"dielectric\"\ndispersion = \"dense flint\"\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = [2.0, 0.8, 1.6]\nradius = 0.8\nmaterial = \"flint\"\n"
+    )
+}
+
+fn render_mean(text: &str, o: Options) -> [f64; 3] {
+    mean(&scene_with(text, &Options { spectral: Some(true), width: Some(40), height: Some(40), ..o }).render().image)
+}
+
+fn assert_close(what: &str, a: [f64; 3], b: [f64; 3], tolerance: f64) {
+    let ratio: Vec<f64> = (0..3).map(|k| a[k] / b[k]).collect();
+    eprintln!("{what}: {a:?} against {b:?}, ratio {ratio:?}");
+    for r in ratio {
+        assert!((r - 1.0).abs() < tolerance, "{what}: ratio {r}");
+    }
+}
+
+/// Photon mapping and SPPM agree with the path tracer on a dispersive scene lit by an area
+/// light: mean within 3% per channel.
+#[test]
+fn photon_and_sppm_agree_with_the_path_tracer_on_dispersive_glass() {
+    let text = dispersive_cornell();
+    let path =
+        render_mean(&text, Options { integrator: Some(IntegratorKind::Path), spp: Some(512), ..Options::default() });
+    let sppm =
+        render_mean(&text, Options { integrator: Some(IntegratorKind::Sppm), spp: Some(256), ..Options::default() });
+    assert_close("sppm / path", sppm, path, 0.03);
+    let photon_options = caustic::options::PhotonOptions { photons: Some(2_000_000), ..Default::default() };
+    let photon = render_mean(
+        &text,
+        Options {
+            integrator: Some(IntegratorKind::Photon),
+            spp: Some(16),
+            photon: photon_options,
+            ..Options::default()
+        },
+    );
+    assert_close("photon / path", photon, path, 0.03);
+}
+
+/// Photon mapping and SPPM agree with each other on the prism showcase, lit by a spot light (a
+/// point light in a cone), whose spectrum on the wall only photons render: mean within 3% per
+/// channel.
+#[test]
+fn photon_and_sppm_agree_on_the_prism() {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/19-prism.toml");
+    let text = std::fs::read_to_string(path).unwrap().replace("meshes/prism.obj", "scenes/meshes/prism.obj");
+    let sppm_options = caustic::options::PhotonOptions { photons_per_iter: Some(100_000), ..Default::default() };
+    let sppm = render_mean(
+        &text,
+        Options { integrator: Some(IntegratorKind::Sppm), spp: Some(128), photon: sppm_options, ..Options::default() },
+    );
+    let photon_options = caustic::options::PhotonOptions {
+        caustic_photons: Some(1_000_000),
+        photons: Some(1_000_000),
+        ..Default::default()
+    };
+    let photon = render_mean(
+        &text,
+        Options {
+            integrator: Some(IntegratorKind::Photon),
+            spp: Some(16),
+            photon: photon_options,
+            ..Options::default()
+        },
+    );
+    assert_close("photon / sppm on the prism", photon, sppm, 0.03);
+}
