@@ -340,6 +340,7 @@ mod tests {
             filter: Some(crate::film::filter::Filter::Gaussian { stddev: 0.3 }),
             aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             display_server: Some("127.0.0.1:14158".into()),
+            spectral: Some(true),
 
             photon: PhotonOptions {
                 photons: Some(1000),
@@ -372,6 +373,7 @@ mod tests {
             filter,
             aov,
             display_server,
+            spectral,
 
             photon,
         } = every.clone();
@@ -407,6 +409,8 @@ mod tests {
             ("light_samples", Options { light_samples, ..none() }),
             ("filter", Options { filter, ..none() }),
             ("aov", Options { aov, ..none() }),
+            // (The default integrator, Whitted's, refuses spectral mode.)
+            ("spectral", Options { spectral, integrator, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),

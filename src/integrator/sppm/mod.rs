@@ -843,6 +843,7 @@ mod tests {
             alpha: 2.0 / 3.0,
             max_depth: 5,
             ray_bias: 1e-4,
+            spectral: false,
         };
         // Windows of iterations measuring direct variance d, photon variance p at the current
         // photons, camera rays c and two rays a photon: the number goes to sqrt(p P c / (d k)),
