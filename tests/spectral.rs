@@ -357,3 +357,14 @@ fn cornell_box_matches_mitsuba_scalar_spectral() {
         panic!("differs from Mitsuba's scalar_spectral: {failure}");
     }
 }
+
+/// Two cases of the materials showcase (tests/data/materials) against `scalar_spectral`: a
+/// smooth plastic over a coloured base, and gold.
+#[test]
+fn materials_match_mitsuba_scalar_spectral() {
+    let failures: Vec<String> = [("plastic_area", 256), ("conductor_au_area", 256)]
+        .iter()
+        .filter_map(|&(case, spp)| check_against_mitsuba_spectral(case, spp))
+        .collect();
+    assert!(failures.is_empty(), "differ from Mitsuba's scalar_spectral:\n{}", failures.join("\n"));
+}

@@ -159,14 +159,13 @@ impl Wavelengths {
     /// The Monte Carlo estimate of the CIE XYZ of spectral radiance `v` (one value per lane):
     /// the average of v_i xyz-bar(lambda_i) / pdf_i, scaled by the Y normalisation.
     pub fn to_xyz(&self, v: Color) -> [f32; 3] {
-        let v = v.to_array();
         let mut xyz = [0.0f32; 3];
-        for i in 0..LANES {
-            if v[i] == 0.0 || !(self.pdf[i] > 0.0) {
+        for ((value, lambda), pdf) in v.to_array().into_iter().zip(self.lambda).zip(self.pdf) {
+            if value == 0.0 || !(pdf > 0.0) {
                 continue;
             }
-            let bar = cie_xyz(self.lambda[i]);
-            let w = v[i] / self.pdf[i];
+            let bar = cie_xyz(lambda);
+            let w = value / pdf;
             for k in 0..3 {
                 xyz[k] += w * bar[k];
             }
