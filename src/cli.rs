@@ -206,6 +206,7 @@ impl RenderArgs {
             filter,
             aov,
             display_server,
+            spectral,
             photon,
         } = options;
         let PhotonOptions {
@@ -224,6 +225,9 @@ impl RenderArgs {
             initial_radius,
         } = photon;
         let mut a: Vec<String> = Vec::new();
+        if *spectral == Some(true) {
+            a.push("--spectral".into());
+        }
         let mut opt = |name: &str, v: Option<String>| {
             if let Some(v) = v {
                 a.push(format!("--{name}={v}"));
@@ -539,6 +543,7 @@ mod tests {
             "--strict",
             "--display-server",
             "localhost:14158",
+            "--spectral",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
         // Every argument is given a value of its own above: destructured without `..`, so a new
@@ -574,6 +579,7 @@ mod tests {
             filter,
             aov,
             display_server,
+            spectral,
             photon,
         } = options;
         let PhotonOptions {
@@ -607,6 +613,7 @@ mod tests {
             filter.is_some(),
             aov.is_some(),
             display_server.is_some(),
+            spectral.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

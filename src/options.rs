@@ -57,6 +57,20 @@ integrator_kinds! {
 }
 
 impl IntegratorKind {
+    /// Whether the integrator renders in spectral mode (`--spectral`); the others refuse it.
+    /// Spectral media are not implemented: a scene with media refuses it too
+    /// (`SceneDescription::build`).
+    pub fn renders_spectrally(self) -> bool {
+        match self {
+            IntegratorKind::Path | IntegratorKind::Photon | IntegratorKind::Sppm => true,
+            IntegratorKind::Whitted
+            | IntegratorKind::Volpath
+            | IntegratorKind::Light
+            | IntegratorKind::Bdpt
+            | IntegratorKind::Vcm => false,
+        }
+    }
+
     /// Whether the integrator renders participating media (the others render a scene with media
     /// as if its media were not there, and the render says so).
     pub fn renders_media(self) -> bool {
@@ -152,6 +166,13 @@ pub struct Options {
     #[arg(long, value_name = "HOST:PORT", value_parser = parse_display_server)]
     #[serde(deserialize_with = "deserialize_display_server")]
     pub display_server: Option<String>,
+
+    /// Render spectrally: each path carries wavelengths instead of RGB channels, so that
+    /// dispersive glass splits white light (path, photon and sppm integrators; see
+    /// docs/scene-format.md) [default: RGB].
+    // A flag that gives `Some(true)`.
+    #[arg(long, num_args = 0, default_missing_value = "true")]
+    pub spectral: Option<bool>,
 
     /// Photon-mapping and SPPM settings (`[render.photon]` in a TOML scene).
     #[command(flatten)]

@@ -52,6 +52,7 @@ fn help_documents_every_option() {
         "--filter",
         "--set",
         "--display-server",
+        "--spectral",
     ] {
         assert!(text.contains(opt), "render --help lacks {opt}:\n{text}");
     }
@@ -574,4 +575,40 @@ fn integrators_without_media_say_they_leave_them_out() {
     assert!(dir.join("light.png").exists());
     let path = run("path");
     assert!(!path.contains("participating media"), "{path}");
+}
+
+/// `--spectral` with an integrator that has no spectral mode is an error that names it, not a
+/// panic (issue 31).
+#[test]
+fn spectral_with_an_integrator_without_it_is_an_error() {
+    let dir = common::scratch("cli-spectral");
+    let out = caustic()
+        .args(["render", "--spectral", "--integrator", "bdpt", "--width", "8", "--height", "8", "-q", "-o"])
+        .arg(dir.join("x.png"))
+        .arg(scene("11-cornell-area.toml"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bdpt") && err.contains("spectral") && !err.contains("panicked"), "{err}");
+    let out = caustic()
+        .args([
+            "render",
+            "--spectral",
+            "--integrator",
+            "path",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "1",
+            "-q",
+            "-o",
+        ])
+        .arg(dir.join("y.png"))
+        .arg(scene("11-cornell-area.toml"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }

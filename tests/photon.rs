@@ -113,6 +113,7 @@ fn caustic_map_holds_only_specular_paths() {
         5_000_000,
         5,
         common::bias(&s),
+        trace::PhotonColour::Rgb,
         trace::Watch::none(),
     );
     assert!(pass.hits.len() >= 50_000, "{} stored", pass.hits.len());
@@ -136,6 +137,7 @@ fn caustic_map_holds_only_specular_paths() {
             100_000,
             5,
             common::bias(&diffuse),
+            trace::PhotonColour::Rgb,
             trace::Watch::none()
         )
         .hits
@@ -269,7 +271,18 @@ fn caustic_photons_are_stored_exactly_as_many_as_asked() {
     let targets = trace::specular_targets(&s.scene);
     let run = |n: u64, threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| trace::trace_caustic(&s.scene, &targets, n, n * 200, 5, common::bias(&s), trace::Watch::none()))
+        pool.install(|| {
+            trace::trace_caustic(
+                &s.scene,
+                &targets,
+                n,
+                n * 200,
+                5,
+                common::bias(&s),
+                trace::PhotonColour::Rgb,
+                trace::Watch::none(),
+            )
+        })
     };
     let small = run(7_000, 2);
     let large = run(100_000, 2);

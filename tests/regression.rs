@@ -284,7 +284,14 @@ fn issue16_no_bundled_scene_drops_samples_with_any_integrator() {
                 },
                 ..Default::default()
             };
-            let s = caustic::app::load(file, &Default::default(), &o).unwrap();
+            let s = match caustic::app::load(file, &Default::default(), &o) {
+                // A scene in spectral mode (the prism and the gem) is refused by the integrators
+                // without one.
+                Err(e) if !kind.renders_spectrally() && e.to_string().contains("does not render spectrally") => {
+                    continue;
+                }
+                loaded => loaded.unwrap(),
+            };
             let out = s.render();
             assert_eq!(out.stats.nonfinite_samples, 0, "{} with {}", file.display(), kind.name());
             assert!(out.image.pixels.iter().all(|c| c.is_finite()));

@@ -28,6 +28,7 @@ fn sppm_with(s: &LoadedScene, iterations: u32, photons: u64, adaptive: bool) -> 
         alpha: 2.0 / 3.0,
         max_depth: s.integrator.depth_limit(IntegratorKind::Sppm),
         ray_bias: common::bias(s),
+        spectral: s.integrator.spectral,
     };
     let sppm = Sppm::new(config);
     let out = sppm.render(

@@ -55,6 +55,7 @@ impl RenderId {
             ambient: _,
             transparent_shadows: _,
             ray_bias: _,
+            spectral,
         } = integrator;
         let PhotonOptions {
             photons,
@@ -133,6 +134,11 @@ impl RenderId {
             ("photons_per_iter".into(), opt(photons_per_iter.map(|v| v.to_string()))),
             ("initial_radius".into(), opt(initial_radius.map(|v| format!("{v:?}")))),
         ];
+        // Named only when on, so that RGB renders keep the identities of partial files written
+        // before spectral mode existed.
+        if *spectral {
+            fields.push(("spectral".into(), "true".into()));
+        }
         let mut defines = defines.to_vec();
         defines.sort();
         for (k, v) in defines {
@@ -334,6 +340,7 @@ mod tests {
             filter: Some(crate::film::filter::Filter::Gaussian { stddev: 0.3 }),
             aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             display_server: Some("127.0.0.1:14158".into()),
+            spectral: Some(true),
 
             photon: PhotonOptions {
                 photons: Some(1000),
@@ -366,6 +373,7 @@ mod tests {
             filter,
             aov,
             display_server,
+            spectral,
 
             photon,
         } = every.clone();
@@ -401,6 +409,8 @@ mod tests {
             ("light_samples", Options { light_samples, ..none() }),
             ("filter", Options { filter, ..none() }),
             ("aov", Options { aov, ..none() }),
+            // (The default integrator, Whitted's, refuses spectral mode.)
+            ("spectral", Options { spectral, integrator, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),

@@ -20,6 +20,12 @@
 //! still reaches the camera) with one jittered offset for all, each weighted by T / (n pdf);
 //! then the walk goes on to the surface with the throughput times the segment's transmittance.
 //! Heterogeneous media and segments that never end (into the sky) take a free flight.
+//!
+//! A walk made `with_wavelengths` is spectral (`crate::spectrum::lanes`): its throughput and the
+//! light it adds are per wavelength, the BSDFs it meets are lifted (dispersive glass keeps the
+//! hero wavelength alone), and the vertex it stops at carries the lifted BSDF. The integrator's
+//! photon estimate there is RGB (photons are stored in RGB): it reads the vertex's RGB BSDF
+//! and weights the estimate by `beta_rgb`, the camera path's filter as a colour.
 
 use super::layers::LayerPath;
 use super::volpath::TRACKING_STREAM;
@@ -31,6 +37,7 @@ use crate::medium::{Homogeneous, Medium};
 use crate::render::RayStats;
 use crate::sampling::{Rng32, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 /// A camera path being walked.
 #[derive(Clone, Debug)]
@@ -55,6 +62,8 @@ pub struct CameraWalk {
     march_steps: u32,
     /// The segment being marched: the surface at its end, the jittered offset and the next step.
     march: Option<(Hit, f32, u32)>,
+    /// The path's wavelengths in spectral mode.
+    wl: Option<Wavelengths>,
 }
 
 /// Where the walk stopped: a surface, or a scattering point in a medium.
@@ -111,6 +120,39 @@ impl CameraWalk {
             tracking: None,
             march_steps: 0,
             march: None,
+            wl: None,
+        }
+    }
+
+    /// The walk in spectral mode at wavelengths `wl` (see the module docs); `None` keeps RGB.
+    pub fn with_wavelengths(self, wl: Option<Wavelengths>) -> Self {
+        CameraWalk { wl, ..self }
+    }
+
+    /// The path's wavelengths (spectral mode) or `None` (RGB).
+    #[inline]
+    pub fn wavelengths(&self) -> Option<&Wavelengths> {
+        self.wl.as_ref()
+    }
+
+    /// The throughput as an RGB colour: itself in RGB mode; in spectral mode the colour of white
+    /// (D65) light through it, exact (the lanes' common value) while the throughput is grey.
+    #[inline]
+    pub fn beta_rgb(&self) -> Color {
+        let Some(wl) = &self.wl else { return self.beta };
+        let [a, b, c] = self.beta.to_array();
+        if a == b && b == c && !wl.secondary_terminated() {
+            return self.beta;
+        }
+        wl.to_srgb(self.beta * wl.map(crate::spectrum::d65))
+    }
+
+    /// Spectral light `l` the walk found, as RGB (itself in RGB mode).
+    #[inline]
+    pub fn to_rgb(&self, l: Color) -> Color {
+        match &self.wl {
+            Some(wl) => wl.to_srgb(l),
+            None => l,
         }
     }
 
@@ -168,7 +210,7 @@ impl CameraWalk {
         sampler: &mut Sampler,
         stats: &mut RayStats,
         mut add: impl FnMut(usize, Color),
-        mut direct: impl FnMut(&Hit, &Bsdf, Vec3, u32, &mut Sampler, &mut RayStats) -> Color,
+        mut direct: impl FnMut(&Hit, &Bsdf, Vec3, u32, Option<&Wavelengths>, &mut Sampler, &mut RayStats) -> Color,
     ) -> Option<Stop<'s>> {
         loop {
             if let Some((hit, u, i)) = self.march.take() {
@@ -232,7 +274,10 @@ impl CameraWalk {
             }
             let Some(hit) = hit else {
                 if !self.lit_by_light_sample {
-                    add(self.layer.emitted(), self.beta * scene.environment(self.ray.d));
+                    add(
+                        self.layer.emitted(),
+                        self.beta * scene.emission_in(scene.environment(self.ray.d), self.wl.as_ref()),
+                    );
                 }
                 return None;
             };
@@ -255,20 +300,20 @@ impl CameraWalk {
         sampler: &mut Sampler,
         stats: &mut RayStats,
         add: &mut impl FnMut(usize, Color),
-        direct: &mut impl FnMut(&Hit, &Bsdf, Vec3, u32, &mut Sampler, &mut RayStats) -> Color,
+        direct: &mut impl FnMut(&Hit, &Bsdf, Vec3, u32, Option<&Wavelengths>, &mut Sampler, &mut RayStats) -> Color,
     ) -> Option<Option<Stop<'s>>> {
         self.dist += hit.t;
         let wo = -self.ray.d;
         if hit.is_emitter() {
             if hit.is_front(self.ray.d) && !self.lit_by_light_sample {
-                add(self.layer.emitted(), self.beta * scene.emitted(&hit, wo));
+                add(self.layer.emitted(), self.beta * scene.emission_in(scene.emitted(&hit, wo), self.wl.as_ref()));
             }
             // A reflecting emitter (one with a BSDF) also reflects.
             if scene.bsdf(&hit, wo).is_black() {
                 return Some(None);
             }
         }
-        let bsdf = scene.bsdf(&hit, wo);
+        let bsdf = scene.bsdf_for(&hit, wo, self.wl.as_mut(), &mut self.beta);
         if scene.has_media() && bsdf.is_invisible() {
             // A medium's boundary: straight on, into the medium beyond, not a bounce.
             self.spawn(scene, &hit, self.ray.d, bias);
@@ -291,7 +336,8 @@ impl CameraWalk {
             self.follow_delta(scene, &hit, &s, bias);
             return None;
         }
-        add(self.layer.direct(), self.beta * direct(&hit, &bsdf, wo, self.ray.medium, sampler, stats));
+        let l = direct(&hit, &bsdf, wo, self.ray.medium, self.wl.as_ref(), sampler, stats);
+        add(self.layer.direct(), self.beta * l);
         if bsdf.is_glossy_only() && !last {
             // Ray-traced glossy reflection: one sampled direction carries the rest.
             let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {

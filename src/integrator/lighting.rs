@@ -12,6 +12,7 @@ use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec2, Vec3};
 use crate::render::RayStats;
 use crate::scene::{Crossing, Scene};
+use crate::spectrum::Wavelengths;
 
 /// The most surfaces a shadow ray passes through (masks, or glass for the Whitted integrator)
 /// before it counts as blocked.
@@ -112,6 +113,7 @@ pub fn light_sample(
     u: Vec2,
     bias: f32,
     mis: bool,
+    wl: Option<&Wavelengths>,
     stats: &mut RayStats,
 ) -> Color {
     light_sample_at(
@@ -121,6 +123,7 @@ pub fn light_sample(
         hit.p,
         u,
         mis,
+        wl,
         |wi, mis| bsdf_scatter(bsdf, wo, wi, mis),
         |wi, dist| (visibility(scene, hit.origin(), wi, dist, bias, stats), Color::ONE),
     )
@@ -140,7 +143,9 @@ pub fn bsdf_scatter(bsdf: &Bsdf, wo: Vec3, wi: Vec3, mis: bool) -> (Color, f32, 
 /// value, a cosine factor, and the density its own sampler would have chosen `wi` with, when
 /// `mis`), and `visible(wi, dist)` what reaches it from the light (a fraction and a per-channel
 /// transmittance through media). Area and environment lights are weighted against the point's
-/// own sampling by the power heuristic when `mis`.
+/// own sampling by the power heuristic when `mis`. In spectral mode (`wl`) the light's colour
+/// is lifted to its illuminant spectrum at the path's wavelengths (`scatter` gives lifted
+/// values already).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn light_sample_at(
@@ -150,6 +155,7 @@ pub fn light_sample_at(
     p: Vec3,
     u: Vec2,
     mis: bool,
+    wl: Option<&Wavelengths>,
     scatter: impl FnOnce(Vec3, bool) -> (Color, f32, f32),
     visible: impl FnOnce(Vec3, f32) -> (f32, Color),
 ) -> Color {
@@ -164,7 +170,7 @@ pub fn light_sample_at(
         return Color::ZERO;
     }
     let w = if mis { power_heuristic(ls.pdf * p_pick, scatter_pdf) } else { 1.0 };
-    f * ls.weight() * (cos * w * visible / p_pick) * tr
+    f * scene.emission_in(ls.weight(), wl) * (cos * w * visible / p_pick) * tr
 }
 
 /// The transmittance from `from` a distance `dist` along unit `wi` (infinite for lights at
@@ -229,10 +235,11 @@ pub fn direct_light(
     u: Vec2,
     bias: f32,
     mis: bool,
+    wl: Option<&Wavelengths>,
     stats: &mut RayStats,
 ) -> Color {
     let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
-    light_sample(scene, &scene.lights[li], p_pick, hit, bsdf, wo, u, bias, mis, stats)
+    light_sample(scene, &scene.lights[li], p_pick, hit, bsdf, wo, u, bias, mis, wl, stats)
 }
 
 /// Direct light from every light in turn (photon mapping's estimator, Jensen 2001 sec. 9.1):
@@ -273,10 +280,11 @@ impl EveryLight {
         wo: Vec3,
         bias: f32,
         rng: &mut crate::sampling::Rng32,
+        wl: Option<&Wavelengths>,
         stats: &mut RayStats,
     ) -> Color {
         self.sum(scene, rng, stats, |light, p_pick, u, _, stats| {
-            light_sample(scene, light, p_pick, hit, bsdf, wo, u, bias, false, stats)
+            light_sample(scene, light, p_pick, hit, bsdf, wo, u, bias, false, wl, stats)
         })
     }
 

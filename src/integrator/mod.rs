@@ -77,9 +77,11 @@ impl Integrator {
         Ok(match desc.kind {
             IntegratorKind::Whitted => Integrator::Whitted(Whitted::new(scene, desc)),
             // The path tracer knows no media: a scene with media is the volumetric one's.
-            IntegratorKind::Path if !scene.has_media() => {
-                Integrator::Path(PathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
-            }
+            IntegratorKind::Path if !scene.has_media() => Integrator::Path(PathTracer {
+                max_depth: depth,
+                ray_bias: desc.ray_bias(scene),
+                spectral: desc.spectral,
+            }),
             IntegratorKind::Path | IntegratorKind::Volpath => {
                 Integrator::VolPath(VolPathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
             }

@@ -3,6 +3,11 @@
 //! Next-event estimation at every non-specular vertex (a light chosen in proportion to power),
 //! combined with BSDF sampling by multiple importance sampling (power heuristic, Veach 1997) for
 //! area and environment lights, and Russian roulette after three bounces. Unbiased up to the depth limit.
+//!
+//! In spectral mode a path draws its wavelengths from the sampler's first dimension after the
+//! camera's and carries one value per wavelength in each lane of its colours
+//! (`crate::spectrum::lanes`): BSDFs and lights are lifted where the path meets them, and the
+//! layers are converted to linear sRGB when the path ends.
 
 use super::layers::LayerPath;
 use super::lighting::{direct_light, emission_found};
@@ -13,12 +18,15 @@ use crate::math::Color;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 pub struct PathTracer {
     /// Longest path in bounces (0 = emitters only, 1 = direct light only).
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode (`crate::spectrum::lanes`); RGB otherwise.
+    pub spectral: bool,
 }
 
 impl RayIntegrator for PathTracer {
@@ -27,6 +35,7 @@ impl RayIntegrator for PathTracer {
     fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
         let mut layers = [Color::ZERO; 4];
         let mut beta = Color::ONE;
+        let mut wl = self.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
         let mut ray = *ray;
         let mut specular_bounce = true;
         let mut prev_pdf = 0.0f32;
@@ -38,7 +47,7 @@ impl RayIntegrator for PathTracer {
             stats.rays += 1;
             let hit = scene.intersect(&ray, f32::INFINITY);
             if let Some((le, w)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
-                layers[layer.emitted()] += beta * le * w;
+                layers[layer.emitted()] += beta * scene.emission_in(le, wl.as_ref()) * w;
             }
             // The ray leaves the scene.
             let Some(hit) = hit else { break };
@@ -46,11 +55,11 @@ impl RayIntegrator for PathTracer {
             if depth >= self.max_depth {
                 break;
             }
-            let bsdf = scene.bsdf(&hit, wo);
+            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
             if !bsdf.is_specular_only() {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
                 layers[layer.direct()] +=
-                    beta * direct_light(scene, &hit, &bsdf, wo, u_pick, u, self.ray_bias, true, stats);
+                    beta * direct_light(scene, &hit, &bsdf, wo, u_pick, u, self.ray_bias, true, wl.as_ref(), stats);
             }
             let uc = sampler.next_1d();
             let u = sampler.next_2d();
@@ -80,6 +89,9 @@ impl RayIntegrator for PathTracer {
                 break;
             }
             ray = hit.spawn(s.wi, self.ray_bias);
+        }
+        if let Some(wl) = &wl {
+            layers = layers.map(|l| wl.to_srgb(l));
         }
         layers
     }

@@ -42,6 +42,7 @@ use crate::sampling::Sampler;
 use crate::sampling::warp::cosine_hemisphere;
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
+use crate::spectrum::Wavelengths;
 use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
@@ -92,6 +93,8 @@ pub struct PhotonConfig {
     pub seed: u64,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode: photons and camera paths carry wavelengths; the maps hold XYZ.
+    pub spectral: bool,
 }
 
 impl PhotonConfig {
@@ -126,6 +129,7 @@ impl PhotonConfig {
             max_depth: desc.depth_limit(desc.kind),
             seed,
             ray_bias: desc.ray_bias(scene),
+            spectral: desc.spectral,
         }
     }
 }
@@ -248,7 +252,16 @@ impl PhotonIntegrator {
         let watch = Watch { cancel, progress: Some(&bar) };
         let store = if scene.has_media() { trace::Store::Volume } else { trace::Store::All };
         let mut global = PhotonPass { emitted: config.photons, ..Default::default() };
-        trace::trace_global_into(scene, config.photons, config.seed, config.ray_bias, store, watch, &mut global.hits);
+        trace::trace_global_into(
+            scene,
+            config.photons,
+            config.seed,
+            config.ray_bias,
+            store,
+            trace::spectral_store(config.spectral, true),
+            watch,
+            &mut global.hits,
+        );
         global.cancelled = watch.cancelled();
         let volume_photons = media::split_volume(&mut global.hits);
         bar.finish(&format!(
@@ -267,6 +280,7 @@ impl PhotonIntegrator {
             config.caustic_cap,
             config.seed,
             config.ray_bias,
+            trace::spectral_store(config.spectral, true),
             Watch { cancel, progress: Some(&bar) },
         );
         bar.finish(&format!("{} caustic photons traced, {} stored", caustic.emitted, caustic.hits.len()));
@@ -332,6 +346,14 @@ impl PhotonIntegrator {
         Some(pm)
     }
 
+    /// A power or irradiance read from a map as linear sRGB: in spectral mode the maps hold CIE
+    /// XYZ (never negative, as the maps' packed powers must be; see the module docs), converted
+    /// here; in RGB mode itself.
+    #[inline]
+    fn colour(&self, c: Color) -> Color {
+        if self.config.spectral { crate::spectrum::xyz_to_color(c.to_array()) } else { c }
+    }
+
     /// Outgoing diffuse radiance towards `wo_y` at a final-gather hit from the nearest
     /// precomputed irradiance record facing the same way (L = albedo / pi * E), at the level of
     /// the photon bounces `depth` allows; where photons are too sparse for a record to be near
@@ -342,7 +364,7 @@ impl PhotonIntegrator {
         let c = &self.config;
         let level = c.record_depth().saturating_sub(depth) as usize;
         if level >= RECORD_LEVELS {
-            return Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch);
+            return self.estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch);
         }
         let r = self.config.max_radius;
         let n = by.normal();
@@ -355,13 +377,13 @@ impl PhotonIntegrator {
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some(&(_, i)) => {
-                let e = match level {
+                let e = self.colour(match level {
                     0 => self.irradiance.photon(i).power(),
                     _ => self.irradiance_levels[i as usize][level - 1],
-                };
+                });
                 by.diffuse_albedo() * e * std::f32::consts::FRAC_1_PI
             }
-            None => Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch),
+            None => self.estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch),
         }
     }
 
@@ -370,6 +392,7 @@ impl PhotonIntegrator {
     /// `cone` applies the cone filter.
     #[allow(clippy::too_many_arguments)]
     fn estimate(
+        &self,
         map: &PhotonMap,
         hit: &Hit,
         bsdf: &Bsdf,
@@ -419,11 +442,11 @@ impl PhotonIntegrator {
                     sum += ph.power() * w;
                 }
             } else {
-                sum += bsdf.f(wo, -dir, Transport::Radiance) * ph.power() * w;
+                sum += bsdf.f(wo, -dir, Transport::Radiance) * self.colour(ph.power()) * w;
             }
         }
         if let Some(albedo) = lambert {
-            sum *= albedo * std::f32::consts::FRAC_1_PI;
+            sum = self.colour(sum) * (albedo * std::f32::consts::FRAC_1_PI);
         }
         let norm = match cone {
             Some(kc) => 1.0 - 2.0 / (3.0 * kc),
@@ -440,7 +463,7 @@ impl PhotonIntegrator {
             return self.gathered_radiance(y, by, wo_y, depth, scratch);
         }
         let c = &self.config;
-        Self::estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch)
+        self.estimate(&self.global, y, by, wo_y, c.gather_k, c.max_radius, 0, depth, None, scratch)
     }
 
     /// Indirect light at a hit by final gathering: rays sampled from the BSDF's non-delta part,
@@ -707,13 +730,23 @@ impl RayIntegrator for PhotonIntegrator {
         if ray.medium == crate::geometry::NO_MEDIUM {
             ray.medium = scene.camera_medium;
         }
-        let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS);
+        // In spectral mode the wavelengths take the first dimension after the camera's; the
+        // light found on the way is spectral (`layers`), the photon estimates RGB (`rgb`).
+        let wl = c.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
+        let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS).with_wavelengths(wl);
+        let mut rgb = [Color::ZERO; 4];
         loop {
-            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, medium, sampler: &mut Sampler, stats: &mut RayStats| {
+            let direct = |hit: &Hit,
+                          bsdf: &Bsdf,
+                          wo: Vec3,
+                          medium,
+                          wl: Option<&Wavelengths>,
+                          sampler: &mut Sampler,
+                          stats: &mut RayStats| {
                 if has_media {
                     self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), stats)
                 } else {
-                    self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), stats)
+                    self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), wl, stats)
                 }
             };
             let add = |k: usize, l: Color| layers[k] += l;
@@ -730,10 +763,20 @@ impl RayIntegrator for PhotonIntegrator {
                 }
                 None => break,
             };
-            let (hit, bsdf, wo, beta, layer) = (&v.hit, &v.bsdf, v.wo, walk.beta, walk.layer);
+            let (hit, wo, layer) = (&v.hit, v.wo, walk.layer);
+            // The estimates read the RGB BSDF and weight by the path's filter as a colour; in RGB
+            // mode these are the vertex's BSDF and the throughput themselves.
+            let rgb_bsdf;
+            let (bsdf, beta) = if c.spectral {
+                rgb_bsdf = scene.bsdf(hit, wo);
+                (&rgb_bsdf, walk.beta_rgb())
+            } else {
+                (&v.bsdf, walk.beta)
+            };
+            let out = if c.spectral { &mut rgb } else { &mut layers };
             let photon_depth = trace::photon_depth_limit(c.max_depth, v.bounce).unwrap_or(0);
-            layers[layer.caustic_photons()] += beta
-                * Self::estimate(
+            out[layer.caustic_photons()] += beta
+                * self.estimate(
                     &self.caustic,
                     hit,
                     bsdf,
@@ -746,7 +789,7 @@ impl RayIntegrator for PhotonIntegrator {
                     scratch,
                 );
             let indirect = if c.gather_rays == 0 {
-                Self::estimate(
+                self.estimate(
                     &self.global,
                     hit,
                     bsdf,
@@ -764,15 +807,20 @@ impl RayIntegrator for PhotonIntegrator {
                 let medium = walk.medium();
                 self.indirect(scene, hit, v.bounce, bsdf, wo, medium, !walk.glossy_prefix, sampler, scratch, stats)
             };
-            layers[layer.other_photons()] += beta * indirect;
+            out[layer.other_photons()] += beta * indirect;
             // The mirror or glass part of a mixed material, or a mask's transparent part.
-            if !bsdf.has_delta() || v.last {
+            if !v.bsdf.has_delta() || v.last {
                 break;
             }
-            let Some(s) = bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
+            let Some(s) = v.bsdf.sample_delta(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
                 break;
             };
             walk.follow_delta(scene, hit, &s, c.ray_bias);
+        }
+        if c.spectral {
+            for (l, r) in layers.iter_mut().zip(rgb) {
+                *l = walk.to_rgb(*l) + r;
+            }
         }
         layers
     }

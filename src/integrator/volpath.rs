@@ -60,6 +60,7 @@ impl VolPathTracer {
             p,
             u,
             true,
+            None,
             |wi, _| {
                 let v = phase.p(wo, wi);
                 (Color::splat(v), 1.0, v)
@@ -151,6 +152,7 @@ impl RayIntegrator for VolPathTracer {
                         hit.p,
                         u,
                         true,
+                        None,
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, dist| {
                             if has_media {

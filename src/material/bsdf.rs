@@ -95,6 +95,17 @@ impl Lobes {
         self.directional |= lobe.directional_selection();
     }
 
+    /// The lobes in spectral mode (`Lobe::lifted`): colours as spectra at `wl`, dielectric
+    /// indices times `eta_ratio`; sampling weights follow the lifted values.
+    #[inline]
+    pub fn lifted(&self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Lobes {
+        let mut out = Lobes::default();
+        for lobe in self.as_slice() {
+            out.add(lobe.lifted(wl, eta_ratio));
+        }
+        out
+    }
+
     /// Adds every lobe of `other`, each scaled by `w` (a blend of two materials).
     pub fn add_scaled(&mut self, other: &Lobes, w: f32) {
         for lobe in other.as_slice() {
@@ -199,6 +210,12 @@ impl<'a> Bsdf<'a> {
     pub fn with_opacity(mut self, opacity: f32) -> Self {
         self.opacity = if opacity.is_finite() { opacity.clamp(0.0, 1.0) } else { 1.0 };
         self
+    }
+
+    /// The same BSDF in spectral mode: its lobes lifted (`Lobes::lifted`), owned.
+    #[inline]
+    pub fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
+        Bsdf { lobes: LobeSet::Owned(self.lobes.lifted(wl, eta_ratio)), ..self }
     }
 
     /// The shading frame (z on the side of `wo`).

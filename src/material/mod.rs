@@ -422,11 +422,15 @@ pub struct Material {
     /// Seen from behind (against the outward normal) a one-sided material is black, as
     /// Mitsuba's reflecting BSDFs are; glass and the classic model are always two-sided.
     pub two_sided: bool,
+    /// A glass's index of refraction over wavelength, when dispersive: its lobes hold the index
+    /// at the d line (what the RGB mode renders with), and spectral mode scales it to the path's
+    /// hero wavelength (`Materials::dispersion`). `None` for everything else.
+    pub dispersion: Option<crate::spectrum::Dispersion>,
 }
 
 impl From<Classic> for Material {
     fn from(c: Classic) -> Self {
-        Material { model: Model::Plain(Plain::Classic(c)), two_sided: true }
+        Material { model: Model::Plain(Plain::Classic(c)), two_sided: true, dispersion: None }
     }
 }
 
@@ -439,12 +443,12 @@ impl Default for Material {
 impl Material {
     /// A one-sided material of model `model` (Mitsuba's default for reflecting BSDFs).
     pub fn one_sided(model: impl Into<Model>) -> Self {
-        Material { model: model.into(), two_sided: false }
+        Material { model: model.into(), two_sided: false, dispersion: None }
     }
 
     /// A material of model `model` that scatters the same on both sides.
     pub fn two_sided(model: impl Into<Model>) -> Self {
-        Material { model: model.into(), two_sided: true }
+        Material { model: model.into(), two_sided: true, dispersion: None }
     }
 
     /// A surface that reflects nothing (the surface of a plain area light).

@@ -302,6 +302,18 @@ impl Materials {
         perturbed_frame(base, base.to_local(n2), wo)
     }
 
+    /// The spectral-mode index ratio of the material at hit `h`, seen from side `front`, for the
+    /// hero wavelength `lambda` (nm): n(lambda) / n_d for a dispersive glass seen from outside,
+    /// its inverse from inside (its lobes' relative index is inverted there); `None` when the
+    /// material is not dispersive. Only a plain glass material disperses: a dispersive glass
+    /// wrapped by another material is rendered with its d-line index.
+    #[inline]
+    pub fn dispersion(&self, h: &Hit, front: bool, lambda: f32) -> Option<f32> {
+        let d = self.list.get(h.material as usize)?.dispersion?;
+        let r = d.eval(lambda) / d.n_d();
+        Some(if front { r } else { 1.0 / r })
+    }
+
     /// How much of the light a shadow ray carries past hit `h`: 1 - opacity for a mask's
     /// transparent part, 0 for everything else.
     #[inline]

@@ -23,6 +23,7 @@ use crate::progress::Progress;
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, SeedPrefix};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -136,6 +137,25 @@ pub enum Store {
     Volume,
 }
 
+/// How a pass's photons carry colour: RGB, or (spectral mode) wavelengths of their own, stored
+/// converted to linear sRGB (which may be negative in a channel: SPPM's hits are floats) or to
+/// CIE XYZ (never negative: the packed powers of a photon map).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhotonColour {
+    Rgb,
+    SpectralSrgb,
+    SpectralXyz,
+}
+
+/// The `PhotonColour` of a pass: RGB unless `spectral`, then XYZ when `xyz`.
+pub fn spectral_store(spectral: bool, xyz: bool) -> PhotonColour {
+    match (spectral, xyz) {
+        (false, _) => PhotonColour::Rgb,
+        (true, false) => PhotonColour::SpectralSrgb,
+        (true, true) => PhotonColour::SpectralXyz,
+    }
+}
+
 const CHUNK: u64 = 4096;
 /// Bounces after which a photon is dropped (Russian roulette ends nearly all paths long before).
 pub const MAX_BOUNCES: u32 = 64;
@@ -144,18 +164,22 @@ pub const MAX_BOUNCES: u32 = 64;
 /// surfaces with offset `bias`.
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
     let mut hits = Vec::new();
-    trace_global_into(scene, n_emit, seed, bias, Store::All, watch, &mut hits);
+    trace_global_into(scene, n_emit, seed, bias, Store::All, PhotonColour::Rgb, watch, &mut hits);
     PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
 
 /// `trace_global` storing the hits `store` names into `hits` (its old contents replaced, its
-/// buffer kept: SPPM traces a pass per iteration into the same one).
+/// buffer kept: SPPM traces a pass per iteration into the same one). In spectral mode
+/// (`colour`), each photon samples wavelengths of its own (`crate::spectrum::lanes`) and is
+/// stored with its power converted as `colour` says.
+#[allow(clippy::too_many_arguments)]
 pub fn trace_global_into(
     scene: &Scene,
     n_emit: u64,
     seed: u64,
     bias: f32,
     store: Store,
+    colour: PhotonColour,
     watch: Watch,
     hits: &mut Vec<PhotonHit>,
 ) {
@@ -178,6 +202,7 @@ pub fn trace_global_into(
         },
         scene,
         store,
+        colour,
         1.0 / n_emit.max(1) as f32,
         bias,
         watch,
@@ -204,6 +229,7 @@ pub fn trace_caustic(
     cap: u64,
     seed: u64,
     bias: f32,
+    colour: PhotonColour,
     watch: Watch,
 ) -> PhotonPass {
     if targets.is_empty() || n_store == 0 {
@@ -239,6 +265,7 @@ pub fn trace_caustic(
             },
             scene,
             Store::Caustic,
+            colour,
             1.0,
             bias,
             Watch { progress: None, ..watch },
@@ -283,6 +310,7 @@ fn run_chunks(
     emit: impl Fn(u64) -> Option<(Emitted, f32, Rng32)> + Sync,
     scene: &Scene,
     store: Store,
+    colour: PhotonColour,
     scale: f32,
     bias: f32,
     watch: Watch,
@@ -310,9 +338,16 @@ fn run_chunks(
             let end = (start + CHUNK).min(first + n);
             for i in start..end {
                 if let Some((e, p_light, mut rng)) = emit(i) {
-                    let flux = e.flux / p_light;
+                    let mut flux = e.flux / p_light;
+                    // Spectral photons draw their wavelengths after everything RGB ones draw at
+                    // emission, so RGB photons are as they were.
+                    let wl = (colour != PhotonColour::Rgb).then(|| Wavelengths::sample(rng.uniform()));
+                    if let Some(wl) = &wl {
+                        flux = wl.illuminant(flux);
+                    }
                     if flux.max_element() > 0.0 && flux.is_finite() {
-                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, &mut out);
+                        let xyz = colour == PhotonColour::SpectralXyz;
+                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, wl, xyz, &mut out);
                         if store == Store::Caustic {
                             sources.resize(out.len(), i);
                         }
@@ -335,7 +370,11 @@ fn run_chunks(
     }
 }
 
-/// Follows one photon, appending its stored hits to `out`.
+/// Follows one photon, appending its stored hits to `out`. In spectral mode (`wl`) `flux` holds
+/// the power at the photon's wavelengths, BSDFs are lifted to them (dispersive glass keeps the
+/// hero alone), and each stored hit's power is converted to linear sRGB, or with `xyz` to CIE
+/// XYZ.
+#[allow(clippy::too_many_arguments)]
 pub fn trace_photon(
     scene: &Scene,
     mut ray: Ray,
@@ -343,8 +382,15 @@ pub fn trace_photon(
     rng: &mut Rng32,
     store: Store,
     bias: f32,
+    mut wl: Option<Wavelengths>,
+    xyz: bool,
     out: &mut Vec<PhotonHit>,
 ) {
+    let stored = |flux: Color, wl: &Option<Wavelengths>| match wl {
+        Some(wl) if xyz => Color::from_array(wl.to_xyz(flux).map(|c| c.max(0.0))),
+        Some(wl) => wl.to_srgb(flux),
+        None => flux,
+    };
     let caustic_only = store == Store::Caustic;
     let mut only_specular = true;
     // No diffuse bounce and no scattering in a medium so far (`FOCUSED`).
@@ -369,6 +415,7 @@ pub fn trace_photon(
                 }
                 let p = ray.at(ms.t);
                 if matches!(store, Store::Media | Store::Volume) {
+                    let flux = stored(flux, &wl);
                     out.push(PhotonHit { p, dir: ray.d, flux, flags: VOLUME, depth: depth as u8, n: Vec3::ZERO });
                 }
                 let s = medium.phase().sample(-ray.d, rng.uniform2());
@@ -393,7 +440,7 @@ pub fn trace_photon(
         }
         let Some(hit) = hit else { return };
         let wo = -ray.d;
-        let bsdf = scene.bsdf(&hit, wo);
+        let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut flux);
         // Plain emitters absorb; a reflecting emitter (one with a BSDF) scatters like any surface.
         if bsdf.is_black() {
             return;
@@ -403,6 +450,7 @@ pub fn trace_photon(
             let n = bsdf.normal();
             if caustic_only {
                 if caustic {
+                    let flux = stored(flux, &wl);
                     out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, depth: depth as u8, n });
                 }
                 // The mirror or glass part of a mixed material (or plastic's coating) can still
@@ -422,6 +470,7 @@ pub fn trace_photon(
                 };
                 if depth > 0 || matches!(store, Store::All | Store::Volume) {
                     // (`Store::Indirect` and `Store::Media` leave the first hit to direct light.)
+                    let flux = stored(flux, &wl);
                     out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
                 }
             }

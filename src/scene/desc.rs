@@ -53,6 +53,8 @@ pub struct IntegratorDesc {
     /// Extra offset of spawned rays along their direction (the seed report's bias), in scene
     /// units, for every integrator; `None`: 1e-6 x the scene's diagonal (`ray_bias`).
     pub ray_bias: Option<f32>,
+    /// Spectral rendering (`crate::spectrum::lanes`) instead of RGB.
+    pub spectral: bool,
 }
 
 /// POV-Ray's default `adc_bailout`: one step of an 8-bit pixel.
@@ -69,6 +71,7 @@ impl Default for IntegratorDesc {
             ambient: Color::ZERO,
             transparent_shadows: true,
             ray_bias: None,
+            spectral: false,
         }
     }
 }
@@ -247,6 +250,7 @@ impl SceneDescription {
             // Not part of the scene: `app` gives it to the render settings (where to show the
             // picture changes nothing in it).
             display_server: _,
+            spectral,
 
             photon,
         } = o.clone();
@@ -297,6 +301,7 @@ impl SceneDescription {
         i.max_depth = max_depth.or(i.max_depth);
         i.adc_bailout = adc_bailout.unwrap_or(i.adc_bailout);
         i.light_samples = light_samples.map_or(i.light_samples, |n| n.clamp(1, MAX_LIGHT_SAMPLES));
+        i.spectral = spectral.unwrap_or(i.spectral);
         let p = &mut i.photon;
         p.photons = photons.or(p.photons);
         p.caustic_photons = caustic_photons.or(p.caustic_photons);
@@ -383,10 +388,23 @@ impl SceneDescription {
                 return Err(self.error(format!("photon {what} must be a positive number, got {r}")));
             }
         }
+        let kind = self.integrator.kind;
+        if self.integrator.spectral && !kind.renders_spectrally() {
+            return Err(self.error(format!(
+                "the {} integrator does not render spectrally; spectral mode works with path, photon and sppm",
+                kind.name()
+            )));
+        }
         let camera = self.camera.build(sampling.width, sampling.height);
         let (scene, info) =
             self.geometry.finish(camera).map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
+        if self.integrator.spectral && scene.has_media() {
+            return Err(SceneError::File {
+                path: self.name.clone(),
+                message: "spectral mode does not render participating media yet; render this scene in RGB".into(),
+            });
+        }
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }
 }

@@ -344,6 +344,44 @@ impl Scene {
         self.materials.bsdf(h, wo, mesh)
     }
 
+    /// `bsdf`, in spectral mode (`wl` given) lifted to the path's wavelengths: at a dispersive
+    /// glass the path keeps only its hero wavelength from here on, and `beta`, its throughput,
+    /// is multiplied by the factor that takes (`Wavelengths::terminate_secondary`). In RGB mode
+    /// (`None`) it is `bsdf` exactly.
+    #[inline]
+    pub fn bsdf_for(
+        &self,
+        h: &Hit,
+        wo: crate::math::Vec3,
+        wl: Option<&mut crate::spectrum::Wavelengths>,
+        beta: &mut Color,
+    ) -> Bsdf<'_> {
+        let bsdf = self.bsdf(h, wo);
+        let Some(wl) = wl else { return bsdf };
+        let front = crate::material::bsdf::front_side(wo, h.ng);
+        let ratio = match self.materials.dispersion(h, front, wl.hero()) {
+            Some(r) => {
+                if let Some(f) = wl.terminate_secondary() {
+                    *beta *= f;
+                }
+                r
+            }
+            None => 1.0,
+        };
+        bsdf.lifted(wl, ratio)
+    }
+
+    /// Light `light`'s emitted colour `le` (radiance, or radiance over a density) in the mode
+    /// `wl` says: itself in RGB mode (`None`), its illuminant spectrum at the path's
+    /// wavelengths in spectral mode.
+    #[inline]
+    pub fn emission_in(&self, le: Color, wl: Option<&crate::spectrum::Wavelengths>) -> Color {
+        match wl {
+            Some(wl) => wl.illuminant(le),
+            None => le,
+        }
+    }
+
     /// Where hit `h` is on a mesh triangle (the mesh, the triangle's index in it, the
     /// barycentrics of the hit point), for mesh attribute textures; `None` off meshes. Only
     /// top-level primitives are looked up: the loaders refuse mesh attributes in shape groups.

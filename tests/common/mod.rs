@@ -41,7 +41,11 @@ pub fn bundled(name: &str, o: &Options) -> LoadedScene {
 /// The path tracer of depth limit `max_depth` for scene `s` (with its ray offset).
 #[allow(dead_code)]
 pub fn path_tracer(s: &LoadedScene, max_depth: u32) -> caustic::integrator::PathTracer {
-    caustic::integrator::PathTracer { max_depth, ray_bias: s.integrator.ray_bias(&s.scene) }
+    caustic::integrator::PathTracer {
+        max_depth,
+        ray_bias: s.integrator.ray_bias(&s.scene),
+        spectral: s.integrator.spectral,
+    }
 }
 
 /// The offset rays leave surfaces of scene `s` with.

@@ -176,6 +176,7 @@ impl PhotonIntegrator {
                 v.p,
                 u,
                 false,
+                None,
                 |wi, _| (Color::splat(phase.p(v.wo, wi)), 1.0, 0.0),
                 |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, v.medium, 0.0, rng, stats)),
             )
@@ -207,6 +208,7 @@ impl PhotonIntegrator {
                 hit.p,
                 u,
                 false,
+                None,
                 |wi, mis| bsdf_scatter(bsdf, wo, wi, mis),
                 |wi, dist| {
                     let m = scene.medium_after(hit, wi, medium);

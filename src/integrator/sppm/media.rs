@@ -98,7 +98,7 @@ pub(super) fn first_volume_radius(scene: &Scene, photons_per_iter: u64, seed: u6
     let n = photons_per_iter.clamp(1, PILOT_PHOTONS);
     let mut hits = Vec::new();
     let watch = trace::Watch::none();
-    trace::trace_global_into(scene, n, seed, bias, trace::Store::Media, watch, &mut hits);
+    trace::trace_global_into(scene, n, seed, bias, trace::Store::Media, trace::PhotonColour::Rgb, watch, &mut hits);
     let bounded = !bounds.is_empty() && bounds.diagonal().is_finite();
     let inside = |p: Vec3| !bounded || (p.cmpge(bounds.min).all() && p.cmple(bounds.max).all());
     let mut axes: [Vec<f32>; 3] = Default::default();
@@ -206,6 +206,7 @@ impl Sppm {
                         hit.p,
                         u,
                         false,
+                        None,
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, d| {
                             let m = scene.medium_after(&hit, wi, ray.medium);

@@ -45,6 +45,7 @@ use crate::sampling::Sampler;
 use crate::sampling::hash_seed;
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
+use crate::spectrum::Wavelengths;
 use grid::PhotonGrid;
 use rayon::iter::Either;
 use rayon::prelude::*;
@@ -74,6 +75,8 @@ pub struct SppmConfig {
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode: camera paths and photons carry wavelengths (see `camera_sample`).
+    pub spectral: bool,
 }
 
 impl SppmConfig {
@@ -87,6 +90,7 @@ impl SppmConfig {
             alpha: 2.0 / 3.0,
             max_depth: desc.depth_limit(desc.kind),
             ray_bias: desc.ray_bias(scene),
+            spectral: desc.spectral,
         }
     }
 
@@ -485,7 +489,16 @@ impl Sppm {
         let mut hits = std::mem::take(&mut state.hits);
         let store = if scene.has_media() { trace::Store::Media } else { trace::Store::Indirect };
         let photons = state.budget.photons;
-        trace::trace_global_into(scene, photons, seed, config.ray_bias, store, watch, &mut hits);
+        trace::trace_global_into(
+            scene,
+            photons,
+            seed,
+            config.ray_bias,
+            store,
+            trace::spectral_store(config.spectral, false),
+            watch,
+            &mut hits,
+        );
         if watch.cancelled() {
             return false;
         }
@@ -668,7 +681,9 @@ impl Sppm {
         let config = &self.config;
         let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, it);
         // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
-        let mut walk = CameraWalk::new(ray, Color::splat(weight));
+        // In spectral mode the wavelengths take the first dimension after the camera's.
+        let wl = config.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
+        let mut walk = CameraWalk::new(ray, Color::splat(weight)).with_wavelengths(wl);
         let mut ld = Color::ZERO;
         let mut ld_layers = [Color::ZERO; 4];
         loop {
@@ -677,9 +692,15 @@ impl Sppm {
                 ld_layers[k] += l;
             };
             // (Scenes with media take `camera_sample_media`: no medium is met here.)
-            let direct = |hit: &Hit, bsdf: &Bsdf, wo: Vec3, _: u32, sampler: &mut Sampler, stats: &mut RayStats| {
+            let direct = |hit: &Hit,
+                          bsdf: &Bsdf,
+                          wo: Vec3,
+                          _: u32,
+                          wl: Option<&Wavelengths>,
+                          sampler: &mut Sampler,
+                          stats: &mut RayStats| {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-                direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, stats)
+                direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, wl, stats)
             };
             let v = match walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct) {
                 Some(Stop::Surface(v)) => v,
@@ -696,11 +717,13 @@ impl Sppm {
             }
             // This surface is within the depth limit (the walk checked).
             let photon_depth = trace::photon_depth_limit(config.max_depth, v.bounce).unwrap_or(0);
+            // The photons' light is RGB: the camera path's filter weights it as a colour.
+            let (ld, ld_layers) = (walk.to_rgb(ld), ld_layers.map(|l| walk.to_rgb(l)));
             let point = Some((
                 VisiblePoint {
                     at: Shading::of(&v.hit),
                     wo: v.wo,
-                    beta: walk.beta / q,
+                    beta: walk.beta_rgb() / q,
                     layer: walk.layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
                 },
@@ -708,7 +731,7 @@ impl Sppm {
             ));
             return CameraSample { ld, ld_layers, point };
         }
-        CameraSample { ld, ld_layers, point: None }
+        CameraSample { ld: walk.to_rgb(ld), ld_layers: ld_layers.map(|l| walk.to_rgb(l)), point: None }
     }
 }
 
@@ -977,6 +1000,7 @@ mod tests {
             alpha: 2.0 / 3.0,
             max_depth: 5,
             ray_bias: 1e-4,
+            spectral: false,
         };
         // Windows of iterations measuring direct variance d, photon variance p at the current
         // photons, camera rays c and two rays a photon: the number goes to sqrt(p P c / (d k)),

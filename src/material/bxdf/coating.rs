@@ -15,6 +15,11 @@ pub struct FresnelMirror {
 }
 
 impl Lobe for FresnelMirror {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        FresnelMirror { scale: wl.reflectance(self.scale), ..self }
+    }
+
     const DIRECTIONAL: bool = true;
 
     #[inline]

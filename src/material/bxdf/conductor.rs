@@ -24,6 +24,11 @@ impl Conductor {
 
 impl Lobe for Conductor {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        Conductor { eta: wl.unbounded(self.eta), k: wl.unbounded(self.k), scale: wl.reflectance(self.scale) }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::SPECULAR_REFLECTION
     }

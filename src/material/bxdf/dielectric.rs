@@ -25,6 +25,11 @@ impl Dielectric {
 
 impl Lobe for Dielectric {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
+        Dielectric { eta: self.eta * eta_ratio, r: wl.reflectance(self.r), t: wl.reflectance(self.t) }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::SPECULAR_REFLECTION | LobeFlags::SPECULAR_TRANSMISSION
     }

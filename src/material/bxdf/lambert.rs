@@ -14,6 +14,11 @@ pub struct Lambert {
 
 impl Lobe for Lambert {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        Lambert { r: wl.reflectance(self.r) }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::DIFFUSE_REFLECTION
     }

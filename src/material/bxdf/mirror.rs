@@ -11,6 +11,11 @@ pub struct Mirror {
 
 impl Lobe for Mirror {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        Mirror { r: wl.reflectance(self.r) }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::SPECULAR_REFLECTION
     }

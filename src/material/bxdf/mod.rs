@@ -175,6 +175,11 @@ pub trait Lobe: Copy {
     /// The lobe with its values (and so its albedo) scaled by `w` in [0, 1]: a blend's share.
     fn scaled(self, w: f32) -> Self;
 
+    /// The lobe in spectral mode: its colours as spectra at the path's wavelengths `wl`, one per
+    /// lane (`crate::spectrum::lanes`), and a dielectric's relative index times `eta_ratio` (the
+    /// hero wavelength's index over the one the lobe was made with; 1 unless dispersive).
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self;
+
     /// The lobe's value for the pair, without the cosine (0 for delta lobes).
     fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color;
 
@@ -271,6 +276,15 @@ macro_rules! bxdfs {
                 match self {
                     $(Bxdf::$inl(b) => Bxdf::$inl(b.scaled(w)),)+
                     $(Bxdf::$ool(b) => Bxdf::$ool(b.scaled(w))),+
+                }
+            }
+
+            /// See `Lobe::lifted`.
+            #[inline]
+            pub fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Bxdf {
+                match self {
+                    $(Bxdf::$inl(b) => Bxdf::$inl(b.lifted(wl, eta_ratio)),)+
+                    $(Bxdf::$ool(b) => Bxdf::$ool(b.lifted(wl, eta_ratio))),+
                 }
             }
 

@@ -24,6 +24,11 @@ pub fn sample_phong(r: Vec3, exponent: f32, u: Vec2) -> Vec3 {
 
 impl Lobe for Phong {
     #[inline]
+    fn lifted(self, _wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        self
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::GLOSSY_REFLECTION
     }

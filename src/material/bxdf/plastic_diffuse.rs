@@ -20,6 +20,11 @@ pub struct PlasticDiffuse {
 }
 
 impl Lobe for PlasticDiffuse {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        PlasticDiffuse { d: wl.reflectance(self.d), ..self }
+    }
+
     const DIRECTIONAL: bool = true;
 
     #[inline]

@@ -73,6 +73,11 @@ pub struct PrincipledDiffuse {
 
 impl Lobe for PrincipledDiffuse {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        PrincipledDiffuse { color: wl.reflectance(self.color), sheen: wl.reflectance(self.sheen), ..self }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::DIFFUSE_REFLECTION
     }
@@ -188,6 +193,11 @@ impl PrincipledSpecular {
 }
 
 impl Lobe for PrincipledSpecular {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        PrincipledSpecular { base: wl.reflectance(self.base), ..self }
+    }
+
     #[inline]
     fn flags(&self) -> LobeFlags {
         if self.trans > 0.0 {
@@ -346,6 +356,11 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
 
 impl Lobe for PrincipledClearcoat {
     #[inline]
+    fn lifted(self, _wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        self
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::GLOSSY_REFLECTION
     }
@@ -435,6 +450,11 @@ pub struct DiffuseTransmission {
 
 impl Lobe for DiffuseTransmission {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        DiffuseTransmission { t: wl.reflectance(self.t), ..self }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::TRANSMISSION | LobeFlags::DIFFUSE
     }
@@ -511,6 +531,11 @@ impl ThinSpecular {
 }
 
 impl Lobe for ThinSpecular {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        ThinSpecular { base: wl.reflectance(self.base), ..self }
+    }
+
     #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION

@@ -22,6 +22,11 @@ impl PartialEq for RoughCoating {
 }
 
 impl Lobe for RoughCoating {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        RoughCoating { scale: wl.reflectance(self.scale), ..self }
+    }
+
     const DIRECTIONAL: bool = true;
 
     #[inline]

@@ -26,6 +26,16 @@ impl RoughConductor {
 
 impl Lobe for RoughConductor {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        RoughConductor {
+            eta: wl.unbounded(self.eta),
+            k: wl.unbounded(self.k),
+            scale: wl.reflectance(self.scale),
+            ..self
+        }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::GLOSSY_REFLECTION
     }

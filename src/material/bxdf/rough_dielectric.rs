@@ -22,6 +22,11 @@ pub struct RoughDielectric {
 
 impl Lobe for RoughDielectric {
     #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
+        RoughDielectric { eta: self.eta * eta_ratio, r: wl.reflectance(self.r), t: wl.reflectance(self.t), ..self }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
     }

@@ -23,6 +23,11 @@ impl PartialEq for RoughPlasticDiffuse {
 }
 
 impl Lobe for RoughPlasticDiffuse {
+    #[inline]
+    fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
+        RoughPlasticDiffuse { d: wl.reflectance(self.d), ..self }
+    }
+
     const DIRECTIONAL: bool = true;
 
     #[inline]

@@ -15,6 +15,11 @@ pub struct Transmission {
 
 impl Lobe for Transmission {
     #[inline]
+    fn lifted(self, _wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
+        Transmission { eta: self.eta * eta_ratio, ..self }
+    }
+
+    #[inline]
     fn flags(&self) -> LobeFlags {
         LobeFlags::SPECULAR_TRANSMISSION
     }

@@ -110,10 +110,16 @@ impl<'a> Cx<'a> {
                 }
             }
             "dielectric" | "roughdielectric" => {
-                let eta = self.eta(&p, BK7)?;
+                // A dispersive glass (caustic's extension) refracts by its d-line index in RGB
+                // mode and by each path's hero wavelength's in spectral mode.
+                let dispersion = self.dispersive_int_ior(&p)?;
+                let eta = match dispersion {
+                    Some(d) => d.n_d() / self.ior(&p, "ext_ior", AIR)?,
+                    None => self.eta(&p, BK7)?,
+                };
                 let reflectance = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
                 let transmittance = self.color_param(&p, "specular_transmittance", b)?.unwrap_or(unit);
-                if p.kind == "dielectric" {
+                let m = if p.kind == "dielectric" {
                     Material::two_sided(Plain::Dielectric { eta, reflectance, transmittance })
                 } else {
                     if (eta - 1.0).abs() < 1e-7 {
@@ -121,7 +127,8 @@ impl<'a> Cx<'a> {
                     }
                     let roughness = self.roughness(&p, b, true)?;
                     Material::two_sided(Plain::RoughDielectric { roughness, eta, reflectance, transmittance })
-                }
+                };
+                Material { dispersion, ..m }
             }
             "thindielectric" => {
                 let eta = self.eta(&p, BK7)?;

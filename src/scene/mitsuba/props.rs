@@ -557,6 +557,23 @@ impl<'a> Cx<'a> {
     }
 
     /// An index of refraction: a number or one of Mitsuba's named materials.
+    /// A dispersive glass named by `int_ior`: caustic's extension, a name of
+    /// `spectrum::Dispersion`'s table that Mitsuba's own list lacks (`dense flint`, `fused
+    /// silica`); `None` for numbers and Mitsuba's names, which keep Mitsuba's single index so
+    /// that its scenes render as it renders them.
+    pub(super) fn dispersive_int_ior(&self, p: &Props<'a>) -> Result<Option<crate::spectrum::Dispersion>, SceneError> {
+        let Some(el) = self.prop(p, "int_ior") else { return Ok(None) };
+        if el.tag != "string" {
+            return Ok(None);
+        }
+        let (v, _) = self.value(el)?;
+        let key = v.trim().to_ascii_lowercase();
+        if NAMED_IOR.iter().any(|(n, _)| *n == key) {
+            return Ok(None);
+        }
+        Ok(crate::spectrum::Dispersion::named(&key).ok())
+    }
+
     pub(super) fn ior(&self, p: &Props<'a>, name: &str, default: f32) -> Result<f32, SceneError> {
         let Some(el) = self.prop(p, name) else { return Ok(default) };
         match el.tag.as_str() {

@@ -3,7 +3,7 @@
 //! materials (in any order in the file; cycles are an error).
 
 use super::Cx;
-use super::schema::{self, MaterialDesc, TextureDesc};
+use super::schema::{self, DispersionFormula, DispersionSpec, MaterialDesc, TextureDesc};
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{
     Classic, ClassicKind, ColorParam, FloatParam, Material, Param, Plain, Principled, PrincipledThin, Roughness,
@@ -14,6 +14,7 @@ use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
 use crate::scene::de::{ColorOrTexture, NumberOrTexture};
 use crate::scene::footprint::FileKind;
+use crate::spectrum::Dispersion;
 use crate::texture::image::{TexImage, load_image};
 use crate::texture::{Bitmap, Filter, Texture, Wrap};
 use glam::Affine2;
@@ -237,6 +238,30 @@ impl<'a> Cx<'a> {
         Ok(Roughness { distribution, alpha_u, alpha_v })
     }
 
+    /// A glass's `dispersion` (`None` without one); giving `ior` too is an error.
+    fn dispersion(&self, d: &MaterialDesc) -> Result<Option<Dispersion>, SceneError> {
+        let Some(spec) = &d.dispersion else { return Ok(None) };
+        let span = spec.span();
+        if d.ior.is_some() {
+            return Err(self.at(span, "give either `ior` or `dispersion`, not both"));
+        }
+        let made = match spec.get_ref() {
+            DispersionSpec::Name(name) => Dispersion::named(name),
+            DispersionSpec::Formula(DispersionFormula { cauchy: Some(c), sellmeier: None }) => match c.as_slice() {
+                [a, b] => Dispersion::cauchy(*a, *b, 0.0),
+                [a, b, c] => Dispersion::cauchy(*a, *b, *c),
+                _ => return Err(self.at(span, "`cauchy` takes [A, B] or [A, B, C] (wavelengths in micrometres)")),
+            },
+            DispersionSpec::Formula(DispersionFormula { cauchy: None, sellmeier: Some(t) }) => {
+                Dispersion::sellmeier(&t.b, &t.c)
+            }
+            DispersionSpec::Formula(_) => {
+                return Err(self.at(span, "give one of `cauchy = [A, B]` or `sellmeier = { b = [...], c = [...] }`"));
+            }
+        };
+        made.map(Some).map_err(|e| self.at(span, e.to_string()))
+    }
+
     fn named(
         &self,
         names: &MaterialNames,
@@ -258,7 +283,7 @@ impl<'a> Cx<'a> {
     ) -> Result<Material, SceneError> {
         let d = &p.desc;
         let two_sided = d.two_sided.unwrap_or(true);
-        let with_sides = |model: Plain| Material { model: model.into(), two_sided };
+        let with_sides = |model: Plain| Material { model: model.into(), two_sided, dispersion: None };
         let unit = Param::Const(Color::ONE);
         Ok(match p.kind {
             kind @ ("diffuse" | "reflective" | "transparent" | "dielectric") => {
@@ -274,7 +299,11 @@ impl<'a> Cx<'a> {
                 {
                     c.color_texture = Some(self.texture_index(textures, n, s.span())?);
                 }
-                c.into()
+                let dispersion = self.dispersion(d)?;
+                if let Some(n) = dispersion {
+                    c.ior = n.n_d();
+                }
+                Material { dispersion, ..c.into() }
             }
             "conductor" | "roughconductor" => {
                 let (eta, k) = match (&d.metal, d.eta, d.k) {
@@ -296,16 +325,18 @@ impl<'a> Cx<'a> {
                 }
             }
             "roughdielectric" => {
-                let eta = d.ior.map_or(1.5, |v| v.0);
+                let dispersion = self.dispersion(d)?;
+                let eta = dispersion.map_or_else(|| d.ior.map_or(1.5, |v| v.0), |n| n.n_d());
                 if (eta - 1.0).abs() < 1e-7 {
                     return Err(self.at(p.span.clone(), "a rough dielectric needs an `ior` other than 1"));
                 }
-                Material::two_sided(Plain::RoughDielectric {
+                let m = Material::two_sided(Plain::RoughDielectric {
                     roughness: self.roughness(p, textures)?,
                     eta,
                     reflectance: unit,
                     transmittance: unit,
-                })
+                });
+                Material { dispersion, ..m }
             }
             "plastic" | "roughplastic" => {
                 let diffuse = self.color_param(&d.color, Color::splat(0.5), textures)?;

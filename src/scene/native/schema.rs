@@ -14,11 +14,11 @@ use toml::Spanned;
 pub const MATERIAL_KINDS: &[(&str, &[&str])] = &[
     ("diffuse", &["color", "ka", "kd", "ks", "exponent"]),
     ("reflective", &["color", "ka", "kd", "ks", "exponent", "kr"]),
-    ("transparent", &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior"]),
-    ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior"]),
+    ("transparent", &["color", "ka", "kd", "ks", "exponent", "kr", "kt", "ior", "dispersion"]),
+    ("dielectric", &["color", "ka", "kd", "ks", "exponent", "ior", "dispersion"]),
     ("conductor", &["metal", "eta", "k", "specular", "two_sided"]),
     ("roughconductor", &["metal", "eta", "k", "specular", "two_sided", "distribution", "alpha", "alpha_u", "alpha_v"]),
-    ("roughdielectric", &["ior", "distribution", "alpha", "alpha_u", "alpha_v"]),
+    ("roughdielectric", &["ior", "dispersion", "distribution", "alpha", "alpha_u", "alpha_v"]),
     ("plastic", &["color", "specular", "ior", "nonlinear", "two_sided"]),
     ("roughplastic", &["color", "specular", "ior", "nonlinear", "two_sided", "distribution", "alpha"]),
     ("bumpmap", &["material", "texture", "scale"]),
@@ -157,6 +157,8 @@ pub struct RenderDesc {
     pub sample_border: Option<bool>,
     /// AOVs to write beside the image, as `--aov` takes them.
     pub aov: Option<Spanned<String>>,
+    /// Spectral rendering instead of RGB.
+    pub spectral: Option<bool>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -189,6 +191,7 @@ impl RenderDesc {
             filter,
             sample_border: _,
             aov: _,
+            spectral,
             photon,
         } = self;
         Options {
@@ -210,6 +213,7 @@ impl RenderDesc {
             // Where a render is shown is the user's choice, not the scene's: a scene file from
             // elsewhere does not open network connections.
             display_server: None,
+            spectral: *spectral,
 
             photon: photon.clone(),
         }
@@ -233,6 +237,29 @@ pub struct CameraTable {
     pub principal_point_offset: Option<Pair>,
 }
 
+/// `dispersion = "bk7"`, `dispersion = { cauchy = [A, B] }` (or `[A, B, C]`), or
+/// `dispersion = { sellmeier = { b = [...], c = [...] } }`: wavelengths in micrometres.
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub enum DispersionSpec {
+    Name(String),
+    Formula(DispersionFormula),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DispersionFormula {
+    pub cauchy: Option<Vec<f32>>,
+    pub sellmeier: Option<SellmeierTerms>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SellmeierTerms {
+    pub b: Vec<f32>,
+    pub c: Vec<f32>,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
@@ -244,6 +271,8 @@ pub struct MaterialDesc {
     pub kr: Option<Unit>,
     pub kt: Option<Unit>,
     pub ior: Option<Positive>,
+    /// A glass's index over wavelength (replaces `ior`): a named glass or a formula.
+    pub dispersion: Option<Spanned<DispersionSpec>>,
     pub metal: Option<Spanned<String>>,
     pub eta: Option<Rgb>,
     pub k: Option<Rgb>,

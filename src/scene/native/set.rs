@@ -41,6 +41,7 @@ pub const ALIASES: &[(&str, &[(&str, &str)])] = &[
             ("ambient", "ambient"),
             ("transparent_shadows", "transparent_shadows"),
             ("ray_bias", "ray_bias"),
+            ("spectral", "spectral"),
             ("photons", "photon.photons"),
             ("caustic_photons", "photon.caustic_photons"),
             ("gather", "photon.gather"),
