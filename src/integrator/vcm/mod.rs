@@ -132,8 +132,9 @@ pub struct Vcm {
 /// With one light path per m camera paths (`MisFactors::with_light_fraction`), the variance of
 /// the techniques of light subpaths grows about m times and their cost falls m times, while the
 /// camera-only techniques keep both. A pilot of two iterations with one light path per pixel
-/// measures, per pixel, each part's variance per iteration (half the squared difference of the
-/// two iterations' values: V_c for the camera-only part, V_l for the rest, summed over pixels)
+/// measures each part's variance per iteration from the two iterations' values per pixel (from
+/// their mean absolute difference, robust to fireflies: V_c for the camera-only part, V_l for
+/// the rest, summed over pixels)
 /// and each part's cost in rays (C_c: camera paths and their light samples; C_l: light paths,
 /// their splats, the connections' shadow rays and the merges at `MERGE_COST` each); the error
 /// after a given time, (V_c + m V_l) (C_c + C_l / m), is least at m = sqrt(V_c C_l / (V_l C_c)),
@@ -154,21 +155,31 @@ impl LightBudget {
     /// m from the pilot's two iterations: each pixel's camera-only part and whole value (any
     /// measure of light, here luminance), and the costs of both iterations.
     fn divisor(parts: [(&[f32], &[f32]); 2], camera_rays: u64, light_work: f64) -> u32 {
-        let (mut v_c, mut v_l) = (0.0f64, 0.0f64);
+        // Mean absolute differences, squared: two samples per pixel are too few for squared
+        // differences, which one firefly in either iteration decides (a small light's glossy
+        // reflection made a pilot read V_c 40,000 times larger than another seed's).
+        let (mut d_c, mut d_l, mut n) = (0.0f64, 0.0f64, 0.0f64);
         let [(c0, t0), (c1, t1)] = parts;
         for k in 0..c0.len().min(c1.len()).min(t0.len()).min(t1.len()) {
             let (a, b) = (f64::from(c0[k]), f64::from(c1[k]));
             let (la, lb) = (f64::from(t0[k]) - a, f64::from(t1[k]) - b);
             if a.is_finite() && b.is_finite() && la.is_finite() && lb.is_finite() {
-                v_c += (a - b) * (a - b) / 2.0;
-                v_l += (la - lb) * (la - lb) / 2.0;
+                d_c += (a - b).abs();
+                d_l += (la - lb).abs();
+                n += 1.0;
             }
         }
+        // For normal noise E|a - b| = 2 sigma / sqrt(pi): sigma^2 = pi/4 (E|a - b|)^2, per pixel.
+        let variance = |d: f64| std::f64::consts::FRAC_PI_4 * (d / n.max(1.0)).powi(2) * n;
+        let (v_c, v_l) = (variance(d_c), variance(d_l));
         let c_c = camera_rays as f64;
         if !(v_l > 0.0) || !(c_c > 0.0) {
             return Self::MAX_DIVISOR;
         }
         let m = (v_c * light_work / (v_l * c_c)).sqrt();
+        if std::env::var_os("CAUSTIC_VCM_DEBUG").is_some() {
+            eprintln!("DEBUG v_c {v_c:.4e} v_l {v_l:.4e} c_c {c_c:.4e} c_l {light_work:.4e} m {m:.3}");
+        }
         if !m.is_finite() {
             return 1;
         }
