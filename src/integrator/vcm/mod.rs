@@ -177,9 +177,6 @@ impl LightBudget {
             return Self::MAX_DIVISOR;
         }
         let m = (v_c * light_work / (v_l * c_c)).sqrt();
-        if std::env::var_os("CAUSTIC_VCM_DEBUG").is_some() {
-            eprintln!("DEBUG v_c {v_c:.4e} v_l {v_l:.4e} c_c {c_c:.4e} c_l {light_work:.4e} m {m:.3}");
-        }
         if !m.is_finite() {
             return 1;
         }
