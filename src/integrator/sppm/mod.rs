@@ -911,17 +911,22 @@ mod tests {
         desc.build().unwrap().scene
     }
 
-    #[test]
-    fn every_photon_in_range_counts_in_m() {
-        let scene = grey_quad();
+    /// The visible point at the quad's centre, seen from straight above.
+    fn centre_point(scene: &Scene) -> VisiblePoint {
         let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
-        let v = VisiblePoint {
+        VisiblePoint {
             at: Shading::of(&hit.unwrap()),
             wo: Vec3::Z,
             beta: Color::ONE,
             layer: LayerPath::CAMERA,
             photon_depth: trace::MAX_PHOTON_DEPTH as u8,
-        };
+        }
+    }
+
+    #[test]
+    fn every_photon_in_range_counts_in_m() {
+        let scene = grey_quad();
+        let v = centre_point(&scene);
         let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, depth: 0, n: Vec3::Z };
         let hits = [
             hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
@@ -945,14 +950,7 @@ mod tests {
     #[test]
     fn indirect_photons_are_gathered_over_the_wide_disc() {
         let scene = grey_quad();
-        let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
-        let v = VisiblePoint {
-            at: Shading::of(&hit.unwrap()),
-            wo: Vec3::Z,
-            beta: Color::ONE,
-            layer: LayerPath::CAMERA,
-            photon_depth: trace::MAX_PHOTON_DEPTH as u8,
-        };
+        let v = centre_point(&scene);
         let hit = |x: f32, flags: u8| PhotonHit {
             p: Vec3::new(x, 0.0, 0.0),
             dir: -Vec3::Z,
