@@ -10,7 +10,12 @@ The reference is rendered once per scene, size and reference settings, and cache
 - direct and indirect layers: the path tracer, `--ref-spp` samples per pixel (2048);
 - caustic and specular layers: SPPM, `--ref-iters` iterations (1000) of `--ref-photons`
   photons (four per pixel): the path tracer cannot find caustics of point or sun light.
-The reference image is the sum of these four layers. Then the integrator renders with
+Each is rendered twice, with seeds 7919 and 7920, and the reference is their mean; the
+reference's own noise (the variance of that mean per layer, a quarter of the two halves' mean
+squared difference) is subtracted from every squared error printed, so the RMSEs are the
+render's error against the exact image rather than against a noisy one (without this, a
+2048-spp path tracer's noise in the indirect layer hid most of the difference between two
+SPPM versions). The reference image is the sum of these four layers. Then the integrator renders with
 `--layers` for `--time` seconds (equal time) or `--spp` samples / iterations (equal work), and
 the script prints, per layer, its RMSE against the reference layer and its share of the summed
 squared errors of the four layers (the cross terms between layers are left out, so the shares
@@ -68,11 +73,11 @@ def layer_files(out):
     return {name: f"{stem}.{name}{ext}" for name in LAYERS}
 
 
-def reference(args, size):
-    """The four reference layers (cached), as a dict of arrays."""
+def reference_half(args, size, seed):
+    """One reference render of each kind at `seed` (cached): a dict of layer arrays."""
     with open(args.scene, "rb") as f:
         scene_hash = hashlib.sha256(f.read()).hexdigest()[:12]
-    key = f"{scene_hash}-{args.width}x{args.height}-p{args.ref_spp}-s{args.ref_iters}x{args.ref_photons}-{REF_SEED}"
+    key = f"{scene_hash}-{args.width}x{args.height}-p{args.ref_spp}-s{args.ref_iters}x{args.ref_photons}-{seed}"
     name = os.path.splitext(os.path.basename(args.scene))[0]
     os.makedirs(args.cache, exist_ok=True)
     refs = {}
@@ -87,13 +92,24 @@ def reference(args, size):
         files = layer_files(out)
         if not all(os.path.exists(f) for f in files.values()):
             print(f"# rendering the {kind} reference of {args.scene} into {out}", file=sys.stderr)
-            cmd = [args.bin, "render", args.scene, *size, *extra, "--seed", str(REF_SEED), "--layers", "-q", "-o", out]
+            cmd = [args.bin, "render", args.scene, *size, *extra, "--seed", str(seed), "--layers", "-q", "-o", out]
             secs, _, _ = run(cmd)
             print(f"# took {secs:.0f} s", file=sys.stderr)
         for layer, img in files.items():
-            if REF_OF[layer] == kind:
+            if args.ref_of[layer] == kind:
                 refs[layer] = read_rgb(img)
     return refs
+
+
+def reference(args, size):
+    """The four reference layers, each the mean of two renders of different seeds, and the
+    variance of that mean per layer (its own noise, which every RMSE against it includes):
+    for two independent halves a and b, the mean's squared error is E|a - b|^2 / 4."""
+    a = reference_half(args, size, REF_SEED)
+    b = reference_half(args, size, REF_SEED + 1)
+    refs = {k: 0.5 * (a[k] + b[k]) for k in LAYERS}
+    noise = {k: float(((a[k] - b[k]) ** 2).sum() / a[k].size) / 4 for k in LAYERS}
+    return refs, noise
 
 
 def render(args, size, seed, out):
@@ -126,6 +142,14 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--ref-iters", type=int, default=1000)
     ap.add_argument("--ref-photons", type=int, help="default: four per pixel")
+    ap.add_argument(
+        "--indirect-ref",
+        choices=["path", "sppm"],
+        default="path",
+        help="which reference renders the indirect layer: the path tracer cannot find light that "
+        "reaches a diffuse surface through a mirror or glass from a point, spot or sun light and "
+        "then bounces on (L S+ D D+ E), so scenes lit by such lights need sppm here",
+    )
     ap.add_argument("--cache", default="/tmp/caustic-error-budget")
     ap.add_argument("--bin", default=os.environ.get("BIN", "target/release/caustic"))
     ap.add_argument("--label", help="the table's label (default: the integrator)")
@@ -133,6 +157,7 @@ def main():
     extra = argv[argv.index("--") + 1 :] if "--" in argv else []
     args = ap.parse_args(argv[: len(argv) - len(extra) - (1 if "--" in argv else 0)])
     args.extra = extra
+    args.ref_of = dict(REF_OF, indirect=args.indirect_ref)
     if args.cpu is not None:
         if args.time is not None:
             ap.error("give one of --time and --cpu")
@@ -147,7 +172,7 @@ def main():
     if args.ref_photons is None:
         args.ref_photons = 4 * args.width * args.height
     size = ["--width", str(args.width), "--height", str(args.height)]
-    refs = reference(args, size)
+    refs, ref_noise = reference(args, size)
     ref_total = sum(refs[k] for k in LAYERS)
     pixels = ref_total.size
     se = {k: [] for k in LAYERS}
@@ -164,17 +189,26 @@ def main():
             se[k].append(((read_rgb(f) - refs[k]) ** 2).sum() / pixels)
     for f in [tmp, *layer_files(tmp).values()]:
         os.remove(f)
-    mse = {k: float(np.mean(v)) for k, v in se.items()}
+    # Each layer's error net of the reference's own noise (see `reference`): what the render's
+    # error would be against the exact image.
+    mse = {k: max(float(np.mean(v)) - ref_noise[k], 0.0) for k, v in se.items()}
+    total_mse = max(float(np.mean(total)) - sum(ref_noise.values()), 0.0)
     summed = sum(mse.values()) or 1.0
     label = args.label or args.integrator
     budget = f"{args.time:g} s" if args.time else (f"{args.cpu:g} s CPU" if args.cpu else f"{args.spp} spp")
     load = open("/proc/loadavg").read().split()[0] if os.path.exists("/proc/loadavg") else "?"
     print(
         f"| {os.path.basename(args.scene)} | {label} | {budget} | {'/'.join(work)} | "
-        f"{np.mean(secs):.1f} s | {np.mean(cpus):.1f} s | {np.sqrt(np.mean(total)):.4f} | "
-        f"{np.sqrt(np.mean(total) * np.mean(cpus)):.4f} | "
+        f"{np.mean(secs):.1f} s | {np.mean(cpus):.1f} s | {np.sqrt(total_mse):.4f} | "
+        f"{np.sqrt(total_mse * np.mean(cpus)):.4f} | "
         + " | ".join(f"{100 * mse[k] / summed:.0f}% ({np.sqrt(mse[k]):.4f})" for k in LAYERS)
         + f" | {load} |"
+    )
+    print(
+        f"# reference noise (RMSE of the two-seed mean): total {np.sqrt(sum(ref_noise.values())):.4f}, "
+        + ", ".join(f"{k} {np.sqrt(ref_noise[k]):.4f}" for k in LAYERS)
+        + f"; raw RMSE against it {np.sqrt(np.mean(total)):.4f}",
+        file=sys.stderr,
     )
 
 

@@ -57,6 +57,14 @@ integrator_kinds! {
 }
 
 impl IntegratorKind {
+    /// Whether the integrator renders progressively, an open-ended number of iterations of one
+    /// sample per pixel each (its default sample pattern is Sobol's: `SamplerDesc::resolved_kind`).
+    pub fn is_progressive(self) -> bool {
+        matches!(self, IntegratorKind::Sppm | IntegratorKind::Vcm)
+    }
+}
+
+impl IntegratorKind {
     /// Whether the integrator renders in spectral mode (`--spectral`); the others refuse it.
     /// Spectral media are not implemented: a scene with media refuses it too
     /// (`SceneDescription::build`).

@@ -219,6 +219,9 @@ fn scene_text(material: &str, light: &str, plane: bool) -> String {
 width = 12
 height = 10
 max_depth = 8
+# One sample pattern for every integrator, so that they start the same camera rays (`SPP`;
+# SPPM and VCM would otherwise take Sobol points).
+sampler = "jittered"
 
 [camera]
 eye = [0, 1.6, 4.5]

@@ -274,11 +274,14 @@ impl<'a> Cx<'a> {
         let Some(&(sel, _)) = self.object(p, None, "sampler").first() else { return Ok(desc) };
         let sp = self.props(sel)?;
         desc.kind = match sp.kind.as_str() {
-            "independent" | "stratified" | "multijitter" | "orthogonal" => SamplerKind::Jittered,
-            "ldsampler" => SamplerKind::Sobol,
+            // Independent samples are Mitsuba's plainest pattern: the renderer's own choice
+            // (`SamplerDesc::resolved_kind`) serves the author at least as well.
+            "independent" => None,
+            "stratified" | "multijitter" | "orthogonal" => Some(SamplerKind::Jittered),
+            "ldsampler" => Some(SamplerKind::Sobol),
             other => {
-                self.unsupported(sel, PluginKind::Sampler, other, "; jittered sampling is used")?;
-                SamplerKind::Jittered
+                self.unsupported(sel, PluginKind::Sampler, other, "; the default pattern is used")?;
+                None
             }
         };
         if let Some((n, nel)) = self.integer(&sp, "sample_count")? {
