@@ -284,7 +284,10 @@ impl LightTracer {
                 }
                 // Solid angle from the far point's area: dist^2, which the lens's density at
                 // that distance divides out.
-                (scene.emission_in(radiance, wl) * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)), cw.raster)
+                (
+                    scene.emission_in(radiance, wl) * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)),
+                    cw.raster,
+                )
             }
             Light::Environment(_)
             | Light::Point { .. }

@@ -36,8 +36,8 @@
 //! visible point's BSDF in RGB with a spectrum reduced to three numbers: a product of
 //! spectra that is not the spectral product, where VCM's merges are then weighted against
 //! connections that are spectral; sharing keeps every technique the same estimator.) The
-//! iteration's hero is u_i = frac(o + i / phi), the golden-ratio sequence over the global
-//! iteration index offset by a hash of the seed (`iteration_wavelengths`): a pure function of
+//! iteration's hero is u_i = frac(o + i phi / 3), a golden-ratio sequence over the global
+//! iteration index offset by a hash of the seed (`iteration_wavelengths`, which says why a third): a pure function of
 //! (seed, i), so shards, resumes and thread counts give the same images, and N iterations cover
 //! the spectrum with the low discrepancy of that sequence (3N wavelengths with the lanes), where
 //! independent draws would leave the image-wide colour of a render of few iterations as noisy
@@ -116,13 +116,21 @@ impl VcmConfig {
 }
 
 /// The wavelengths every path of iteration `it` carries in spectral mode (the module header):
-/// the hero at frac(o + it / phi), o from the seed.
+/// the hero at u = frac(o + it phi / 3), o from the seed.
+///
+/// Why phi / 3 and not the plain golden-ratio sequence's 1 / phi: the three lanes sit at u,
+/// u + 1/3 and u + 2/3, a set that repeats when u moves by a third, so what the lanes average
+/// sees only 3u mod 1, which advances by phi mod 1 = 1 / phi per iteration: the golden-ratio
+/// sequence itself, the Weyl sequence of least discrepancy. (With a step of 1 / phi, 3u advances
+/// by 0.854, a poorer sequence.) On a test integrand peaked as the CIE z-bar over the visible
+/// distribution, the lanes' mean error is 2.4x smaller at 1024 iterations (0.07% against 0.18%
+/// rms over offsets) and 1.8x at 256; the hero alone (paths through dispersive glass), itself a
+/// Weyl sequence of step 0.539, errs as 1 / phi's at 256 iterations (1.0% against 0.96%) and
+/// 1.5x more at 1024 (0.42% against 0.28%).
 pub fn iteration_wavelengths(seed: u64, it: u32) -> Wavelengths {
-    // 1 / phi: the sequence's points stay apart as they accumulate (Weyl's, of the least
-    // discrepancy among them).
-    const INVERSE_GOLDEN: f64 = 0.618_033_988_749_894_8;
+    const GOLDEN_THIRD: f64 = 1.618_033_988_749_895 / 3.0;
     let offset = (hash_seed(&[seed, WAVELENGTH_STREAM]) >> 11) as f64 / (1u64 << 53) as f64;
-    let u = (offset + f64::from(it) * INVERSE_GOLDEN).fract() as f32;
+    let u = (offset + f64::from(it) * GOLDEN_THIRD).fract() as f32;
     // Rounding to f32 may reach 1.
     Wavelengths::sample(if u < 1.0 { u } else { 0.0 })
 }
