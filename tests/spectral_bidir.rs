@@ -285,3 +285,53 @@ fn vcm_matches_sppm_on_caustics_seen_through_dispersive_glass() {
     eprintln!("specular layer through dispersive glass: vcm {vcm:.6}, sppm {sppm:.6}, ratio {:.4}", vcm / sppm);
     assert!((vcm / sppm - 1.0).abs() < 0.06, "vcm {vcm} against sppm {sppm}");
 }
+
+/// Spectral VCM and bidirectional path tracing split into farm shards merge into the
+/// one-machine render bit for bit (as tests/farm.rs checks in RGB): each VCM iteration's
+/// wavelengths come from its global index, whichever shard runs it.
+#[test]
+fn spectral_shards_merge_to_the_single_render_bit_for_bit() {
+    use caustic::app::{RenderOptions, merge_files, render_file};
+    use caustic::farm::shard::{Shard, ShardSpec};
+    use caustic::film::output::read_exr;
+    static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    let dir = common::scratch("spectral-shards");
+    let scene = dir.join("dispersive.toml");
+    std::fs::write(&scene, dispersive_cornell()).unwrap();
+    let bits_of = |path: &std::path::Path| -> Vec<[u32; 3]> {
+        read_exr(path).unwrap().pixels.iter().map(|c| c.to_array().map(f32::to_bits)).collect()
+    };
+    let options = |kind: IntegratorKind, output: std::path::PathBuf, shard: Option<Shard>| RenderOptions {
+        scene: scene.clone(),
+        output: Some(output),
+        overrides: Options {
+            width: Some(24),
+            height: Some(20),
+            spp: Some(5),
+            integrator: Some(kind),
+            spectral: Some(true),
+            ..Default::default()
+        },
+        threads: Some(2),
+        quiet: true,
+        shard: shard.map(ShardSpec::Fixed),
+        ..Default::default()
+    };
+    for kind in [IntegratorKind::Vcm, IntegratorKind::Bdpt] {
+        let single = dir.join(format!("{}.exr", kind.name()));
+        render_file(&options(kind, single.clone(), None), &NEVER).unwrap();
+        let expected = bits_of(&single);
+        for count in [2, 3] {
+            let parts: Vec<_> = (0..count)
+                .map(|index| {
+                    let part = dir.join(format!("{}-{index}of{count}.exr", kind.name()));
+                    render_file(&options(kind, part.clone(), Some(Shard { index, count })), &NEVER).unwrap();
+                    part
+                })
+                .collect();
+            let merged = dir.join(format!("{}-merged{count}.exr", kind.name()));
+            merge_files(&parts, &merged, false, true).unwrap();
+            assert!(bits_of(&merged) == expected, "{} in {count} shards differs", kind.name());
+        }
+    }
+}
