@@ -70,12 +70,13 @@ impl IntegratorKind {
     /// (`SceneDescription::build`).
     pub fn renders_spectrally(self) -> bool {
         match self {
-            IntegratorKind::Path | IntegratorKind::Photon | IntegratorKind::Sppm => true,
-            IntegratorKind::Whitted
-            | IntegratorKind::Volpath
+            IntegratorKind::Path
+            | IntegratorKind::Photon
+            | IntegratorKind::Sppm
             | IntegratorKind::Light
             | IntegratorKind::Bdpt
-            | IntegratorKind::Vcm => false,
+            | IntegratorKind::Vcm => true,
+            IntegratorKind::Whitted | IntegratorKind::Volpath => false,
         }
     }
 

@@ -583,14 +583,14 @@ fn integrators_without_media_say_they_leave_them_out() {
 fn spectral_with_an_integrator_without_it_is_an_error() {
     let dir = common::scratch("cli-spectral");
     let out = caustic()
-        .args(["render", "--spectral", "--integrator", "bdpt", "--width", "8", "--height", "8", "-q", "-o"])
+        .args(["render", "--spectral", "--integrator", "whitted", "--width", "8", "--height", "8", "-q", "-o"])
         .arg(dir.join("x.png"))
         .arg(scene("11-cornell-area.toml"))
         .output()
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("bdpt") && err.contains("spectral") && !err.contains("panicked"), "{err}");
+    assert!(err.contains("whitted") && err.contains("spectral") && !err.contains("panicked"), "{err}");
     let out = caustic()
         .args([
             "render",

@@ -13,6 +13,12 @@
 //! its numbers from a stream seeded by (seed, i x pixels + k), and the splats are summed exactly,
 //! so the image is the same for any thread count and any split into passes, shards and resumes.
 //!
+//! Spectral mode (`crate::spectrum::lanes`): each light path draws its own wavelengths first
+//! from its stream, lifts the light's emission to them and the BSDFs it meets (keeping only the
+//! hero past dispersive glass, as photons do: `photon::trace`), and each splat's lanes are
+//! turned into linear sRGB through the CIE functions before they reach the film, as the path
+//! tracer's samples are.
+//!
 //! Layers (`integrator::layers`): a connection from the first surface light reaches is `DIRECT`,
 //! one from a surface reached through mirrors and glass only `CAUSTIC`, any other `INDIRECT`;
 //! emitters seen directly are `DIRECT`. Nothing is `SPECULAR` (see above).
@@ -28,6 +34,7 @@ use crate::math::{Color, Vec3};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -46,6 +53,8 @@ pub struct LightTracer {
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode (`crate::spectrum::lanes`); RGB otherwise.
+    pub spectral: bool,
 }
 
 /// Bytes a light-traced render of `pixels` pixels needs beside its film: the splat film and the
@@ -130,8 +139,20 @@ impl LightTracer {
     /// contributions left out as not finite (an infinite light path contributes nothing).
     fn trace(&self, scene: &Scene, seed: u64, index: u64, splats: &SplatFilm, stats: &mut RayStats) -> u64 {
         let mut rng = Rng32::new(hash_seed(&[seed, LIGHT_STREAM, index]));
+        // Spectral paths draw their wavelengths before anything else; RGB paths draw nothing more.
+        let mut wl = self.spectral.then(|| Wavelengths::sample(rng.uniform()));
+        // The lanes' wavelengths as the film reads them (termination does not change them).
+        let film_wl = wl;
         let mut bad = 0;
         let mut splat = |raster, layers: &Layers| {
+            let converted;
+            let layers = match &film_wl {
+                Some(wl) => {
+                    converted = layers.map(|c| wl.to_srgb(c));
+                    &converted
+                }
+                None => layers,
+            };
             if !splats.add(raster, layers) {
                 bad += 1;
             }
@@ -139,9 +160,12 @@ impl LightTracer {
         let Some((li, p_pick)) = scene.light_picker.pick(rng.uniform()) else { return 0 };
         let light = &scene.lights[li];
         // The light itself, seen directly.
-        self.connect_emitter(scene, light, p_pick, &mut rng, stats, &mut splat);
+        self.connect_emitter(scene, light, p_pick, wl.as_ref(), &mut rng, stats, &mut splat);
         let Some(e) = light.sample_le(rng.uniform2(), rng.uniform2(), scene.textures()) else { return bad };
         let mut beta = e.flux / p_pick;
+        if let Some(wl) = &wl {
+            beta = wl.illuminant(beta);
+        }
         if !(beta.max_element() > 0.0) || !beta.is_finite() {
             return bad;
         }
@@ -154,7 +178,7 @@ impl LightTracer {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray, f32::INFINITY) else { break };
             let wo = -ray.d;
-            let bsdf = scene.bsdf(&hit, wo);
+            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
             if bsdf.is_black() {
                 break;
             }
@@ -210,12 +234,15 @@ impl LightTracer {
     /// Connects a point of `light` (chosen with probability `p_pick`) to the camera: a point
     /// by area on an area light, a direction of the environment (its radiance seen from the
     /// camera as from infinitely far), nothing for delta lights. Mitsuba's
-    /// `sample_visible_emitters`.
+    /// `sample_visible_emitters`. In spectral mode (`wl`) the emission is lifted to the path's
+    /// wavelengths.
+    #[allow(clippy::too_many_arguments)]
     fn connect_emitter(
         &self,
         scene: &Scene,
         light: &Light,
         p_pick: f32,
+        wl: Option<&Wavelengths>,
         rng: &mut Rng32,
         stats: &mut RayStats,
         splat: &mut impl FnMut(crate::math::Vec2, &Layers),
@@ -236,7 +263,7 @@ impl LightTracer {
                     return;
                 }
                 // Area density 1 / area, the lens's solid-angle density seen from the point.
-                (le * (cos * shape.area() * cw.importance / (cw.pdf * p_pick)), cw.raster)
+                (scene.emission_in(le, wl) * (cos * shape.area() * cw.importance / (cw.pdf * p_pick)), cw.raster)
             }
             // An orthographic camera sees the environment in one direction only, which a sampled
             // direction never is.
@@ -257,7 +284,10 @@ impl LightTracer {
                 }
                 // Solid angle from the far point's area: dist^2, which the lens's density at
                 // that distance divides out.
-                (radiance * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)), cw.raster)
+                (
+                    scene.emission_in(radiance, wl) * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)),
+                    cw.raster,
+                )
             }
             Light::Environment(_)
             | Light::Point { .. }

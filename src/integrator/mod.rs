@@ -91,11 +91,15 @@ impl Integrator {
                     .ok_or(Cancelled)?;
                 Integrator::Photon(Box::new(pm))
             }
-            IntegratorKind::Light => {
-                Integrator::Light(LightTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
-            }
+            IntegratorKind::Light => Integrator::Light(LightTracer {
+                max_depth: depth,
+                ray_bias: desc.ray_bias(scene),
+                spectral: desc.spectral,
+            }),
             IntegratorKind::Sppm => Integrator::Sppm(Sppm::new(sppm::SppmConfig::new(desc, scene, settings.pixels()))),
-            IntegratorKind::Bdpt => Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene) }),
+            IntegratorKind::Bdpt => {
+                Integrator::Bdpt(Bdpt { max_depth: depth, ray_bias: desc.ray_bias(scene), spectral: desc.spectral })
+            }
             IntegratorKind::Vcm => Integrator::Vcm(Vcm::new(desc, scene, settings)),
         })
     }

@@ -410,7 +410,7 @@ impl SceneDescription {
         let kind = self.integrator.kind;
         if self.integrator.spectral && !kind.renders_spectrally() {
             return Err(self.error(format!(
-                "the {} integrator does not render spectrally; spectral mode works with path, photon and sppm",
+                "the {} integrator does not render spectrally; spectral mode works with path, photon, sppm, light, bdpt and vcm",
                 kind.name()
             )));
         }

@@ -23,6 +23,9 @@
 //! two would follow a direction they cannot take. [`Wavelengths::terminate_secondary`] returns
 //! the factor (3, 0, 0) that the throughput is multiplied by once, so that the hero alone stands
 //! for the three from there on while the light found before the interface keeps all three.
+//! Bidirectional methods join two subpaths at one set of wavelengths; when both crossed a
+//! dispersive interface, each throughput holds the factor and the joined path takes it once
+//! ([`joined`]).
 
 use super::rgb::{RgbToSpectrumTable, SigmoidPolynomial};
 use super::sampled::{LAMBDA_MAX, LAMBDA_MIN, cie_xyz, d65, xyz_to_color};
@@ -183,6 +186,17 @@ impl Wavelengths {
     }
 }
 
+/// A path joined from two subpaths traced at the same wavelengths (a connection or a merge of
+/// bidirectional methods), `c` the product of both throughputs: when both subpaths kept only the
+/// hero, each throughput holds `terminate_secondary`'s factor and `c` the square of it, so the
+/// joined path, which is one path through dispersive interfaces, is brought back to one factor.
+/// Otherwise (one of them, or neither, terminated) `c` is the joined path's as it is. Never both
+/// in RGB mode, so RGB paths are untouched.
+#[inline(always)]
+pub fn joined(c: Color, a_hero_only: bool, b_hero_only: bool) -> Color {
+    if a_hero_only && b_hero_only { c * (1.0 / LANES as f32) } else { c }
+}
+
 /// Slots of each thread's memo of table lookups.
 const MEMO_SLOTS: usize = 64;
 
@@ -272,6 +286,17 @@ mod tests {
         for rgb in [[0.2, 0.5, 0.9], [0.9, 0.1, 0.1], [0.2, 0.5, 0.9], [1.0, 0.0, 0.5]] {
             assert_eq!(coefficients(rgb), RgbToSpectrumTable::srgb().lookup(rgb));
         }
+    }
+
+    /// A path joined from two terminated subpaths carries the factor (3, 0, 0) once.
+    #[test]
+    fn joined_paths_carry_the_factor_once() {
+        let mut a = Wavelengths::sample(0.3);
+        let mut b = a;
+        let (fa, fb) = (a.terminate_secondary().unwrap(), b.terminate_secondary().unwrap());
+        assert_eq!(joined(fa * fb, true, true), Color::new(3.0, 0.0, 0.0));
+        assert_eq!(joined(fa * Color::ONE, true, false), Color::new(3.0, 0.0, 0.0));
+        assert_eq!(joined(Color::ONE, false, false), Color::ONE);
     }
 
     #[test]

@@ -25,7 +25,7 @@ mod spd;
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
 pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
-pub use lanes::{LANES, Wavelengths};
+pub use lanes::{LANES, Wavelengths, joined};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
 };

@@ -23,6 +23,13 @@
 //! traces as many light paths as the image has pixels: a crop traces fewer, and its light paths
 //! count for the full film's (`Context::light_scale`).
 //!
+//! Spectral mode: each camera sample draws its wavelengths from the pixel sampler's first
+//! dimension after the camera's (as the path tracer does) and both its subpaths carry them
+//! (`Context::wl`), so its connections join light and camera at one set of wavelengths; a full
+//! path through dispersive glass keeps the hero alone, its factor counted once whichever subpath
+//! crossed the glass (`strategy`'s header). Camera paths' light and the splats reach the film as
+//! linear sRGB.
+//!
 //! Layers (`integrator::layers`) follow the full path from the camera: the camera subpath's
 //! sampled lobes, a non-delta bounce where the subpaths join, then the light subpath's bounces.
 
@@ -39,6 +46,7 @@ use crate::material::bsdf::Bsdf;
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -61,6 +69,8 @@ pub struct Bdpt {
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode (`crate::spectrum::lanes`); RGB otherwise.
+    pub spectral: bool,
 }
 
 /// Bytes a bidirectional render of `pixels` pixels needs beside its film: the splat film and the
@@ -170,6 +180,13 @@ impl Bdpt {
     ) -> u64 {
         let scene = ctx.scene;
         let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, index);
+        let spectral;
+        let ctx = if self.spectral {
+            spectral = Context { wl: Some(Wavelengths::sample(sampler.next_1d())), ..*ctx };
+            &spectral
+        } else {
+            ctx
+        };
         let film_pixel = (y + settings.origin.1) as u64 * scene.camera.width as u64 + (x + settings.origin.0) as u64;
         let mut rng = Rng32::new(hash_seed(&[settings.seed, LIGHT_STREAM, film_pixel, index as u64]));
         let mut bad = 0;

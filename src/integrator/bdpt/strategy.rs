@@ -10,6 +10,14 @@
 //! Vertices on a surface have a BSDF seen from the direction they were reached from (`wo`). A
 //! light vertex evaluates in importance transport with Veach's shading-normal correction, as the
 //! light tracer does; a camera vertex in radiance transport.
+//!
+//! Spectral mode (`Context::wl`): both subpaths of a full path carry the same wavelengths, one
+//! value per lane (`crate::spectrum::lanes`), so every technique that joins them is evaluated at
+//! one set of wavelengths. A subpath that crossed a dispersive interface keeps only the hero and
+//! holds `terminate_secondary`'s factor in its throughput; a connection or merge of two such
+//! subpaths takes the factor once (`spectrum::joined`), so every technique of a full path through
+//! dispersive glass estimates the hero alone, times the factor once, and their weights (the
+//! densities of BSDFs lifted to the hero's index) sum to one.
 
 use super::mis::{self, MisFactors, SubpathMis};
 use crate::camera::Projection;
@@ -23,8 +31,10 @@ use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec2, Vec3};
 use crate::render::RayStats;
 use crate::scene::Scene;
+use crate::spectrum::{Wavelengths, joined};
 
 /// What every subpath and technique of one sample index (one VCM iteration) reads.
+#[derive(Clone, Copy)]
 pub struct Context<'a> {
     pub scene: &'a Scene,
     /// Longest path in bounces (surface vertices between the camera and the light).
@@ -39,6 +49,10 @@ pub struct Context<'a> {
     /// probability that the camera path was given a light subpath (VCM's light budget; 1 in
     /// bidirectional path tracing).
     pub connection_scale: f32,
+    /// Spectral mode: the wavelengths of the camera sample (bidirectional path tracing) or of
+    /// the iteration (VCM) that both subpaths carry, as drawn (neither subpath's termination at
+    /// dispersive glass); `None` in RGB mode.
+    pub wl: Option<Wavelengths>,
 }
 
 impl<'a> Context<'a> {
@@ -54,6 +68,30 @@ impl<'a> Context<'a> {
             factors: factors.unwrap_or(MisFactors::connections_only(scale)),
             light_scale: scale as f32,
             connection_scale: 1.0,
+            wl: None,
+        }
+    }
+
+    /// Light in the lanes of a spectral render as linear sRGB (the film's colours); RGB as it is.
+    #[inline]
+    pub fn to_film(&self, layers: Layers) -> Layers {
+        match &self.wl {
+            Some(wl) => layers.map(|c| wl.to_srgb(c)),
+            None => layers,
+        }
+    }
+
+    /// The BSDF of light vertex `y` (as its subpath met it: seen from `y.wo`, lifted in spectral
+    /// mode to the wavelengths).
+    #[inline]
+    pub fn light_bsdf(&self, y: &LightVertex) -> Bsdf<'a> {
+        match self.wl {
+            // The factor of a dispersive glass is the light path's, already in `y.beta`.
+            Some(mut wl) => {
+                let mut factor = Color::ONE;
+                self.scene.bsdf_for(&y.hit, y.wo, Some(&mut wl), &mut factor)
+            }
+            None => self.scene.bsdf(&y.hit, y.wo),
         }
     }
 }
@@ -76,6 +114,9 @@ pub struct LightVertex {
     /// and whether all were delta (mirrors, glass, straight through).
     pub bounces: u32,
     pub delta_only: bool,
+    /// Spectral mode: the light path kept only its hero wavelength up to here (`beta` holds
+    /// the factor; see the module header). Always false in RGB mode.
+    pub hero_only: bool,
 }
 
 impl LightVertex {
@@ -117,16 +158,34 @@ pub struct CameraVertex<'a, 'b> {
     pub depth: u32,
     /// The layer state of the camera path here (`integrator::layers`).
     pub layer: LayerPath,
+    /// Spectral mode: the camera path kept only its hero wavelength up to here (`beta` holds
+    /// the factor). Always false in RGB mode.
+    pub hero_only: bool,
 }
 
 /// The density with which `hit`, reached from `wi`, samples `wo` (`bsdf` is its BSDF seen from
 /// `wo`): the same BSDF's for reflection, the one seen from `wi` across the surface
-/// (`Bsdf::pdf_reverse`).
+/// (`Bsdf::pdf_reverse`), lifted in spectral mode (`wl`) as `bsdf` was (a dispersive glass's
+/// index at the hero, seen from the other side).
 #[inline]
-pub fn reverse_pdf(scene: &Scene, hit: &Hit, bsdf: &Bsdf, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
+pub fn reverse_pdf(
+    scene: &Scene,
+    hit: &Hit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    wi: Vec3,
+    mode: Transport,
+    wl: Option<&Wavelengths>,
+) -> f32 {
     match bsdf.pdf_reverse(wo, wi, mode) {
         Some(p) => p,
-        None => scene.bsdf(hit, wi).pdf(wi, wo, mode),
+        None => match wl {
+            Some(wl) => {
+                let (mut wl, mut factor) = (*wl, Color::ONE);
+                scene.bsdf_for(hit, wi, Some(&mut wl), &mut factor).pdf(wi, wo, mode)
+            }
+            None => scene.bsdf(hit, wi).pdf(wi, wo, mode),
+        },
     }
 }
 
@@ -308,7 +367,8 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
         return Color::ZERO;
     }
     let cos = ds.wi.dot(x.bsdf.normal()).abs();
-    let contribution = x.beta * f * ds.radiance * (cos / (ds.pdf * pick_d));
+    let radiance = scene.emission_in(ds.radiance, ctx.wl.as_ref());
+    let contribution = x.beta * f * radiance * (cos / (ds.pdf * pick_d));
     if contribution == Color::ZERO {
         return Color::ZERO;
     }
@@ -316,7 +376,7 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
     if !(visible > 0.0) {
         return Color::ZERO;
     }
-    let rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, ds.wi, Transport::Importance);
+    let rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, ds.wi, Transport::Importance, ctx.wl.as_ref());
     let pick_e = scene.light_picker.prob(li) as f64;
     let w = mis::light_sample_weight(
         &x.mis,
@@ -358,7 +418,7 @@ pub fn connect(
     }
     let cos_x = d.dot(x.bsdf.normal()).abs();
     let cos_y = d.dot(y_bsdf.normal()).abs() * y_bsdf.shading_normal_correction(y.wo, -d);
-    let contribution = x.beta * f_x * f_y * y.beta * (cos_x * cos_y / dist2);
+    let contribution = joined(x.beta * f_x * f_y * y.beta * (cos_x * cos_y / dist2), x.hero_only, y.hero_only);
     if contribution == Color::ZERO || !contribution.is_finite() {
         return None;
     }
@@ -368,8 +428,9 @@ pub fn connect(
     }
     let (gx, gy) = (d.dot(x.hit.ng).abs() as f64, d.dot(y.hit.ng).abs() as f64);
     let d2 = dist2 as f64;
-    let x_rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, d, Transport::Importance) as f64;
-    let y_rev = reverse_pdf(scene, &y.hit, y_bsdf, y.wo, -d, Transport::Radiance) as f64;
+    let wl = ctx.wl.as_ref();
+    let x_rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, d, Transport::Importance, wl) as f64;
+    let y_rev = reverse_pdf(scene, &y.hit, y_bsdf, y.wo, -d, Transport::Radiance, wl) as f64;
     let w = mis::connection_weight(
         &x.mis,
         &y.mis,
@@ -383,7 +444,8 @@ pub fn connect(
 }
 
 /// Connects light vertex `y` (BSDF `bsdf`) to the camera (t = 1) through the lens point `u`
-/// picks: where it lands on the film and its weighted contribution by layer.
+/// picks: where it lands on the film and its weighted contribution by layer (linear sRGB in
+/// spectral mode too, ready for the film).
 pub fn connect_to_camera(
     ctx: &Context,
     y: &LightVertex,
@@ -406,7 +468,7 @@ pub fn connect_to_camera(
     if !(visible > 0.0) {
         return None;
     }
-    let rev = reverse_pdf(scene, &y.hit, bsdf, y.wo, cw.wi, Transport::Radiance) as f64;
+    let rev = reverse_pdf(scene, &y.hit, bsdf, y.wo, cw.wi, Transport::Radiance, ctx.wl.as_ref()) as f64;
     // The camera's density of the vertex per unit area: importance over the connection's
     // solid-angle density is pdf_dir / dist^2 for a perspective camera (and the importance
     // itself for an orthographic one, whose direction is a delta).
@@ -414,7 +476,7 @@ pub fn connect_to_camera(
     let w = mis::camera_connection_weight(&y.mis, camera_pdf, rev, &ctx.factors);
     let mut layers = [Color::ZERO; 4];
     layers[y.layer(LayerPath::CAMERA, 1)] = contribution * (visible * w as f32);
-    Some((cw.raster, layers))
+    Some((cw.raster, ctx.to_film(layers)))
 }
 
 /// The density of a camera ray's direction as `mis::SubpathMis::camera_start` takes it: per

@@ -3,7 +3,9 @@
 //! to the camera and keeps it), and a camera subpath that at each vertex gathers what the
 //! techniques of `strategy` bring: the emitter it hits, a light sample, connections to the
 //! light subpath's vertices, and (for vertex merging) whatever the caller's `merge` adds.
-//! Both carry their MIS partial sums (`mis::SubpathMis`) along.
+//! Both carry their MIS partial sums (`mis::SubpathMis`) along, and in spectral mode the
+//! context's wavelengths (`Context::wl`): emission and BSDFs lifted to them, and each its own
+//! termination at dispersive glass (`strategy`'s header).
 //!
 //! A mask's transparent part is not a vertex: a walk that passes straight through keeps its
 //! partial sums and measures the next segment from the last real vertex, as shadow rays pass
@@ -44,6 +46,10 @@ pub fn trace_light_path<'a>(
     let light = &scene.lights[li];
     let Some(e) = light.sample_le(rng.uniform2(), rng.uniform2(), scene.textures()) else { return };
     let mut beta = e.flux / pick_e;
+    let mut wl = ctx.wl;
+    if let Some(wl) = &wl {
+        beta = wl.illuminant(beta);
+    }
     if !(beta.max_element() > 0.0) || !beta.is_finite() {
         return;
     }
@@ -73,12 +79,13 @@ pub fn trace_light_path<'a>(
         } else {
             mis.arrive(Some((hit.p - last_p).length_squared() as f64), cos_in)
         };
-        let bsdf = scene.bsdf(&hit, wo);
+        let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
         if bsdf.is_black() {
             break;
         }
         depth += 1;
-        let v = LightVertex { hit, wo, beta, mis: arrived, depth, bounces, delta_only };
+        let hero_only = wl.is_some_and(|wl| wl.secondary_terminated());
+        let v = LightVertex { hit, wo, beta, mis: arrived, depth, bounces, delta_only, hero_only };
         if bsdf.has_smooth() {
             vertex(&v, &bsdf, rng, stats);
         }
@@ -98,7 +105,11 @@ pub fn trace_light_path<'a>(
             continue;
         }
         let delta = s.flags.is_specular();
-        let rev = if delta { 0.0 } else { strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Radiance) };
+        let rev = if delta {
+            0.0
+        } else {
+            strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Radiance, ctx.wl.as_ref())
+        };
         mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
         beta *= s.weight * bsdf.shading_normal_correction(wo, s.wi);
         delta_only &= delta;
@@ -132,7 +143,8 @@ pub struct CameraTally {
 /// Traces the camera subpath of `ray` (its numbers from `sampler`, which made the ray) and
 /// returns the light its techniques gather, by layer: emitters it hits, a light sample at each
 /// vertex, connections to `light_path` (vertices of one light subpath with their BSDFs in
-/// `light_bsdfs`) and what `merge` adds at each vertex with a non-delta part.
+/// `light_bsdfs`) and what `merge` adds at each vertex with a non-delta part. In spectral mode
+/// the light (and the tally's) is gathered in the lanes and returned as linear sRGB.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_camera_path<'a>(
     ctx: &Context<'a>,
@@ -151,6 +163,9 @@ pub fn trace_camera_path<'a>(
     let parallel = scene.camera.projection == Projection::Orthographic;
     let mut ray = ray;
     let mut beta = Color::ONE;
+    let mut wl = ctx.wl;
+    // The camera-only techniques' light, for the tally.
+    let mut camera_only = Color::ZERO;
     let mut layer = LayerPath::CAMERA;
     let mut last_p = ray.o;
     let mut first = true;
@@ -159,7 +174,7 @@ pub fn trace_camera_path<'a>(
         stats.rays += 1;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             if let Some(env) = scene.environment {
-                let le = scene.lights[env as usize].environment_radiance(ray.d);
+                let le = scene.emission_in(scene.lights[env as usize].environment_radiance(ray.d), wl.as_ref());
                 if le != Color::ZERO {
                     let w = if depth == 0 {
                         1.0
@@ -168,7 +183,7 @@ pub fn trace_camera_path<'a>(
                     };
                     let c = beta * le * w as f32;
                     layers[layer.emitted()] += c;
-                    tally.camera_only += c;
+                    camera_only += c;
                 }
             }
             break;
@@ -179,7 +194,7 @@ pub fn trace_camera_path<'a>(
         let arrived = mis.arrive((!parallel_ray).then_some(dist2 as f64), wo.dot(hit.ng) as f64);
         depth += 1;
         if hit.is_emitter() && hit.is_front(ray.d) {
-            let le = scene.emitted(&hit, wo);
+            let le = scene.emission_in(scene.emitted(&hit, wo), wl.as_ref());
             if le != Color::ZERO {
                 // A camera that sees an emitter directly is the only technique for that path.
                 let w = if depth == 1 {
@@ -189,19 +204,20 @@ pub fn trace_camera_path<'a>(
                 };
                 let c = beta * le * w as f32;
                 layers[layer.emitted()] += c;
-                tally.camera_only += c;
+                camera_only += c;
             }
         }
         if depth > ctx.max_depth {
             break;
         }
-        let bsdf = scene.bsdf(&hit, wo);
+        let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
         if bsdf.has_smooth() {
-            let x = CameraVertex { hit: &hit, bsdf: &bsdf, wo, beta, mis: arrived, depth, layer };
+            let hero_only = wl.is_some_and(|wl| wl.secondary_terminated());
+            let x = CameraVertex { hit: &hit, bsdf: &bsdf, wo, beta, mis: arrived, depth, layer, hero_only };
             let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
             let c = strategy::light_sample(ctx, &x, u_pick, u, stats);
             layers[layer.direct()] += c;
-            tally.camera_only += c;
+            camera_only += c;
             let before = stats.total();
             for (y, y_bsdf) in light_path.iter().zip(light_bsdfs) {
                 // Light vertices come in order of depth: the rest are deeper still.
@@ -229,7 +245,11 @@ pub fn trace_camera_path<'a>(
             continue;
         }
         let delta = s.flags.is_specular();
-        let rev = if delta { 0.0 } else { strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Importance) };
+        let rev = if delta {
+            0.0
+        } else {
+            strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Importance, ctx.wl.as_ref())
+        };
         mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
         beta *= s.weight;
         layer.bounce(delta);
@@ -248,5 +268,9 @@ pub fn trace_camera_path<'a>(
         crossings = 0;
         ray = hit.spawn(s.wi, ctx.ray_bias);
     }
-    layers
+    tally.camera_only += match &ctx.wl {
+        Some(wl) => wl.to_srgb(camera_only),
+        None => camera_only,
+    };
+    ctx.to_film(layers)
 }

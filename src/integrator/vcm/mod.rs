@@ -26,6 +26,23 @@
 //! count, a checkpoint resumes exactly, and a farm's shards, each taking a block of
 //! iterations, merge into the one-machine image bit for bit (SPPM's shards restart their radii;
 //! these need not, as every iteration knows its own).
+//!
+//! Spectral mode: one set of wavelengths per iteration, carried by all its light and camera
+//! paths (`Context::wl`). A merge joins a camera vertex with light vertices of other paths, and
+//! the estimate is the camera path's throughput times theirs at the same wavelengths, which
+//! holds only if every path the camera vertex may meet was traced at its wavelengths: per-path
+//! wavelengths would merge each camera path with the few light paths that happened to share
+//! them, none in practice. (SPPM's alternative, photons that store CIE XYZ, multiplies the
+//! visible point's BSDF in RGB with a spectrum reduced to three numbers: a product of
+//! spectra that is not the spectral product, where VCM's merges are then weighted against
+//! connections that are spectral; sharing keeps every technique the same estimator.) The
+//! iteration's hero is u_i = frac(o + i phi / 3), a golden-ratio sequence over the global
+//! iteration index offset by a hash of the seed (`iteration_wavelengths`, which says why a third): a pure function of
+//! (seed, i), so shards, resumes and thread counts give the same images, and N iterations cover
+//! the spectrum with the low discrepancy of that sequence (3N wavelengths with the lanes), where
+//! independent draws would leave the image-wide colour of a render of few iterations as noisy
+//! as one path's. Paths through dispersive glass keep the hero alone (`bdpt::strategy`), and
+//! light enters the film as linear sRGB; the light budget's pilot measures the sRGB luminance.
 
 mod grid;
 
@@ -40,6 +57,7 @@ use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, 
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
+use crate::spectrum::{Wavelengths, joined};
 use grid::VertexGrid;
 use rayon::iter::Either;
 use rayon::prelude::*;
@@ -51,6 +69,9 @@ const CHUNK: u64 = 256;
 
 /// The stream light subpaths draw from (apart from bidirectional path tracing's).
 const LIGHT_STREAM: u64 = 0x5643_4d4c_4947;
+
+/// The stream a spectral render's wavelength offset is drawn from (`iteration_wavelengths`).
+const WAVELENGTH_STREAM: u64 = 0x5643_4d57_4156;
 
 /// Radius reduction of progressive photon mapping (SmallVCM's default).
 pub const DEFAULT_ALPHA: f32 = 0.75;
@@ -71,6 +92,8 @@ pub struct VcmConfig {
     pub alpha: f32,
     /// One light path per this many camera paths (`LightBudget`); `None` chooses it.
     pub light_divisor: Option<u32>,
+    /// Spectral mode (`crate::spectrum::lanes`; the module header); RGB otherwise.
+    pub spectral: bool,
 }
 
 impl VcmConfig {
@@ -82,6 +105,7 @@ impl VcmConfig {
             initial_radius: desc.photon.initial_radius.unwrap_or_else(|| scene_radius(scene, settings)),
             alpha: DEFAULT_ALPHA,
             light_divisor: None,
+            spectral: desc.spectral,
         }
     }
 
@@ -89,6 +113,26 @@ impl VcmConfig {
     pub fn radius(&self, i: u32) -> f32 {
         self.initial_radius * ((i as f64 + 1.0).powf((self.alpha as f64 - 1.0) / 2.0)) as f32
     }
+}
+
+/// The wavelengths every path of iteration `it` carries in spectral mode (the module header):
+/// the hero at u = frac(o + it phi / 3), o from the seed.
+///
+/// Why phi / 3 and not the plain golden-ratio sequence's 1 / phi: the three lanes sit at u,
+/// u + 1/3 and u + 2/3, a set that repeats when u moves by a third, so what the lanes average
+/// sees only 3u mod 1, which advances by phi mod 1 = 1 / phi per iteration: the golden-ratio
+/// sequence itself, the Weyl sequence of least discrepancy. (With a step of 1 / phi, 3u advances
+/// by 0.854, a poorer sequence.) On a test integrand peaked as the CIE z-bar over the visible
+/// distribution, the lanes' mean error is 2.4x smaller at 1024 iterations (0.07% against 0.18%
+/// rms over offsets) and 1.8x at 256; the hero alone (paths through dispersive glass), itself a
+/// Weyl sequence of step 0.539, errs as 1 / phi's at 256 iterations (1.0% against 0.96%) and
+/// 1.5x more at 1024 (0.42% against 0.28%).
+pub fn iteration_wavelengths(seed: u64, it: u32) -> Wavelengths {
+    const GOLDEN_THIRD: f64 = 1.618_033_988_749_895 / 3.0;
+    let offset = (hash_seed(&[seed, WAVELENGTH_STREAM]) >> 11) as f64 / (1u64 << 53) as f64;
+    let u = (offset + f64::from(it) * GOLDEN_THIRD).fract() as f32;
+    // Rounding to f32 may reach 1.
+    Wavelengths::sample(if u < 1.0 { u } else { 0.0 })
 }
 
 /// The initial radius SPPM would give the pixels (`sppm::initial_radius`), at the median over a
@@ -379,6 +423,7 @@ impl Vcm {
         let mut ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
         ctx.light_scale = (full / light_paths.max(1) as f64) as f32;
         ctx.connection_scale = m as f32;
+        ctx.wl = self.config.spectral.then(|| iteration_wavelengths(settings.seed, it));
         // The iteration's sums gather here and join the pass only when it is whole.
         let mut sums = Film::new(pass.width, pass.height, pass.has_layers());
         let Some(light_rays) = self.light_pass(&ctx, driver, splats, paths, &mut sums, it, light_paths) else {
@@ -525,7 +570,7 @@ impl Vcm {
                 if (k + u64::from(it)).is_multiple_of(u64::from(m)) {
                     own.vertices.extend_from_slice(paths.path((k / u64::from(m)) as usize));
                 }
-                own.bsdfs.extend(own.vertices.iter().map(|v| ctx.scene.bsdf(&v.hit, v.wo)));
+                own.bsdfs.extend(own.vertices.iter().map(|v| ctx.light_bsdf(v)));
                 let mut found = subpath::CameraTally::default();
                 let mut merges = 0u64;
                 let before = stats.total();
@@ -578,11 +623,20 @@ struct MergeVertex {
     depth: u32,
     bounces: u32,
     delta_only: bool,
+    hero_only: bool,
 }
 
 impl MergeVertex {
     fn of(v: &LightVertex) -> Self {
-        MergeVertex { wo: v.wo, beta: v.beta, mis: v.mis, depth: v.depth, bounces: v.bounces, delta_only: v.delta_only }
+        MergeVertex {
+            wo: v.wo,
+            beta: v.beta,
+            mis: v.mis,
+            depth: v.depth,
+            bounces: v.bounces,
+            delta_only: v.delta_only,
+            hero_only: v.hero_only,
+        }
     }
 }
 
@@ -606,9 +660,11 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
         if f == Color::ZERO {
             return;
         }
-        let rev = strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance);
+        let rev = strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance, ctx.wl.as_ref());
         let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, &ctx.factors);
-        sum[strategy::light_layer(y.bounces, y.delta_only, x.layer, 1)] += f * y.beta * w as f32;
+        // Both paths past dispersive glass: the merged path takes the hero's factor once.
+        sum[strategy::light_layer(y.bounces, y.delta_only, x.layer, 1)] +=
+            joined(f * y.beta * w as f32, x.hero_only, y.hero_only);
     });
     for (l, s) in layers.iter_mut().zip(sum) {
         *l += x.beta * s * norm;
