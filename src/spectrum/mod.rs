@@ -17,6 +17,7 @@
 mod blackbody;
 mod cie_tables;
 mod dispersion;
+mod emission;
 mod lanes;
 mod rgb;
 mod sampled;
@@ -25,6 +26,7 @@ mod spd;
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
 pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
+pub use emission::EmissionSpectrum;
 pub use lanes::{LANES, Wavelengths};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
