@@ -16,7 +16,9 @@
 //! Scene values become spectra where they enter the path: reflectances through
 //! [`super::RgbAlbedoSpectrum`]'s table (greys exactly), unbounded values (conductors' eta and
 //! k) as [`super::RgbUnboundedSpectrum`], emission as [`super::RgbIlluminantSpectrum`] (times
-//! D65, so white light stays white). The film receives the Monte Carlo estimate of the sample's
+//! D65, so white light stays white). Values the scene gave as spectra are evaluated as they
+//! are instead: named metals' measured eta and k (`material::conductors`), emitted spectra
+//! ([`super::EmissionSpectrum`], through `Scene::emission_in`). The film receives the Monte Carlo estimate of the sample's
 //! CIE XYZ, each lane divided by its wavelength's pdf, mapped to linear sRGB ([`Wavelengths::to_srgb`]).
 //!
 //! At a dispersive interface the path keeps only its hero wavelength: the lanes of the other
