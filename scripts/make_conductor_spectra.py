@@ -56,12 +56,15 @@ for name in names:
 
 
 def floats(vals):
-    return ", ".join(f"{v:.9e}" for v in vals)
+    # The shortest decimals that give back each single-precision value.
+    return ", ".join(str(np.float32(v)) for v in vals)
 
 
 lines = [
-    f"// Written by scripts/make_conductor_spectra.py from the measured optical constants (luxpop.com,",
-    f"// mostly Palik) that Mitsuba {mi.__version__} ships in data/ior; do not edit.",
+    f"// Written by scripts/make_conductor_spectra.py from the measured optical constants (luxpop.com;",
+    f"// the _palik ones from Palik's handbook) that Mitsuba {mi.__version__} ships in data/ior; do not edit.",
+    "// Measured values, not constants: 3.14 is a k, not pi.",
+    "#![allow(clippy::approx_constant)]",
     "",
     "/// Measured eta and k of a conductor at increasing wavelengths (nm).",
     "pub(super) struct MeasuredIor {",

@@ -9,9 +9,10 @@
 //! spectrum of ones is white; emitted spectra are not, so a flat emission spectrum is the
 //! slightly purple colour of an equal-energy white in sRGB.
 //!
-//! The foundations of spectral rendering (issue 31), not yet used by the integrators: `sampled`
-//! (hero-wavelength sampling, `SpectrumSample`, the Monte Carlo conversion to colour), `rgb`
-//! (RGB colours uplifted to smooth spectra, Jakob and Hanika 2019), `blackbody` and
+//! Spectral rendering (issue 31): `lanes` (`Wavelengths`, a path's three wavelengths in the
+//! lanes of `Color`, the lifts of colours and the conversion back), `sampled` (the CIE tables at
+//! any wavelength, the visible-light distribution), `rgb` (RGB colours uplifted to smooth
+//! spectra, Jakob and Hanika 2019), `emission` (emitted spectra kept as given), `blackbody` and
 //! `dispersion` (indices of refraction over wavelength, named glasses).
 
 mod blackbody;
@@ -31,10 +32,7 @@ pub use lanes::{LANES, Wavelengths};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
 };
-pub use sampled::{
-    LAMBDA_MAX, LAMBDA_MIN, N_WAVELENGTHS, SampledWavelengths, SpectrumSample, WavelengthDistribution, cie_xyz, d65,
-    visible_pdf, xyz_to_color,
-};
+pub use sampled::{LAMBDA_MAX, LAMBDA_MIN, cie_xyz, d65, visible_pdf, xyz_to_color};
 pub use spd::{SpdError, parse_spd};
 
 use crate::math::Color;
