@@ -350,7 +350,14 @@ fn materials_map_to_our_model() {
     let mirror = m("mirror");
     assert_eq!(
         (mirror.model, mirror.two_sided),
-        (Plain::Conductor { eta: Color::ZERO, k: Color::ONE, specular: Param::Const(Color::ONE) }.into(), false)
+        (
+            Plain::Conductor {
+                ior: caustic::material::conductors::ComplexIor::rgb(Color::ZERO, Color::ONE),
+                specular: Param::Const(Color::ONE)
+            }
+            .into(),
+            false
+        )
     );
     // `twosided` of one diffuse: the diffuse on both sides; a bare diffuse is one-sided.
     let two = m("two");

@@ -276,7 +276,12 @@ impl CameraWalk {
                 if !self.lit_by_light_sample {
                     add(
                         self.layer.emitted(),
-                        self.beta * scene.emission_in(scene.environment(self.ray.d), self.wl.as_ref()),
+                        self.beta
+                            * scene.emission_in(
+                                scene.environment(self.ray.d),
+                                scene.environment.unwrap_or(crate::geometry::NO_LIGHT),
+                                self.wl.as_ref(),
+                            ),
                     );
                 }
                 return None;
@@ -306,7 +311,8 @@ impl CameraWalk {
         let wo = -self.ray.d;
         if hit.is_emitter() {
             if hit.is_front(self.ray.d) && !self.lit_by_light_sample {
-                add(self.layer.emitted(), self.beta * scene.emission_in(scene.emitted(&hit, wo), self.wl.as_ref()));
+                let le = scene.emission_in(scene.emitted(&hit, wo), hit.light, self.wl.as_ref());
+                add(self.layer.emitted(), self.beta * le);
             }
             // A reflecting emitter (one with a BSDF) also reflects.
             if scene.bsdf(&hit, wo).is_black() {

@@ -160,11 +160,11 @@ impl LightTracer {
         let Some((li, p_pick)) = scene.light_picker.pick(rng.uniform()) else { return 0 };
         let light = &scene.lights[li];
         // The light itself, seen directly.
-        self.connect_emitter(scene, light, p_pick, wl.as_ref(), &mut rng, stats, &mut splat);
+        self.connect_emitter(scene, li, p_pick, wl.as_ref(), &mut rng, stats, &mut splat);
         let Some(e) = light.sample_le(rng.uniform2(), rng.uniform2(), scene.textures()) else { return bad };
         let mut beta = e.flux / p_pick;
-        if let Some(wl) = &wl {
-            beta = wl.illuminant(beta);
+        if wl.is_some() {
+            beta = scene.emission_in(beta, li as u32, wl.as_ref());
         }
         if !(beta.max_element() > 0.0) || !beta.is_finite() {
             return bad;
@@ -240,13 +240,14 @@ impl LightTracer {
     fn connect_emitter(
         &self,
         scene: &Scene,
-        light: &Light,
+        li: usize,
         p_pick: f32,
         wl: Option<&Wavelengths>,
         rng: &mut Rng32,
         stats: &mut RayStats,
         splat: &mut impl FnMut(crate::math::Vec2, &Layers),
     ) {
+        let light = &scene.lights[li];
         let (u_light, u_lens) = (rng.uniform2(), rng.uniform2());
         let textures = scene.textures();
         let (le, raster) = match light {
@@ -263,7 +264,10 @@ impl LightTracer {
                     return;
                 }
                 // Area density 1 / area, the lens's solid-angle density seen from the point.
-                (scene.emission_in(le, wl) * (cos * shape.area() * cw.importance / (cw.pdf * p_pick)), cw.raster)
+                (
+                    scene.emission_in(le, li as u32, wl) * (cos * shape.area() * cw.importance / (cw.pdf * p_pick)),
+                    cw.raster,
+                )
             }
             // An orthographic camera sees the environment in one direction only, which a sampled
             // direction never is.
@@ -285,7 +289,8 @@ impl LightTracer {
                 // Solid angle from the far point's area: dist^2, which the lens's density at
                 // that distance divides out.
                 (
-                    scene.emission_in(radiance, wl) * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)),
+                    scene.emission_in(radiance, li as u32, wl)
+                        * (cw.importance * cw.dist * cw.dist / (cw.pdf * pdf * p_pick)),
                     cw.raster,
                 )
             }

@@ -105,7 +105,7 @@ pub fn visibility(scene: &Scene, from: RayOrigin, wi: Vec3, dist: f32, bias: f32
 #[inline]
 pub fn light_sample(
     scene: &Scene,
-    light: &Light,
+    light: usize,
     p_pick: f32,
     hit: &Hit,
     bsdf: &Bsdf,
@@ -150,7 +150,7 @@ pub fn bsdf_scatter(bsdf: &Bsdf, wo: Vec3, wi: Vec3, mis: bool) -> (Color, f32, 
 #[inline(always)]
 pub fn light_sample_at(
     scene: &Scene,
-    light: &Light,
+    light: usize,
     p_pick: f32,
     p: Vec3,
     u: Vec2,
@@ -159,7 +159,8 @@ pub fn light_sample_at(
     scatter: impl FnOnce(Vec3, bool) -> (Color, f32, f32),
     visible: impl FnOnce(Vec3, f32) -> (f32, Color),
 ) -> Color {
-    let Some(ls) = light.sample(p, u, scene.textures()) else { return Color::ZERO };
+    let li = light as u32;
+    let Some(ls) = scene.lights[light].sample(p, u, scene.textures()) else { return Color::ZERO };
     let mis = mis && !ls.delta;
     let (f, cos, scatter_pdf) = scatter(ls.wi, mis);
     if f == Color::ZERO {
@@ -170,7 +171,7 @@ pub fn light_sample_at(
         return Color::ZERO;
     }
     let w = if mis { power_heuristic(ls.pdf * p_pick, scatter_pdf) } else { 1.0 };
-    f * scene.emission_in(ls.weight(), wl) * (cos * w * visible / p_pick) * tr
+    f * scene.emission_in(ls.weight(), li, wl) * (cos * w * visible / p_pick) * tr
 }
 
 /// The transmittance from `from` a distance `dist` along unit `wi` (infinite for lights at
@@ -239,7 +240,7 @@ pub fn direct_light(
     stats: &mut RayStats,
 ) -> Color {
     let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
-    light_sample(scene, &scene.lights[li], p_pick, hit, bsdf, wo, u, bias, mis, wl, stats)
+    light_sample(scene, li, p_pick, hit, bsdf, wo, u, bias, mis, wl, stats)
 }
 
 /// Direct light from every light in turn (photon mapping's estimator, Jensen 2001 sec. 9.1):
@@ -297,11 +298,11 @@ impl EveryLight {
         scene: &Scene,
         rng: &mut crate::sampling::Rng32,
         stats: &mut RayStats,
-        mut one: impl FnMut(&Light, f32, Vec2, &mut crate::sampling::Rng32, &mut RayStats) -> Color,
+        mut one: impl FnMut(usize, f32, Vec2, &mut crate::sampling::Rng32, &mut RayStats) -> Color,
     ) -> Color {
         let picked = !self.area_lights.is_empty();
         let mut sum = Color::ZERO;
-        for light in &scene.lights {
+        for (i, light) in scene.lights.iter().enumerate() {
             if picked && !light.is_delta() {
                 continue;
             }
@@ -309,7 +310,7 @@ impl EveryLight {
             let mut acc = Color::ZERO;
             for _ in 0..n_samples {
                 let u = rng.uniform2();
-                acc += one(light, 1.0, u, rng, stats);
+                acc += one(i, 1.0, u, rng, stats);
             }
             sum += acc / n_samples as f32;
         }
@@ -319,7 +320,7 @@ impl EveryLight {
             for _ in 0..n_samples {
                 let Some((k, p)) = self.area_picker.pick(rng.uniform()) else { break };
                 let u = rng.uniform2();
-                acc += one(&scene.lights[self.area_lights[k] as usize], 1.0, u, rng, stats) / p;
+                acc += one(self.area_lights[k] as usize, 1.0, u, rng, stats) / p;
             }
             sum += acc / n_samples as f32;
         }
@@ -340,13 +341,13 @@ pub fn emission_found(
     prev_p: Vec3,
     prev_pdf: f32,
     specular_bounce: bool,
-) -> Option<(Color, f32)> {
+) -> Option<(Color, f32, u32)> {
     let (li, le, light_pdf) = match hit {
         None => {
             let env = scene.environment?;
             let le = scene.lights[env as usize].environment_radiance(ray_d);
             if specular_bounce {
-                return Some((le, 1.0));
+                return Some((le, 1.0, env));
             }
             (env, le, scene.lights[env as usize].pdf_li(prev_p, prev_p, ray_d, ray_d))
         }
@@ -356,12 +357,12 @@ pub fn emission_found(
             }
             let le = scene.emitted(hit, -ray_d);
             if specular_bounce {
-                return Some((le, 1.0));
+                return Some((le, 1.0, hit.light));
             }
             (hit.light, le, scene.lights[hit.light as usize].pdf_li(prev_p, hit.p, hit.ng, ray_d))
         }
     };
-    Some((le, power_heuristic(prev_pdf, scene.direct_picker.prob(li as usize) * light_pdf)))
+    Some((le, power_heuristic(prev_pdf, scene.direct_picker.prob(li as usize) * light_pdf), li))
 }
 
 /// Veach's power heuristic (exponent 2) weight of a sample of density `a` against one of `b`.

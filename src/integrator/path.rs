@@ -46,8 +46,9 @@ impl RayIntegrator for PathTracer {
         loop {
             stats.rays += 1;
             let hit = scene.intersect(&ray, f32::INFINITY);
-            if let Some((le, w)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
-                layers[layer.emitted()] += beta * scene.emission_in(le, wl.as_ref()) * w;
+            if let Some((le, w, light)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce)
+            {
+                layers[layer.emitted()] += beta * scene.emission_in(le, light, wl.as_ref()) * w;
             }
             // The ray leaves the scene.
             let Some(hit) = hit else { break };

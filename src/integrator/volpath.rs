@@ -55,7 +55,7 @@ impl VolPathTracer {
         let from = RayOrigin { p, p_error: Vec3::ZERO, ng: Vec3::ZERO };
         light_sample_at(
             scene,
-            &scene.lights[li],
+            li,
             p_pick,
             p,
             u,
@@ -123,7 +123,7 @@ impl RayIntegrator for VolPathTracer {
                     continue;
                 }
             }
-            if let Some((le, w)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
+            if let Some((le, w, _)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
                 layers[layer.emitted()] += beta * le * w;
             }
             // The ray leaves the scene.
@@ -143,11 +143,10 @@ impl RayIntegrator for VolPathTracer {
             if !bsdf.is_specular_only() {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
                 if let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) {
-                    let light = &scene.lights[li];
                     let bias = self.ray_bias;
                     let direct = light_sample_at(
                         scene,
-                        light,
+                        li,
                         p_pick,
                         hit.p,
                         u,

@@ -174,12 +174,12 @@ pub fn classic_view(materials: &Materials, m: u32) -> Classic {
             let (color, color_texture) = const_or_mean(&reflectance);
             Classic { kind: ClassicKind::Diffuse, color, color_texture, kd: 1.0, ..base }
         }
-        Plain::Conductor { eta, k, specular } => {
-            let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
+        Plain::Conductor { ior, specular } => {
+            let f0 = fresnel_conductor_rgb(1.0, ior.eta, ior.k) * const_or_mean(&specular).0;
             Classic { kind: ClassicKind::Reflective, color: f0, kd: 0.0, kr: f0.mean(), ..base }
         }
-        Plain::RoughConductor { roughness, eta, k, specular } => {
-            let f0 = fresnel_conductor_rgb(1.0, eta, k) * const_or_mean(&specular).0;
+        Plain::RoughConductor { roughness, ior, specular } => {
+            let f0 = fresnel_conductor_rgb(1.0, ior.eta, ior.k) * const_or_mean(&specular).0;
             let n = exponent(alpha_of(&roughness.alpha_u).max(alpha_of(&roughness.alpha_v)));
             Classic { kind: ClassicKind::Diffuse, color: f0, kd: 0.0, ks: f0.mean(), exponent: n, ..base }
         }

@@ -1,8 +1,76 @@
-//! Complex indices of refraction of conductors by name, as Mitsuba 3 uses them in RGB mode:
-//! the spectral data of its `data/ior` files reduced to linear sRGB (negative channels clamped to
-//! 0). The values were read from Mitsuba 3.9.1 (`scalar_rgb`) for each named material.
+//! Complex indices of refraction of conductors by name, as Mitsuba 3 uses them. RGB mode takes
+//! the colours of `TABLE`: the spectral data of Mitsuba's `data/ior` files reduced to linear sRGB
+//! (negative channels clamped to 0), read from Mitsuba 3.9.1 (`scalar_rgb`) for each named
+//! material. Spectral mode evaluates the measured spectra themselves (`conductor_spectra.rs`,
+//! written by scripts/make_conductor_spectra.py) at each path's wavelengths, linearly between
+//! the samples as Mitsuba's `scalar_spectral` does: lifting the colours back to smooth spectra
+//! would lose the shape of gold's or copper's absorption edge.
+//!
+//! One departure: outside a material's measured range Mitsuba's spectra are zero (eta = k = 0,
+//! which gives NaN reflectances there); here the nearest measured value holds. Only materials
+//! measured over less than 360-830 nm (Li, Se, MgO, d-C, AlSb, ...) meet it.
 
+use super::conductor_spectra::{MEASURED, NAMES};
 use crate::math::Color;
+use crate::spectrum::Wavelengths;
+
+/// A conductor's complex index eta + i k: the colours RGB mode uses and, for a metal given by
+/// name, its measured spectra, which spectral mode uses instead.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ComplexIor {
+    pub eta: Color,
+    pub k: Color,
+    pub measured: Option<Measured>,
+}
+
+impl ComplexIor {
+    /// Given as colours (or a spectrum already turned into one): lifted as unbounded spectra in
+    /// spectral mode.
+    pub fn rgb(eta: Color, k: Color) -> Self {
+        ComplexIor { eta, k, measured: None }
+    }
+}
+
+/// The measured spectra of a named conductor (an index into `conductor_spectra.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Measured(u8);
+
+impl Measured {
+    /// eta and k at the lanes' wavelengths.
+    #[inline]
+    pub fn at(self, wl: &Wavelengths) -> (Color, Color) {
+        let m = &MEASURED[self.0 as usize];
+        let mut eta = [0.0; 3];
+        let mut k = [0.0; 3];
+        for i in 0..3 {
+            (eta[i], k[i]) = interpolate(m.lambda, m.eta, m.k, wl.lambda(i));
+        }
+        (Color::from_array(eta), Color::from_array(k))
+    }
+
+    /// eta and k at `lambda` nm.
+    pub fn eval(self, lambda: f32) -> (f32, f32) {
+        let m = &MEASURED[self.0 as usize];
+        interpolate(m.lambda, m.eta, m.k, lambda)
+    }
+}
+
+/// Two spectra sampled at the same increasing wavelengths `l`, at `w`: linear between samples,
+/// the end values outside them.
+#[inline]
+fn interpolate(l: &[f32], a: &[f32], b: &[f32], w: f32) -> (f32, f32) {
+    let last = l.len() - 1;
+    if !(w > l[0]) {
+        return (a[0], b[0]);
+    }
+    if w >= l[last] {
+        return (a[last], b[last]);
+    }
+    // The last sample at or below w.
+    let i = l.partition_point(|&x| x <= w) - 1;
+    let t = (w - l[i]) / (l[i + 1] - l[i]);
+    (a[i] + (a[i + 1] - a[i]) * t, b[i] + (b[i + 1] - b[i]) * t)
+}
 
 /// (name, eta, k) per RGB channel.
 const TABLE: &[(&str, [f32; 3], [f32; 3])] = &[
@@ -52,16 +120,20 @@ const TABLE: &[(&str, [f32; 3], [f32; 3])] = &[
 /// Materials Mitsuba 3.9.1 knows without a `_palik` twin (checked by loading each name there).
 const NO_PALIK: [&str; 6] = ["Au", "Ag", "Al", "Cr", "W", "a-C"];
 
-/// The (eta, k) of a named conductor; `none` is Mitsuba's perfect mirror (eta 0, k 1). Names
-/// ending in `_palik` that Mitsuba gives the same numbers as the plain name resolve to it.
-pub fn lookup(name: &str) -> Option<(Color, Color)> {
+/// The complex index of a named conductor; `none` is Mitsuba's perfect mirror (eta 0, k 1).
+/// Names ending in `_palik` that Mitsuba's RGB variants give the same colours as the plain name
+/// resolve to those colours; their measured spectra are their own files'.
+pub fn lookup(name: &str) -> Option<ComplexIor> {
     if name == "none" {
-        return Some((Color::ZERO, Color::ONE));
+        return Some(ComplexIor::rgb(Color::ZERO, Color::ONE));
     }
     let find = |n: &str| {
         TABLE.iter().find(|(m, _, _)| *m == n).map(|(_, e, k)| (Color::from_array(*e), Color::from_array(*k)))
     };
-    find(name).or_else(|| name.strip_suffix("_palik").filter(|n| !NO_PALIK.contains(n)).and_then(find))
+    let (eta, k) =
+        find(name).or_else(|| name.strip_suffix("_palik").filter(|n| !NO_PALIK.contains(n)).and_then(find))?;
+    let measured = NAMES.iter().find(|(n, _)| *n == name).map(|&(_, i)| Measured(i));
+    Some(ComplexIor { eta, k, measured })
 }
 
 /// Every name `lookup` knows, for error messages.
@@ -75,14 +147,45 @@ mod tests {
 
     #[test]
     fn gold_and_the_mirror() {
-        let (eta, k) = lookup("Au").unwrap();
-        assert_eq!(eta, Color::new(0.143036, 0.375307, 1.44205));
-        assert_eq!(k, Color::new(3.983, 2.38556, 1.60336));
-        assert_eq!(lookup("none"), Some((Color::ZERO, Color::ONE)));
-        assert_eq!(lookup("TiO2_palik"), lookup("TiO2"));
+        let gold = lookup("Au").unwrap();
+        assert_eq!(gold.eta, Color::new(0.143036, 0.375307, 1.44205));
+        assert_eq!(gold.k, Color::new(3.983, 2.38556, 1.60336));
+        assert_eq!(lookup("none"), Some(ComplexIor::rgb(Color::ZERO, Color::ONE)));
+        let rgb = |n: &str| lookup(n).map(|c| (c.eta, c.k));
+        assert_eq!(rgb("TiO2_palik"), rgb("TiO2"));
         assert!(lookup("Ag_palik").is_none() && lookup("Au_palik").is_none());
-        assert_ne!(lookup("Cu_palik"), lookup("Cu"));
+        assert_ne!(rgb("Cu_palik"), rgb("Cu"));
         assert!(lookup("gold").is_none());
         assert!(names().count() > 30);
+    }
+
+    /// Every name of the RGB table has measured spectra, and every name Mitsuba's data has is
+    /// in the RGB table (directly or through its `_palik` twin).
+    #[test]
+    fn every_named_metal_has_its_spectra() {
+        for (name, _, _) in TABLE {
+            assert!(lookup(name).unwrap().measured.is_some(), "{name}");
+        }
+        for (name, _) in NAMES {
+            assert!(lookup(name).is_some_and(|c| c.measured.is_some()), "{name}");
+        }
+    }
+
+    /// Gold's measured samples (Mitsuba's data/ior/Au.eta.spd and Au.k.spd) and the linear
+    /// interpolation between them; the end values hold outside the measured range.
+    #[test]
+    fn gold_spectra_interpolate_linearly() {
+        let gold = lookup("Au").unwrap().measured.unwrap();
+        // The file's samples at 495.9367 and 506.0579 nm.
+        let (a, b) = (gold.eval(495.936_7), gold.eval(506.057_86));
+        let (eta, k) = gold.eval((495.936_7 + 506.057_86) / 2.0);
+        assert!((eta - (a.0 + b.0) / 2.0).abs() < 1e-5 && (k - (a.1 + b.1) / 2.0).abs() < 1e-5);
+        // Gold reflects red, absorbs blue: eta falls and k rises from 450 to 650 nm.
+        let (blue, red) = (gold.eval(450.0), gold.eval(650.0));
+        assert!(blue.0 > 1.0 && red.0 < 0.3 && red.1 > 3.0 && blue.1 < 2.0, "{blue:?} {red:?}");
+        assert_eq!(gold.eval(100.0), gold.eval(200.0));
+        assert_eq!(gold.eval(1000.0), gold.eval(2000.0));
+        let wl = Wavelengths::single(650.0);
+        assert_eq!(gold.at(&wl).0, Color::splat(red.0));
     }
 }

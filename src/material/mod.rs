@@ -9,6 +9,9 @@
 pub mod bsdf;
 pub mod bxdf;
 pub mod classic;
+// Generated data: one long line per spectrum.
+#[rustfmt::skip]
+mod conductor_spectra;
 pub mod conductors;
 pub mod fresnel;
 pub mod microfacet;
@@ -25,6 +28,7 @@ use bxdf::{
     PrincipledClearcoat, PrincipledDiffuse, PrincipledSpecular, RoughCoating, RoughConductor, RoughDielectric,
     RoughPlasticDiffuse, ThinSpecular, tint_of,
 };
+use conductors::ComplexIor;
 use fresnel::fresnel_diffuse_reflectance;
 use microfacet::{Distribution, Microfacet};
 
@@ -111,10 +115,10 @@ pub enum Plain {
     Classic(Classic),
     /// Lambertian reflection (Mitsuba `diffuse`).
     Diffuse { reflectance: ColorParam },
-    /// A smooth metal with complex index eta + i k per channel (Mitsuba `conductor`).
-    Conductor { eta: Color, k: Color, specular: ColorParam },
+    /// A smooth metal with complex index eta + i k (Mitsuba `conductor`).
+    Conductor { ior: ComplexIor, specular: ColorParam },
     /// A rough metal (Mitsuba `roughconductor`).
-    RoughConductor { roughness: Roughness, eta: Color, k: Color, specular: ColorParam },
+    RoughConductor { roughness: Roughness, ior: ComplexIor, specular: ColorParam },
     /// Smooth glass of relative index `eta` = inside / outside (Mitsuba `dielectric`).
     Dielectric { eta: f32, reflectance: ColorParam, transmittance: ColorParam },
     /// Frosted glass (Mitsuba `roughdielectric`).
@@ -562,13 +566,17 @@ impl Plain {
                 return c.lobes(front);
             }
             Plain::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(at, textures) })),
-            Plain::Conductor { eta, k, specular } => {
-                lobes.add(Bxdf::Conductor(Conductor { eta, k, scale: specular.at(at, textures) }))
-            }
-            Plain::RoughConductor { roughness, eta, k, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
+            Plain::Conductor { ior, specular } => lobes.add(Bxdf::Conductor(Conductor {
+                eta: ior.eta,
+                k: ior.k,
+                measured: ior.measured,
+                scale: specular.at(at, textures),
+            })),
+            Plain::RoughConductor { roughness, ior, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
                 mf: roughness.at(at, textures),
-                eta,
-                k,
+                eta: ior.eta,
+                k: ior.k,
+                measured: ior.measured,
                 scale: specular.at(at, textures),
             })),
             Plain::Dielectric { eta, reflectance, transmittance } => lobes.add(Bxdf::Dielectric(Dielectric {

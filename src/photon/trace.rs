@@ -198,7 +198,7 @@ pub fn trace_global_into(
             if scene.has_media() {
                 ray.medium = scene.medium_at(ray.o, ray.d);
             }
-            Some((Emitted { ray, flux: e.flux }, p, rng))
+            Some((Emitted { ray, flux: e.flux, light: li as u32 }, p, rng))
         },
         scene,
         store,
@@ -261,7 +261,7 @@ pub fn trace_caustic(
                 if scene.has_media() {
                     ray.medium = scene.medium_at(ray.o, ray.d);
                 }
-                Some((Emitted { ray, flux }, p, rng))
+                Some((Emitted { ray, flux, light: li as u32 }, p, rng))
             },
             scene,
             Store::Caustic,
@@ -297,6 +297,8 @@ pub fn trace_caustic(
 struct Emitted {
     ray: Ray,
     flux: Color,
+    /// The light's index in the scene (its spectrum in spectral mode).
+    light: u32,
 }
 
 /// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order into
@@ -343,7 +345,7 @@ fn run_chunks(
                     // emission, so RGB photons are as they were.
                     let wl = (colour != PhotonColour::Rgb).then(|| Wavelengths::sample(rng.uniform()));
                     if let Some(wl) = &wl {
-                        flux = wl.illuminant(flux);
+                        flux = scene.emission_in(flux, e.light, Some(wl));
                     }
                     if flux.max_element() > 0.0 && flux.is_finite() {
                         let xyz = colour == PhotonColour::SpectralXyz;
@@ -622,7 +624,7 @@ fn emit_towards(light: &Light, targets: &[(Vec3, f32)], rng: &mut Rng32) -> Opti
         Light::Directional { .. } | Light::Environment(_) => unreachable!(),
     };
     let ray = if n == Vec3::ZERO { Ray::new(p, d) } else { Ray::spawn(p, p_error, n, d, 0.0) };
-    Some((Emitted { ray, flux: emitted / pdf_dir }, uv))
+    Some((Emitted { ray, flux: emitted / pdf_dir, light: crate::geometry::NO_LIGHT }, uv))
 }
 
 /// A photon travelling along `direction` from infinity, through a point of the disks the targets
@@ -656,7 +658,10 @@ fn towards_from_infinity(
     let pdf_area = covering as f32 / total;
     let back = (center - q).dot(-direction) + radius;
     let o = q - direction * back.max(r);
-    Some((Emitted { ray: Ray::new(o, direction), flux: irradiance / pdf_area }, Vec2::ZERO))
+    Some((
+        Emitted { ray: Ray::new(o, direction), flux: irradiance / pdf_area, light: crate::geometry::NO_LIGHT },
+        Vec2::ZERO,
+    ))
 }
 
 /// Index chosen from `weights` in proportion to them, by the uniform number `u`.

@@ -17,6 +17,7 @@ use crate::material::{Material, Materials, Param, Wrapper};
 use crate::math::{Color, Vec2, Vec3};
 use crate::medium::{Medium, MediumInterface};
 use crate::shape::{Plane, Primitive, Primitives, Shape, TRIANGLE_UV, Triangle, TriangleMesh};
+use crate::spectrum::EmissionSpectrum;
 use crate::texture::Texture;
 use std::time::Instant;
 
@@ -59,6 +60,10 @@ pub struct SceneBuilder {
     null_material: Option<u32>,
     /// The medium the camera sits in (vacuum when `None`).
     camera_medium: Option<u32>,
+    /// Emitted spectra kept as given, for spectral mode, and the lights that emit them:
+    /// (first light, end, spectrum), `usize::MAX` as the first light for the environment.
+    spectra: Vec<EmissionSpectrum>,
+    spectrum_users: Vec<(usize, usize, u32)>,
 }
 
 impl SceneBuilder {
@@ -264,6 +269,21 @@ impl SceneBuilder {
         self.lights.push(light);
     }
 
+    /// How many lights were added so far (the environment aside).
+    pub fn light_count(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Spectral mode evaluates `spectrum` for the lights added from light `first` on (the
+    /// lights of one emitter), or for the environment when `first` is `None`, instead of
+    /// lifting their colour.
+    pub fn set_emission_spectrum(&mut self, first: Option<usize>, spectrum: EmissionSpectrum) {
+        let end = self.lights.len();
+        let id = self.spectra.len() as u32;
+        self.spectra.push(spectrum);
+        self.spectrum_users.push((first.unwrap_or(usize::MAX), end, id));
+    }
+
     /// Sets the environment light (an environment map or a constant radiance); a scene has at
     /// most one, as in Mitsuba.
     pub fn set_environment(&mut self, env: Environment) -> Result<(), String> {
@@ -396,6 +416,17 @@ impl SceneBuilder {
             self.lights.push(Light::Environment(e));
             (self.lights.len() - 1) as u32
         });
+        let mut light_spectra = Vec::new();
+        if !self.spectra.is_empty() {
+            light_spectra = vec![crate::scene::NO_SPECTRUM; self.lights.len()];
+            for &(first, end, id) in &self.spectrum_users {
+                match (first, environment) {
+                    (usize::MAX, Some(env)) => light_spectra[env as usize] = id,
+                    (usize::MAX, None) => {}
+                    _ => light_spectra[first..end].iter_mut().for_each(|s| *s = id),
+                }
+            }
+        }
         for l in &mut self.lights {
             match l {
                 Light::Directional { disk: d, .. } => *d = disk,
@@ -417,6 +448,8 @@ impl SceneBuilder {
             interfaces: if self.interfaces.iter().any(Option::is_some) { self.interfaces } else { Vec::new() },
             media: self.media,
             camera_medium: self.camera_medium.unwrap_or(crate::geometry::NO_MEDIUM),
+            emission_spectra: self.spectra,
+            light_spectra,
         };
         Ok((scene, info))
     }

@@ -118,7 +118,15 @@ pub struct Scene {
     pub interfaces: Vec<Option<crate::medium::MediumInterface>>,
     /// The medium the camera sits in (`NO_MEDIUM`: vacuum).
     pub camera_medium: u32,
+    /// Emitted spectra given as spectra (spectral mode evaluates them as they are).
+    pub emission_spectra: Vec<crate::spectrum::EmissionSpectrum>,
+    /// Each light's index in `emission_spectra` (`NO_SPECTRUM`: its colour, lifted); empty when
+    /// no light has one.
+    pub light_spectra: Vec<u32>,
 }
+
+/// A light without an emitted spectrum of its own (`Scene::light_spectra`).
+pub const NO_SPECTRUM: u32 = u32::MAX;
 
 /// An object of a scene as its file gave it: the bounding sphere of its primitives and its
 /// material.
@@ -372,13 +380,14 @@ impl Scene {
     }
 
     /// Light `light`'s emitted colour `le` (radiance, or radiance over a density) in the mode
-    /// `wl` says: itself in RGB mode (`None`), its illuminant spectrum at the path's
-    /// wavelengths in spectral mode.
+    /// `wl` says: itself in RGB mode (`None`); in spectral mode the light's spectrum as the
+    /// scene gave it, or else its colour's illuminant spectrum, at the path's wavelengths.
     #[inline]
-    pub fn emission_in(&self, le: Color, wl: Option<&crate::spectrum::Wavelengths>) -> Color {
-        match wl {
-            Some(wl) => wl.illuminant(le),
-            None => le,
+    pub fn emission_in(&self, le: Color, light: u32, wl: Option<&crate::spectrum::Wavelengths>) -> Color {
+        let Some(wl) = wl else { return le };
+        match self.light_spectra.get(light as usize) {
+            Some(&s) if s != NO_SPECTRUM => self.emission_spectra[s as usize].at(le, wl),
+            _ => wl.illuminant(le),
         }
     }
 

@@ -4,7 +4,7 @@
 //! caustic follows Mitsuba so that Mitsuba scenes keep their brightness.
 
 use super::planck;
-use super::sampled::{LAMBDA_MAX, LAMBDA_MIN, SampledWavelengths, SpectrumSample};
+use super::sampled::{LAMBDA_MAX, LAMBDA_MIN};
 
 /// Wien's displacement constant b (CODATA 2018), m K: the peak of Planck's law in wavelength
 /// is at b / T.
@@ -61,11 +61,6 @@ impl Blackbody {
         }
         planck(self.kelvin as f64, lambda as f64) as f32
     }
-
-    #[inline]
-    pub fn sample(&self, wavelengths: &SampledWavelengths) -> SpectrumSample {
-        wavelengths.map(|l| self.eval(l))
-    }
 }
 
 #[cfg(test)]
@@ -94,11 +89,6 @@ mod tests {
         assert!((Blackbody::new(5000.0).unwrap().eval(500.0) / 1.2106e4 - 1.0).abs() < 1e-3);
         let narrow = Blackbody::with_range(5000.0, 400.0, 700.0).unwrap();
         assert_eq!((narrow.eval(399.0), narrow.eval(701.0)), (0.0, 0.0));
-        let wl = SampledWavelengths::sample(0.2);
-        let v = narrow.sample(&wl);
-        for i in 0..4 {
-            assert_eq!(v[i], narrow.eval(wl.lambda(i)));
-        }
     }
 
     /// The maximum over wavelength sits where Wien's displacement law puts it, for bodies

@@ -116,14 +116,8 @@ impl Dispersion {
         }
     }
 
-    /// The index at each sampled wavelength.
-    #[inline]
-    pub fn sample(&self, wavelengths: &super::SampledWavelengths) -> super::SpectrumSample {
-        wavelengths.map(|l| self.eval(l))
-    }
-
     /// Whether the index changes with wavelength: a refraction through it must keep only the
-    /// hero wavelength (`SampledWavelengths::terminate_secondary`).
+    /// hero wavelength (`Wavelengths::terminate_secondary`).
     pub fn is_dispersive(&self) -> bool {
         !matches!(self, Dispersion::Constant(_))
     }
@@ -232,11 +226,6 @@ mod tests {
         let c = Dispersion::Constant(1.5);
         assert_eq!((c.eval(400.0), c.eval(800.0), c.is_dispersive()), (1.5, 1.5, false));
         assert!(c.abbe_number().is_infinite());
-        let wl = crate::spectrum::SampledWavelengths::sample(0.5);
-        let n = d.sample(&wl);
-        for i in 0..4 {
-            assert_eq!(n[i], d.eval(wl.lambda(i)));
-        }
     }
 
     #[test]

@@ -9,14 +9,16 @@
 //! spectrum of ones is white; emitted spectra are not, so a flat emission spectrum is the
 //! slightly purple colour of an equal-energy white in sRGB.
 //!
-//! The foundations of spectral rendering (issue 31), not yet used by the integrators: `sampled`
-//! (hero-wavelength sampling, `SpectrumSample`, the Monte Carlo conversion to colour), `rgb`
-//! (RGB colours uplifted to smooth spectra, Jakob and Hanika 2019), `blackbody` and
+//! Spectral rendering (issue 31): `lanes` (`Wavelengths`, a path's three wavelengths in the
+//! lanes of `Color`, the lifts of colours and the conversion back), `sampled` (the CIE tables at
+//! any wavelength, the visible-light distribution), `rgb` (RGB colours uplifted to smooth
+//! spectra, Jakob and Hanika 2019), `emission` (emitted spectra kept as given), `blackbody` and
 //! `dispersion` (indices of refraction over wavelength, named glasses).
 
 mod blackbody;
 mod cie_tables;
 mod dispersion;
+mod emission;
 mod lanes;
 mod rgb;
 mod sampled;
@@ -25,14 +27,12 @@ mod spd;
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
 pub use cie_tables::{CIE_MAX, CIE_MIN};
 pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
+pub use emission::EmissionSpectrum;
 pub use lanes::{LANES, Wavelengths, joined};
 pub use rgb::{
     RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbToSpectrumTable, RgbUnboundedSpectrum, SigmoidPolynomial, TableError,
 };
-pub use sampled::{
-    LAMBDA_MAX, LAMBDA_MIN, N_WAVELENGTHS, SampledWavelengths, SpectrumSample, WavelengthDistribution, cie_xyz, d65,
-    visible_pdf, xyz_to_color,
-};
+pub use sampled::{LAMBDA_MAX, LAMBDA_MIN, cie_xyz, d65, visible_pdf, xyz_to_color};
 pub use spd::{SpdError, parse_spd};
 
 use crate::math::Color;

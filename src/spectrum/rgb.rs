@@ -27,7 +27,7 @@
 use std::sync::LazyLock;
 
 use super::cie_tables::{CIE_X, CIE_Y, CIE_Y_NORMALIZATION, CIE_Z, D65, XYZ_TO_SRGB};
-use super::sampled::{LAMBDA_MAX, LAMBDA_MIN, SampledWavelengths, SpectrumSample, d65};
+use super::sampled::{LAMBDA_MAX, LAMBDA_MIN, d65};
 use crate::math::Color;
 
 /// The fitted sRGB table, bytes as the script writes them.
@@ -233,11 +233,6 @@ impl SigmoidPolynomial {
         }
         m
     }
-
-    #[inline]
-    pub fn sample(&self, wavelengths: &SampledWavelengths) -> SpectrumSample {
-        wavelengths.map(|l| self.eval(l))
-    }
 }
 
 #[inline]
@@ -329,11 +324,6 @@ impl RgbAlbedoSpectrum {
     pub fn eval(&self, lambda: f32) -> f32 {
         self.polynomial.eval(lambda)
     }
-
-    #[inline]
-    pub fn sample(&self, wavelengths: &SampledWavelengths) -> SpectrumSample {
-        self.polynomial.sample(wavelengths)
-    }
 }
 
 /// A colour whose channels may exceed 1 (a conductor's eta, a scaled albedo): the spectrum of
@@ -369,11 +359,6 @@ impl RgbUnboundedSpectrum {
     pub fn eval(&self, lambda: f32) -> f32 {
         self.scale * self.polynomial.eval(lambda)
     }
-
-    #[inline]
-    pub fn sample(&self, wavelengths: &SampledWavelengths) -> SpectrumSample {
-        self.polynomial.sample(wavelengths) * self.scale
-    }
 }
 
 /// An emitted colour: the unbounded spectrum of the colour times D65 (as `cie_tables.rs` scales
@@ -395,11 +380,6 @@ impl RgbIlluminantSpectrum {
     #[inline]
     pub fn eval(&self, lambda: f32) -> f32 {
         self.unbounded.eval(lambda) * d65(lambda)
-    }
-
-    #[inline]
-    pub fn sample(&self, wavelengths: &SampledWavelengths) -> SpectrumSample {
-        self.unbounded.sample(wavelengths) * wavelengths.map(d65)
     }
 }
 

@@ -367,7 +367,7 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
         return Color::ZERO;
     }
     let cos = ds.wi.dot(x.bsdf.normal()).abs();
-    let radiance = scene.emission_in(ds.radiance, ctx.wl.as_ref());
+    let radiance = scene.emission_in(ds.radiance, li as u32, ctx.wl.as_ref());
     let contribution = x.beta * f * radiance * (cos / (ds.pdf * pick_d));
     if contribution == Color::ZERO {
         return Color::ZERO;

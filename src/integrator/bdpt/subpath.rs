@@ -47,8 +47,8 @@ pub fn trace_light_path<'a>(
     let Some(e) = light.sample_le(rng.uniform2(), rng.uniform2(), scene.textures()) else { return };
     let mut beta = e.flux / pick_e;
     let mut wl = ctx.wl;
-    if let Some(wl) = &wl {
-        beta = wl.illuminant(beta);
+    if wl.is_some() {
+        beta = scene.emission_in(beta, li as u32, wl.as_ref());
     }
     if !(beta.max_element() > 0.0) || !beta.is_finite() {
         return;
@@ -174,7 +174,7 @@ pub fn trace_camera_path<'a>(
         stats.rays += 1;
         let Some(hit) = scene.intersect(&ray, f32::INFINITY) else {
             if let Some(env) = scene.environment {
-                let le = scene.emission_in(scene.lights[env as usize].environment_radiance(ray.d), wl.as_ref());
+                let le = scene.emission_in(scene.lights[env as usize].environment_radiance(ray.d), env, wl.as_ref());
                 if le != Color::ZERO {
                     let w = if depth == 0 {
                         1.0
@@ -194,7 +194,7 @@ pub fn trace_camera_path<'a>(
         let arrived = mis.arrive((!parallel_ray).then_some(dist2 as f64), wo.dot(hit.ng) as f64);
         depth += 1;
         if hit.is_emitter() && hit.is_front(ray.d) {
-            let le = scene.emission_in(scene.emitted(&hit, wo), wl.as_ref());
+            let le = scene.emission_in(scene.emitted(&hit, wo), hit.light, wl.as_ref());
             if le != Color::ZERO {
                 // A camera that sees an emitter directly is the only technique for that path.
                 let w = if depth == 1 {

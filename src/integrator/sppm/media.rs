@@ -201,7 +201,7 @@ impl Sppm {
                 if let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) {
                     let direct = light_sample_at(
                         scene,
-                        &scene.lights[li],
+                        li,
                         p_pick,
                         hit.p,
                         u,

@@ -45,7 +45,7 @@ fn chi2_bsdf(name: &str, b: &Bsdf, wo: Vec3, mode: Transport) {
 }
 
 fn rough_conductors() -> Vec<(String, Bxdf)> {
-    let (eta, k) = crate::material::conductors::lookup("Cu").unwrap();
+    let crate::material::conductors::ComplexIor { eta, k, .. } = crate::material::conductors::lookup("Cu").unwrap();
     let mut out = Vec::new();
     for (d, au, av) in
         [(Distribution::Ggx, 0.3, 0.3), (Distribution::Beckmann, 0.1, 0.4), (Distribution::Ggx, 0.05, 0.6)]
@@ -53,7 +53,7 @@ fn rough_conductors() -> Vec<(String, Bxdf)> {
         let mf = Microfacet::new(d, au, av);
         out.push((
             format!("rough conductor {d:?} {au}/{av}"),
-            Bxdf::RoughConductor(RoughConductor { mf, eta, k, scale: Color::ONE }),
+            Bxdf::RoughConductor(RoughConductor { mf, eta, k, measured: None, scale: Color::ONE }),
         ));
     }
     out
@@ -103,11 +103,12 @@ fn plastics_blends_and_masks_sample_their_density() {
         Bxdf::FresnelMirror(FresnelMirror { eta: PLASTIC_ETA, scale: Color::ONE }),
         Bxdf::PlasticDiffuse(PlasticDiffuse { d: Color::new(0.2, 0.5, 0.8), eta: PLASTIC_ETA, d_mean: 0.5 }),
     ];
-    let (eta, k) = crate::material::conductors::lookup("Au").unwrap();
+    let crate::material::conductors::ComplexIor { eta, k, .. } = crate::material::conductors::lookup("Au").unwrap();
     let gold = Bxdf::RoughConductor(RoughConductor {
         mf: Microfacet::new(Distribution::Ggx, 0.15, 0.15),
         eta,
         k,
+        measured: None,
         scale: Color::ONE,
     });
     for wo in wos() {
@@ -177,6 +178,7 @@ fn energy_is_conserved() {
                 mf: Microfacet::new(d, alpha, alpha),
                 eta: Color::ZERO,
                 k: Color::ONE,
+                measured: None,
                 scale: Color::ONE,
             });
             for wo in wos() {
@@ -226,8 +228,8 @@ fn energy_is_conserved() {
         assert!(a.max_element() <= 1.0 + 3e-3, "rough plastic at {wo}: albedo {a}");
     }
     // A smooth conductor reflects F, a dielectric with scales reflects and transmits them.
-    let (eta, k) = crate::material::conductors::lookup("Au").unwrap();
-    let gold = bsdf_of(&[Bxdf::Conductor(Conductor { eta, k, scale: Color::ONE })], Vec3::Z);
+    let crate::material::conductors::ComplexIor { eta, k, .. } = crate::material::conductors::lookup("Au").unwrap();
+    let gold = bsdf_of(&[Bxdf::Conductor(Conductor { eta, k, measured: None, scale: Color::ONE })], Vec3::Z);
     let s = gold.sample(Vec3::Z, 0.5, crate::math::Vec2::splat(0.5), Transport::Radiance).unwrap();
     assert!(s.weight.abs_diff_eq(Color::new(0.96668, 0.80201, 0.32412), 2e-4), "{}", s.weight);
     let tinted = Dielectric { eta: 1.5, r: Color::new(1.0, 0.5, 0.0), t: Color::new(0.0, 0.5, 1.0) };

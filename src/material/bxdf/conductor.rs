@@ -2,6 +2,7 @@
 //! It reflects only on the side the normal faces.
 
 use super::{BxdfSample, Lobe, LobeFlags, Transport, colour_weight, reflect_local};
+use crate::material::conductors::Measured;
 use crate::material::fresnel::fresnel_conductor_rgb;
 use crate::math::{Color, Vec2, Vec3};
 
@@ -11,6 +12,9 @@ use crate::math::{Color, Vec2, Vec3};
 pub struct Conductor {
     pub eta: Color,
     pub k: Color,
+    /// A named metal's measured spectra, which spectral mode evaluates instead of lifting
+    /// `eta` and `k`.
+    pub measured: Option<Measured>,
     pub scale: Color,
 }
 
@@ -25,7 +29,11 @@ impl Conductor {
 impl Lobe for Conductor {
     #[inline]
     fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
-        Conductor { eta: wl.unbounded(self.eta), k: wl.unbounded(self.k), scale: wl.reflectance(self.scale) }
+        let (eta, k) = match self.measured {
+            Some(m) => m.at(wl),
+            None => (wl.unbounded(self.eta), wl.unbounded(self.k)),
+        };
+        Conductor { eta, k, measured: None, scale: wl.reflectance(self.scale) }
     }
 
     #[inline]

@@ -4,6 +4,7 @@
 //! normal faces.
 
 use super::{BxdfSample, Lobe, LobeFlags, Transport, colour_weight, reflect_about};
+use crate::material::conductors::Measured;
 use crate::material::fresnel::fresnel_conductor_rgb;
 use crate::material::microfacet::Microfacet;
 use crate::math::{Color, Vec2, Vec3};
@@ -13,6 +14,9 @@ pub struct RoughConductor {
     pub mf: Microfacet,
     pub eta: Color,
     pub k: Color,
+    /// A named metal's measured spectra, which spectral mode evaluates instead of lifting
+    /// `eta` and `k`.
+    pub measured: Option<Measured>,
     pub scale: Color,
 }
 
@@ -27,12 +31,11 @@ impl RoughConductor {
 impl Lobe for RoughConductor {
     #[inline]
     fn lifted(self, wl: &crate::spectrum::Wavelengths, _eta_ratio: f32) -> Self {
-        RoughConductor {
-            eta: wl.unbounded(self.eta),
-            k: wl.unbounded(self.k),
-            scale: wl.reflectance(self.scale),
-            ..self
-        }
+        let (eta, k) = match self.measured {
+            Some(m) => m.at(wl),
+            None => (wl.unbounded(self.eta), wl.unbounded(self.k)),
+        };
+        RoughConductor { eta, k, measured: None, scale: wl.reflectance(self.scale), ..self }
     }
 
     #[inline]

@@ -7,6 +7,7 @@ use super::Build;
 use super::plugins::PluginKind;
 use super::props::{Cx, Props};
 use super::xml::El;
+use crate::material::conductors::ComplexIor;
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{Classic, ClassicKind, Material, Param, Plain, Roughness, Wrapper, conductors};
 use crate::math::Color;
@@ -100,13 +101,13 @@ impl<'a> Cx<'a> {
                 one(Plain::Diffuse { reflectance })
             }
             "conductor" | "roughconductor" => {
-                let (eta, k) = self.complex_ior(&p)?;
+                let ior = self.complex_ior(&p)?;
                 let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
                 if p.kind == "conductor" {
-                    one(Plain::Conductor { eta, k, specular })
+                    one(Plain::Conductor { ior, specular })
                 } else {
                     let roughness = self.roughness(&p, b, true)?;
-                    one(Plain::RoughConductor { roughness, eta, k, specular })
+                    one(Plain::RoughConductor { roughness, ior, specular })
                 }
             }
             "dielectric" | "roughdielectric" => {
@@ -380,7 +381,7 @@ impl<'a> Cx<'a> {
 
     /// A conductor's complex index: a named `material` (default `none`: a perfect mirror), or
     /// `eta` and `k` (0 and 1 when missing, as Mitsuba).
-    fn complex_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color), SceneError> {
+    fn complex_ior(&mut self, p: &Props<'a>) -> Result<ComplexIor, SceneError> {
         let material = self.string(p, "material")?;
         let eta = self.color_for(p, "eta", crate::spectrum::SpectrumUse::Unbounded)?;
         let k = self.color_for(p, "k", crate::spectrum::SpectrumUse::Unbounded)?;
@@ -394,7 +395,7 @@ impl<'a> Cx<'a> {
                     self.err(at, format!("unknown conductor `{name}`; expected one of: {}", names.join(", ")))
                 })
             }
-            None => Ok((eta.unwrap_or(Color::ZERO), k.unwrap_or(Color::ONE))),
+            None => Ok(ComplexIor::rgb(eta.unwrap_or(Color::ZERO), k.unwrap_or(Color::ONE))),
         }
     }
 

@@ -27,9 +27,12 @@ impl<'a> Cx<'a> {
     /// Reads a top-level emitter.
     pub(super) fn emitter(&mut self, el: &'a El, b: &mut Build) -> Result<(), SceneError> {
         let p = self.props(el)?;
+        // The light this emitter adds (for its spectrum).
+        let first = b.geometry.light_count();
         match p.kind.as_str() {
             "point" => {
-                let intensity = self.color_for(&p, "intensity", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
+                let (intensity, spectrum) = self.emission_color(&p, "intensity")?;
+                let intensity = intensity.unwrap_or(Color::ONE);
                 let position = match (self.point(&p, "position")?, self.transform(&p, "to_world")?) {
                     (Some(_), Some(_)) => return Err(self.err(el, "give either `position` or `to_world`, not both")),
                     (Some(pos), None) => pos,
@@ -37,9 +40,11 @@ impl<'a> Cx<'a> {
                     (None, None) => Vec3::ZERO,
                 };
                 b.geometry.add_light(Light::Point { position, intensity });
+                self.keep_spectrum(b, Some(first), spectrum, intensity);
             }
             "spot" => {
-                let intensity = self.color_for(&p, "intensity", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
+                let (intensity, spectrum) = self.emission_color(&p, "intensity")?;
+                let intensity = intensity.unwrap_or(Color::ONE);
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
                 let cutoff = self.float(&p, "cutoff_angle")?.unwrap_or(20.0);
                 let beam = self.float(&p, "beam_width")?.unwrap_or(cutoff * 0.75);
@@ -59,6 +64,7 @@ impl<'a> Cx<'a> {
                     beam,
                     texture,
                 )));
+                self.keep_spectrum(b, Some(first), spectrum, intensity);
             }
             "projector" => {
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
@@ -119,7 +125,8 @@ impl<'a> Cx<'a> {
                 }));
             }
             "directional" => {
-                let irradiance = self.color_for(&p, "irradiance", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
+                let (irradiance, spectrum) = self.emission_color(&p, "irradiance")?;
+                let irradiance = irradiance.unwrap_or(Color::ONE);
                 let direction = match (self.point(&p, "direction")?, self.transform(&p, "to_world")?) {
                     (Some(_), Some(_)) => return Err(self.err(el, "give either `direction` or `to_world`, not both")),
                     (Some(d), None) => d,
@@ -131,10 +138,13 @@ impl<'a> Cx<'a> {
                     return Err(self.err(el, "directional light needs a non-zero direction"));
                 }
                 b.geometry.add_light(Light::Directional { direction, irradiance, disk: PhotonDisk::default() });
+                self.keep_spectrum(b, Some(first), spectrum, irradiance);
             }
             "constant" => {
-                let radiance = self.color_for(&p, "radiance", SpectrumUse::Emission)?.unwrap_or(Color::ONE);
+                let (radiance, spectrum) = self.emission_color(&p, "radiance")?;
+                let radiance = radiance.unwrap_or(Color::ONE);
                 b.geometry.set_environment(Environment::constant(radiance)).map_err(|e| self.err(el, e))?;
+                self.keep_spectrum(b, None, spectrum, radiance);
             }
             "envmap" => {
                 if self.prop(&p, "bitmap").is_some() {
@@ -171,6 +181,20 @@ impl<'a> Cx<'a> {
 
     /// The orthonormal frame of a light's `to_world`: z the direction it shines, x and y its
     /// image axes (Mitsuba's local frame, rotation only).
+    /// Keeps an emitter's spectrum, given as a spectrum, for the lights it added from `first`
+    /// on (the environment when `None`), whose emitted colour is `color` in RGB mode.
+    pub(super) fn keep_spectrum(
+        &self,
+        b: &mut Build,
+        first: Option<usize>,
+        spectrum: Option<crate::spectrum::SampledSpectrum>,
+        color: Color,
+    ) {
+        if let Some(s) = spectrum.and_then(|s| crate::spectrum::EmissionSpectrum::new(&s, color)) {
+            b.geometry.set_emission_spectrum(first, s);
+        }
+    }
+
     fn light_frame(&self, el: &'a El, x: &Transform) -> Result<Frame, SceneError> {
         let z = x.vector(Vec3::Z).normalize_or_zero();
         if z == Vec3::ZERO {

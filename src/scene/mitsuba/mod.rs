@@ -85,6 +85,7 @@ pub fn load_mitsuba_text(
         strict: options.strict,
         aovs: Default::default(),
         files,
+        given_spectrum: None,
     };
     for (k, v) in &options.defines {
         cx.defines.insert(k.clone(), v.clone());

@@ -70,6 +70,9 @@ pub(super) struct Cx<'a> {
     pub files: &'a crate::scene::FileBudget,
     /// The AOVs an `aov` integrator asks for.
     pub aovs: crate::film::aov::AovList,
+    /// The last emitted spectrum read as a spectrum (not an RGB colour), which the emitter
+    /// reading it takes (`emission_color`) for spectral mode.
+    pub given_spectrum: Option<crate::spectrum::SampledSpectrum>,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).

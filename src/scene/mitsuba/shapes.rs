@@ -27,6 +27,9 @@ impl<'a> Cx<'a> {
         // A nested area emitter.
         let emitters = self.object(&p, None, "emitter");
         let mut radiance = None;
+        // The emitter's radiance given as a spectrum (for spectral mode).
+        let mut spectrum = None;
+        let first_light = b.geometry.light_count();
         for &(eel, at) in &emitters {
             let ep = self.props(eel)?;
             if ep.kind != "area" {
@@ -43,20 +46,19 @@ impl<'a> Cx<'a> {
                     "emitters inside a shapegroup are not supported (Mitsuba refuses them too: instancing of emitters)",
                 ));
             }
-            radiance =
-                Some(match self.color_param_for(&ep, "radiance", b, crate::spectrum::SpectrumUse::Emission)? {
-                    None => (Color::ONE, None),
-                    Some(crate::material::Param::Const(c)) => (c, None),
-                    Some(crate::material::Param::Texture(t)) => {
-                        if let crate::texture::Texture::MeshAttribute { name, .. } = &b.geometry.textures()[t as usize]
-                        {
-                            return Err(
-                                self.err(at, format!("mesh attribute `{name}` cannot be emitted radiance here"))
-                            );
-                        }
-                        (Color::ONE, Some(t))
+            self.given_spectrum = None;
+            let param = self.color_param_for(&ep, "radiance", b, crate::spectrum::SpectrumUse::Emission)?;
+            spectrum = self.given_spectrum.take();
+            radiance = Some(match param {
+                None => (Color::ONE, None),
+                Some(crate::material::Param::Const(c)) => (c, None),
+                Some(crate::material::Param::Texture(t)) => {
+                    if let crate::texture::Texture::MeshAttribute { name, .. } = &b.geometry.textures()[t as usize] {
+                        return Err(self.err(at, format!("mesh attribute `{name}` cannot be emitted radiance here")));
                     }
-                });
+                    (Color::ONE, Some(t))
+                }
+            });
             self.finish(&ep)?;
         }
         // Material: a nested or referenced <bsdf>, or Mitsuba's default. A `null` BSDF is an
@@ -298,6 +300,7 @@ impl<'a> Cx<'a> {
                 if let Some(mesh) = &emitting_mesh {
                     b.geometry.add_mesh_area_lights(mesh, radiance, texture, None);
                 }
+                self.keep_spectrum(b, Some(first_light), spectrum, radiance);
             }
             return self.finish(&p);
         };
@@ -346,6 +349,7 @@ impl<'a> Cx<'a> {
             if let Some(mesh) = &emitting_mesh {
                 b.geometry.add_mesh_area_lights(mesh, radiance, texture, reflects.then_some(m));
             }
+            self.keep_spectrum(b, Some(first_light), spectrum, radiance);
             return self.finish(&p);
         }
         if let Some((mesh, mesh_name)) = mesh_out {

@@ -11,8 +11,31 @@ use crate::spectrum::{CIE_MAX, CIE_MIN, SampledSpectrum, SpectrumUse, equal_ener
 use std::ops::Range;
 
 impl<'a> Cx<'a> {
-    /// The colour of a `<spectrum>` element for property `name`.
+    /// The colour of a `<spectrum>` element for property `name`. An emitted spectrum given
+    /// as a spectrum (a constant, a list, a file, `uniform`, `regular`, `irregular`,
+    /// `blackbody`: all but `srgb` and `d65`) is also kept in `given_spectrum`.
     pub(super) fn spectrum_color(&mut self, el: &'a El, name: &str, usage: SpectrumUse) -> Result<Color, SceneError> {
+        self.given_spectrum = None;
+        let color = self.spectrum_color_of(el, name, usage)?;
+        if usage != SpectrumUse::Emission {
+            self.given_spectrum = None;
+        }
+        Ok(color)
+    }
+
+    /// The colour of an emitter's property `name` and, when it was given as a spectrum, that
+    /// spectrum (for spectral mode).
+    pub(super) fn emission_color(
+        &mut self,
+        p: &super::props::Props<'a>,
+        name: &str,
+    ) -> Result<(Option<Color>, Option<SampledSpectrum>), SceneError> {
+        self.given_spectrum = None;
+        let color = self.color_for(p, name, SpectrumUse::Emission)?;
+        Ok((color, self.given_spectrum.take()))
+    }
+
+    fn spectrum_color_of(&mut self, el: &'a El, name: &str, usage: SpectrumUse) -> Result<Color, SceneError> {
         if self.attr(el, "type")?.is_some() {
             return self.spectrum_plugin(el, usage);
         }
@@ -40,6 +63,7 @@ impl<'a> Cx<'a> {
             && !one.contains(':')
         {
             let x = self.parse_f32(el, one, span)?;
+            self.given_spectrum = Some(flat(x));
             // A flat emission spectrum is an equal-energy white, which sRGB shows slightly
             // purple; a flat reflectance is grey.
             return Ok(match usage {
@@ -90,12 +114,18 @@ impl<'a> Cx<'a> {
     fn spectrum_plugin(&mut self, el: &'a El, usage: SpectrumUse) -> Result<Color, SceneError> {
         let p = self.props(el)?;
         let color = match p.kind.as_str() {
-            "uniform" => Color::splat(self.float(&p, "value")?.unwrap_or(1.0)),
+            "uniform" => {
+                let x = self.float(&p, "value")?.unwrap_or(1.0);
+                self.given_spectrum = Some(flat(x));
+                Color::splat(x)
+            }
             "srgb" | "d65" => {
                 let c = match self.prop(&p, "color") {
                     Some(c) => self.color_of_for(c, "color", SpectrumUse::Unbounded)?,
                     None => Color::ONE,
                 };
+                // An RGB colour: spectral mode lifts it (times D65 on an emitter, as Mitsuba).
+                self.given_spectrum = None;
                 c * self.float(&p, "scale")?.unwrap_or(1.0)
             }
             "regular" => {
@@ -145,6 +175,7 @@ impl<'a> Cx<'a> {
 
     /// The spectrum's colour, with Mitsuba's warning when it is out of gamut and clamped.
     fn spectrum_to_color(&mut self, el: &El, s: &SampledSpectrum, usage: SpectrumUse) -> Result<Color, SceneError> {
+        self.given_spectrum = Some(s.clone());
         let (c, clamped) = s.to_srgb(usage);
         if !c.is_finite() {
             return Err(self.err(el, format!("the spectrum's values are too large for a colour (it gives {c})")));
@@ -155,4 +186,9 @@ impl<'a> Cx<'a> {
         }
         Ok(c)
     }
+}
+
+/// A constant spectrum over the visible range (where spectral mode samples wavelengths).
+fn flat(x: f32) -> SampledSpectrum {
+    SampledSpectrum::new(vec![CIE_MIN, CIE_MAX], vec![x as f64; 2]).expect("two increasing wavelengths")
 }

@@ -4,6 +4,7 @@
 
 use super::Cx;
 use super::schema::{self, DispersionFormula, DispersionSpec, MaterialDesc, TextureDesc};
+use crate::material::conductors::ComplexIor;
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{
     Classic, ClassicKind, ColorParam, FloatParam, Material, Param, Plain, Principled, PrincipledThin, Roughness,
@@ -306,7 +307,7 @@ impl<'a> Cx<'a> {
                 Material { dispersion, ..c.into() }
             }
             "conductor" | "roughconductor" => {
-                let (eta, k) = match (&d.metal, d.eta, d.k) {
+                let ior = match (&d.metal, d.eta, d.k) {
                     (Some(m), None, None) => conductors::lookup(m.get_ref()).ok_or_else(|| {
                         let names: Vec<&str> = conductors::names().collect();
                         self.at(
@@ -315,13 +316,13 @@ impl<'a> Cx<'a> {
                         )
                     })?,
                     (Some(m), _, _) => return Err(self.at(m.span(), "give either `metal` or `eta` and `k`, not both")),
-                    (None, eta, k) => (eta.map_or(Color::ZERO, |c| c.0), k.map_or(Color::ONE, |c| c.0)),
+                    (None, eta, k) => ComplexIor::rgb(eta.map_or(Color::ZERO, |c| c.0), k.map_or(Color::ONE, |c| c.0)),
                 };
                 let specular = self.color_param(&d.specular, Color::ONE, textures)?;
                 if p.kind == "conductor" {
-                    with_sides(Plain::Conductor { eta, k, specular })
+                    with_sides(Plain::Conductor { ior, specular })
                 } else {
-                    with_sides(Plain::RoughConductor { roughness: self.roughness(p, textures)?, eta, k, specular })
+                    with_sides(Plain::RoughConductor { roughness: self.roughness(p, textures)?, ior, specular })
                 }
             }
             "roughdielectric" => {

@@ -2,6 +2,8 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg32;
 
 use super::*;
+use crate::spectrum::Wavelengths;
+use crate::spectrum::cie_tables::CIE_Y_NORMALIZATION;
 
 /// Largest relative deviation of a colour's chromaticity (each channel over the sum) from
 /// that of white, (1/3, 1/3, 1/3).
@@ -11,22 +13,54 @@ fn chromaticity_error(c: Color) -> f64 {
     [r, g, b].iter().map(|v| (v / sum * 3.0 - 1.0).abs()).fold(0.0, f64::max)
 }
 
+/// Where a path's three wavelengths come from: spectral mode's visible-light distribution, or
+/// uniform over 360-830 nm (for the comparison), both hero-rotated by thirds.
+#[derive(Clone, Copy, Debug)]
+enum Distribution {
+    Visible,
+    Uniform,
+}
+
+/// One path's sRGB estimate of `spectrum` at wavelengths from `u`, keeping only the hero when
+/// `terminate`.
+fn one_path(u: f32, distribution: Distribution, spectrum: &dyn Fn(f32) -> f32, terminate: bool) -> Color {
+    match distribution {
+        Distribution::Visible => {
+            let mut wl = Wavelengths::sample(u);
+            let mut v = wl.map(spectrum);
+            if terminate {
+                v *= wl.terminate_secondary().unwrap();
+            }
+            wl.to_srgb(v)
+        }
+        Distribution::Uniform => {
+            let range = LAMBDA_MAX - LAMBDA_MIN;
+            let mut xyz = [0.0f32; 3];
+            let lanes = if terminate { 1 } else { 3 };
+            for i in 0..lanes {
+                let l = LAMBDA_MIN + ((u + i as f32 / 3.0) % 1.0) * range;
+                let bar = cie_xyz(l);
+                for k in 0..3 {
+                    xyz[k] += spectrum(l) * range * bar[k] * CIE_Y_NORMALIZATION as f32 / lanes as f32;
+                }
+            }
+            xyz_to_color(xyz)
+        }
+    }
+}
+
 /// Mean and standard deviation per channel of one path's estimate of `spectrum`'s colour over
 /// `n` random wavelength samples.
 fn estimate(
     n: usize,
-    distribution: WavelengthDistribution,
-    spectrum: impl Fn(&SampledWavelengths) -> SpectrumSample,
+    distribution: Distribution,
+    spectrum: &dyn Fn(f32) -> f32,
     terminate: bool,
 ) -> ([f64; 3], [f64; 3]) {
     let mut rng = Pcg32::seed_from_u64(7);
     let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
     for _ in 0..n {
-        let mut wl = SampledWavelengths::sample_from(rng.random::<f32>(), distribution);
-        if terminate {
-            wl.terminate_secondary();
-        }
-        let c = spectrum(&wl).to_srgb(&wl).to_array();
+        let c = one_path(rng.random::<f32>(), distribution, spectrum, terminate).to_array();
         for k in 0..3 {
             sum[k] += c[k] as f64;
             sum2[k] += (c[k] as f64).powi(2);
@@ -37,32 +71,8 @@ fn estimate(
     (mean, sd)
 }
 
-fn d65_light(wl: &SampledWavelengths) -> SpectrumSample {
-    wl.map(d65)
-}
-
-#[test]
-fn arithmetic_is_per_wavelength() {
-    let a = SpectrumSample::new(1.0, 2.0, 3.0, 4.0);
-    let b = SpectrumSample::splat(2.0);
-    assert_eq!((a + b).to_array(), [3.0, 4.0, 5.0, 6.0]);
-    assert_eq!((a - b).to_array(), [-1.0, 0.0, 1.0, 2.0]);
-    assert_eq!((a * b).to_array(), [2.0, 4.0, 6.0, 8.0]);
-    assert_eq!((a / 2.0).to_array(), [0.5, 1.0, 1.5, 2.0]);
-    assert_eq!((2.0 * a)[3], 8.0);
-    let mut c = a;
-    c *= a;
-    c += 1.0;
-    assert_eq!(c.to_array(), [2.0, 5.0, 10.0, 17.0]);
-    assert_eq!(a.average(), 2.5);
-    assert_eq!((a.max_element(), a.min_element()), (4.0, 1.0));
-    assert_eq!(a.safe_div(SpectrumSample::new(2.0, 0.0, 1.0, 0.0)).to_array(), [0.5, 0.0, 3.0, 0.0]);
-    assert!(SpectrumSample::ZERO.is_black() && !a.is_black());
-    assert_eq!(std::mem::size_of::<SpectrumSample>(), 16);
-}
-
 /// The hard-coded tanh values are those of the distribution's ends, its pdf integrates to 1,
-/// and sampling is its inverse CDF: CDF(lambda(u)) = u, and the pdf is the CDF's slope.
+/// and spectral mode's sampling is its inverse CDF: CDF(lambda(u)) = u.
 #[test]
 fn visible_distribution_is_normalised_and_inverted() {
     let (a, mu) = (VISIBLE_A as f64, VISIBLE_MU as f64);
@@ -73,32 +83,19 @@ fn visible_distribution_is_normalised_and_inverted() {
     let cdf = |l: f64| ((a * (l - mu)).tanh() - TANH_LO as f64) / (TANH_HI - TANH_LO) as f64;
     for i in 0..=100 {
         let u = (i as f32 / 100.0).min(0.999_999);
-        let wl = SampledWavelengths::sample_from(u, WavelengthDistribution::Visible);
-        let l = wl.lambda(0) as f64;
+        let l = Wavelengths::sample(u).hero() as f64;
         assert!((cdf(l) - u as f64).abs() < 2e-5, "u {u}: cdf {}", cdf(l));
-        let slope = (cdf(l + 0.01) - cdf(l - 0.01)) / 0.02;
-        assert!((slope / wl.pdf()[0] as f64 - 1.0).abs() < 1e-3 || !(360.02..829.98).contains(&l));
     }
 }
 
+/// The other two wavelengths are the hero's number rotated by a third, wrapping around.
 #[test]
 fn secondary_wavelengths_are_the_hero_rotated() {
-    let wl = SampledWavelengths::sample_from(0.1, WavelengthDistribution::Uniform);
-    let step = (LAMBDA_MAX - LAMBDA_MIN) / 4.0;
-    let want = [0.1, 0.35, 0.6, 0.85].map(|u| LAMBDA_MIN + u * (LAMBDA_MAX - LAMBDA_MIN));
-    for (i, want) in want.iter().enumerate() {
-        assert!((wl.lambda(i) - want).abs() < 1e-3);
-    }
-    let wl = SampledWavelengths::sample_from(0.9, WavelengthDistribution::Uniform);
-    assert!((wl.lambda(1) - (LAMBDA_MIN + 0.15 * (LAMBDA_MAX - LAMBDA_MIN))).abs() < 1e-3, "wraps: {wl:?}");
-    assert!((wl.lambda(2) - wl.lambda(1) - step).abs() < 1e-3);
-    // Visible: the same rotation in the distribution's CDF.
-    let wl = SampledWavelengths::sample_from(0.6, WavelengthDistribution::Visible);
-    let other = SampledWavelengths::sample_from(0.85, WavelengthDistribution::Visible);
-    assert_eq!(wl.lambda(1), other.lambda(0));
-    for i in 0..4 {
-        assert_eq!(wl.pdf()[i], visible_pdf(wl.lambda(i)));
-    }
+    let wl = Wavelengths::sample(0.1);
+    assert_eq!(wl.lambda(1), Wavelengths::sample(0.1 + 1.0 / 3.0).hero());
+    let wl = Wavelengths::sample(0.9);
+    let wrapped = Wavelengths::sample(0.9 + 1.0 / 3.0 - 1.0).hero();
+    assert!((wl.lambda(1) - wrapped).abs() < 1e-3, "wraps: {wl:?}");
 }
 
 /// Issue 31's furnace criterion at the spectral level: the colour of D65 (an RGB white light,
@@ -107,8 +104,8 @@ fn secondary_wavelengths_are_the_hero_rotated() {
 /// distribution.
 #[test]
 fn white_light_converges_to_white() {
-    for distribution in [WavelengthDistribution::Visible, WavelengthDistribution::Uniform] {
-        let (mean, _) = estimate(200_000, distribution, d65_light, false);
+    for distribution in [Distribution::Visible, Distribution::Uniform] {
+        let (mean, _) = estimate(200_000, distribution, &d65, false);
         let c = Color::new(mean[0] as f32, mean[1] as f32, mean[2] as f32);
         let err = chromaticity_error(c);
         assert!(err < 0.005, "{distribution:?}: {c} chromaticity error {err}");
@@ -120,32 +117,24 @@ fn white_light_converges_to_white() {
 /// spectrum that varies with wavelength; it is noisier, as it should be.
 #[test]
 fn terminating_secondary_wavelengths_stays_unbiased() {
-    let ramp = |wl: &SampledWavelengths| wl.map(|l| d65(l) * (l - 300.0) / 300.0);
-    let (all, sd_all) = estimate(400_000, WavelengthDistribution::Visible, ramp, false);
-    let (hero, sd_hero) = estimate(400_000, WavelengthDistribution::Visible, ramp, true);
+    let ramp = |l: f32| d65(l) * (l - 300.0) / 300.0;
+    let (all, sd_all) = estimate(400_000, Distribution::Visible, &ramp, false);
+    let (hero, sd_hero) = estimate(400_000, Distribution::Visible, &ramp, true);
     for k in 0..3 {
         let tolerance = 4.0 * (sd_all[k].powi(2) + sd_hero[k].powi(2)).sqrt() / 400_000f64.sqrt();
         assert!((all[k] - hero[k]).abs() < tolerance, "channel {k}: {all:?} vs {hero:?}");
         assert!(sd_hero[k] > sd_all[k]);
     }
-    let mut wl = SampledWavelengths::sample(0.3);
-    let hero_pdf = wl.pdf()[0];
-    wl.terminate_secondary();
-    assert!(wl.secondary_terminated());
-    wl.terminate_secondary();
-    assert_eq!(wl.pdf().to_array(), [hero_pdf / 4.0, 0.0, 0.0, 0.0]);
 }
 
-/// The measurement behind the default distribution: the per-path standard deviation of a white
+/// The measurement behind the distribution: the per-path standard deviation of a white
 /// furnace's colour (D65 light), and of a grey-green reflectance under it, with each.
 #[test]
 fn visible_sampling_is_less_noisy_than_uniform() {
-    let tinted = |wl: &SampledWavelengths| wl.map(|l| d65(l) * (0.3 + 0.5 * (-((l - 530.0) / 60.0).powi(2)).exp()));
-    for (name, spectrum) in
-        [("white", &d65_light as &dyn Fn(&SampledWavelengths) -> SpectrumSample), ("tinted", &tinted)]
-    {
-        let (_, visible) = estimate(100_000, WavelengthDistribution::Visible, spectrum, false);
-        let (_, uniform) = estimate(100_000, WavelengthDistribution::Uniform, spectrum, false);
+    let tinted = |l: f32| d65(l) * (0.3 + 0.5 * (-((l - 530.0) / 60.0).powi(2)).exp());
+    for (name, spectrum) in [("white", &d65 as &dyn Fn(f32) -> f32), ("tinted", &tinted)] {
+        let (_, visible) = estimate(100_000, Distribution::Visible, spectrum, false);
+        let (_, uniform) = estimate(100_000, Distribution::Uniform, spectrum, false);
         eprintln!("{name}: per-path sRGB standard deviation, visible {visible:.3?}, uniform {uniform:.3?}");
         for k in 0..3 {
             assert!(visible[k] < 0.85 * uniform[k], "{name} channel {k}: {visible:?} vs {uniform:?}");
