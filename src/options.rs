@@ -62,9 +62,8 @@ impl IntegratorKind {
     /// (`SceneDescription::build`).
     pub fn renders_spectrally(self) -> bool {
         match self {
-            IntegratorKind::Path | IntegratorKind::Photon | IntegratorKind::Sppm => true,
+            IntegratorKind::Path | IntegratorKind::Volpath | IntegratorKind::Photon | IntegratorKind::Sppm => true,
             IntegratorKind::Whitted
-            | IntegratorKind::Volpath
             | IntegratorKind::Light
             | IntegratorKind::Bdpt
             | IntegratorKind::Vcm => false,

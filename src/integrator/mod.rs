@@ -83,7 +83,11 @@ impl Integrator {
                 spectral: desc.spectral,
             }),
             IntegratorKind::Path | IntegratorKind::Volpath => {
-                Integrator::VolPath(VolPathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
+                Integrator::VolPath(VolPathTracer {
+                    max_depth: depth,
+                    ray_bias: desc.ray_bias(scene),
+                    spectral: desc.spectral,
+                })
             }
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);

@@ -391,7 +391,7 @@ impl SceneDescription {
         let kind = self.integrator.kind;
         if self.integrator.spectral && !kind.renders_spectrally() {
             return Err(self.error(format!(
-                "the {} integrator does not render spectrally; spectral mode works with path, photon and sppm",
+                "the {} integrator does not render spectrally; spectral mode works with path, volpath, photon and sppm",
                 kind.name()
             )));
         }
@@ -399,12 +399,6 @@ impl SceneDescription {
         let (scene, info) =
             self.geometry.finish(camera).map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
-        if self.integrator.spectral && scene.has_media() {
-            return Err(SceneError::File {
-                path: self.name.clone(),
-                message: "spectral mode does not render participating media yet; render this scene in RGB".into(),
-            });
-        }
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }
 }
