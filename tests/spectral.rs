@@ -215,7 +215,6 @@ fn spectral_matches_rgb_on_the_cornell_box() {
 fn integrators_without_spectral_mode_refuse_it() {
     for kind in [
         IntegratorKind::Whitted,
-        IntegratorKind::Volpath,
         IntegratorKind::Light,
         IntegratorKind::Bdpt,
         IntegratorKind::Vcm,
