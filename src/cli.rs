@@ -207,6 +207,7 @@ impl RenderArgs {
             aov,
             display_server,
             spectral,
+            xyz,
             photon,
         } = options;
         let PhotonOptions {
@@ -227,6 +228,9 @@ impl RenderArgs {
         let mut a: Vec<String> = Vec::new();
         if *spectral == Some(true) {
             a.push("--spectral".into());
+        }
+        if *xyz == Some(true) {
+            a.push("--xyz".into());
         }
         let mut opt = |name: &str, v: Option<String>| {
             if let Some(v) = v {

@@ -213,12 +213,7 @@ fn spectral_matches_rgb_on_the_cornell_box() {
 /// The integrators without a spectral mode refuse it with an error naming the integrator.
 #[test]
 fn integrators_without_spectral_mode_refuse_it() {
-    for kind in [
-        IntegratorKind::Whitted,
-        IntegratorKind::Light,
-        IntegratorKind::Bdpt,
-        IntegratorKind::Vcm,
-    ] {
+    for kind in [IntegratorKind::Whitted, IntegratorKind::Light, IntegratorKind::Bdpt, IntegratorKind::Vcm] {
         let o = Options { spectral: Some(true), integrator: Some(kind), ..Options::default() };
         let text = point_light_furnace(4);
         let e = match caustic::app::load_toml_str(&text, "s.toml", std::path::Path::new("."), &o) {

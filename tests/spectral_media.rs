@@ -96,3 +96,137 @@ fn spectral_media_images_are_the_same_on_any_thread_count() {
         assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array() == y.to_array()), "{}", kind.name());
     }
 }
+
+/// The float channels of an EXR file by name.
+fn exr_channels(path: &std::path::Path) -> std::collections::HashMap<String, Vec<f32>> {
+    let image =
+        exr::prelude::read_all_flat_layers_from_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let layer = &image.layer_data[0];
+    layer.channel_data.list.iter().map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect())).collect()
+}
+
+/// Renders `scene` (a file) to `output` with `overrides`, quietly on two threads.
+fn render_to(scene: &std::path::Path, output: &std::path::Path, overrides: Options, layers: bool) {
+    let opts = caustic::app::RenderOptions {
+        scene: scene.to_path_buf(),
+        output: Some(output.to_path_buf()),
+        overrides,
+        quiet: true,
+        layers,
+        threads: Some(2),
+        ..Default::default()
+    };
+    caustic::app::render_file(&opts, &std::sync::atomic::AtomicBool::new(false))
+        .unwrap_or_else(|e| panic!("{}: {e}", output.display()));
+}
+
+/// `--xyz`: the EXR's X, Y, Z channels are the same render's R, G, B times the sRGB-to-XYZ
+/// matrix (to float rounding: 1e-6 relative), in RGB and spectral mode, for the image, its
+/// layers, and with AOVs (which keep their own channels).
+#[test]
+fn xyz_exr_is_the_srgb_exr_times_the_matrix() {
+    let dir = common::scratch("xyz-output");
+    let scene = REFS.dir.join("cube_area.xml");
+    let m = caustic::film::output::srgb_to_xyz();
+    for spectral in [false, true] {
+        let o = |xyz| Options {
+            width: Some(16),
+            height: Some(16),
+            spp: Some(4),
+            seed: Some(5),
+            spectral: Some(spectral),
+            xyz: Some(xyz),
+            aov: Some(caustic::film::aov::AovList::parse("albedo,depth").unwrap()),
+            ..Options::default()
+        };
+        let (srgb, xyz) = (dir.join(format!("srgb-{spectral}.exr")), dir.join(format!("xyz-{spectral}.exr")));
+        render_to(&scene, &srgb, o(false), true);
+        render_to(&scene, &xyz, o(true), true);
+        let files = |p: &std::path::Path| {
+            [
+                p.to_path_buf(),
+                caustic::film::output::layer_path(p, "direct"),
+                caustic::film::output::layer_path(p, "indirect"),
+            ]
+        };
+        for (a, b) in files(&srgb).iter().zip(&files(&xyz)) {
+            let (a, b) = (exr_channels(a), exr_channels(b));
+            assert!(b.contains_key("X") && !b.contains_key("R"), "{:?}", b.keys());
+            if a.contains_key("albedo.R") {
+                for aov in ["albedo.R", "albedo.G", "albedo.B", "depth.T"] {
+                    assert_eq!(a[aov], b[aov], "{aov}");
+                }
+            }
+            let mut nonzero = 0;
+            for i in 0..a["R"].len() {
+                let rgb = [a["R"][i], a["G"][i], a["B"][i]].map(f64::from);
+                nonzero += usize::from(rgb.iter().any(|v| *v != 0.0));
+                for (k, name) in ["X", "Y", "Z"].into_iter().enumerate() {
+                    let want = m[k][0] * rgb[0] + m[k][1] * rgb[1] + m[k][2] * rgb[2];
+                    let got = f64::from(b[name][i]);
+                    assert!(
+                        (got - want).abs() <= 1e-6 * want.abs().max(1e-3),
+                        "spectral {spectral}: {name}[{i}] {got} vs {want}"
+                    );
+                }
+            }
+            assert!(nonzero > 0, "an empty image tests nothing");
+        }
+    }
+}
+
+/// A grey constant (RGB mode: a constant environment seen everywhere) writes X:Y:Z in D65's
+/// ratio, (0.95047, 1, 1.08883) times the grey to 1e-4; a white furnace in spectral mode within
+/// 1% (its noise and the uplift's error); and a PNG refuses XYZ before rendering.
+#[test]
+fn grey_is_d65_in_xyz() {
+    let dir = common::scratch("xyz-grey");
+    // CIE 1931 XYZ of D65 with Y = 1 (its xy chromaticity 0.3127, 0.3290).
+    let d65 = [0.3127 / 0.3290, 1.0, (1.0 - 0.3127 - 0.3290) / 0.3290];
+    let grey = dir.join("grey.toml");
+    std::fs::write(&grey, "[render]\nwidth = 4\nheight = 4\nspp = 1\nintegrator = \"path\"\nbackground = [0.5, 0.5, 0.5]\n[camera]\neye = [0, 0, 0]\nlook_at = [0, 0, 1]\n").unwrap();
+    let out = dir.join("grey.exr");
+    render_to(&grey, &out, Options { xyz: Some(true), ..Options::default() }, false);
+    let c = exr_channels(&out);
+    for i in 0..16 {
+        for (k, name) in ["X", "Y", "Z"].into_iter().enumerate() {
+            let v = f64::from(c[name][i]) / 0.5;
+            assert!((v - d65[k]).abs() < 1e-3 * d65[k], "{name}: {v} vs {}", d65[k]);
+        }
+    }
+    let furnace = dir.join("furnace.toml");
+    std::fs::write(
+        &furnace,
+        common::point_light_furnace(64).replace("max_depth = 64", "max_depth = 64\nspp = 256\nintegrator = \"path\""),
+    )
+    .unwrap();
+    let out = dir.join("furnace.exr");
+    render_to(&furnace, &out, Options { xyz: Some(true), spectral: Some(true), ..Options::default() }, false);
+    let c = exr_channels(&out);
+    let mean = ["X", "Y", "Z"].map(|n| c[n].iter().map(|v| f64::from(*v)).sum::<f64>() / c[n].len() as f64);
+    eprintln!("spectral furnace in XYZ: {mean:?} (D65 {d65:?})");
+    for k in 0..3 {
+        assert!((mean[k] / mean[1] / d65[k] - 1.0).abs() < 0.01, "{mean:?}");
+    }
+    let opts = caustic::app::RenderOptions {
+        scene: grey.clone(),
+        output: Some(dir.join("grey.png")),
+        overrides: Options { xyz: Some(true), ..Options::default() },
+        quiet: true,
+        ..Default::default()
+    };
+    let e = match caustic::app::render_file(&opts, &std::sync::atomic::AtomicBool::new(false)) {
+        Ok(_) => panic!("a PNG accepted XYZ"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("XYZ") && e.contains(".exr"), "{e}");
+    let png_scene = dir.join("grey-xyz.toml");
+    std::fs::write(&png_scene, std::fs::read_to_string(&grey).unwrap().replace("[render]", "[render]\nxyz = true"))
+        .unwrap();
+    let opts = caustic::app::RenderOptions { scene: png_scene, overrides: Options::default(), ..opts };
+    let e = match caustic::app::render_file(&opts, &std::sync::atomic::AtomicBool::new(false)) {
+        Ok(_) => panic!("a PNG accepted XYZ"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("XYZ"), "{e}");
+}

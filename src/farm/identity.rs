@@ -101,6 +101,7 @@ impl RenderId {
 
             layers,
             aovs,
+            xyz,
         } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
         let mut fields: Vec<(String, String)> = vec![
@@ -138,6 +139,11 @@ impl RenderId {
         // before spectral mode existed.
         if *spectral {
             fields.push(("spectral".into(), "true".into()));
+        }
+        // The samples are the same either way, but the merge writes the image the render asked
+        // for; named only when on, as `spectral`.
+        if *xyz {
+            fields.push(("xyz".into(), "true".into()));
         }
         let mut defines = defines.to_vec();
         defines.sort();

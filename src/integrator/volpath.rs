@@ -128,8 +128,19 @@ impl RayIntegrator for VolPathTracer {
                     let wo = -ray.d;
                     let phase = *medium.phase();
                     let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-                    layers[layer.other_photons()] +=
-                        beta * self.medium_direct(scene, p, wo, ray.medium, &phase, u_pick, u, &mut tracking, wl.as_ref(), stats);
+                    layers[layer.other_photons()] += beta
+                        * self.medium_direct(
+                            scene,
+                            p,
+                            wo,
+                            ray.medium,
+                            &phase,
+                            u_pick,
+                            u,
+                            &mut tracking,
+                            wl.as_ref(),
+                            stats,
+                        );
                     let s = phase.sample(wo, sampler.next_2d());
                     layer.scatter_in_medium();
                     specular_bounce = false;

@@ -71,7 +71,9 @@ impl Homogeneous {
     pub fn at(&self, wl: Option<&Wavelengths>) -> Homogeneous {
         match wl {
             None => *self,
-            Some(wl) => Homogeneous { sigma_t: wl.unbounded(self.sigma_t), albedo: wl.reflectance(self.albedo), ..*self },
+            Some(wl) => {
+                Homogeneous { sigma_t: wl.unbounded(self.sigma_t), albedo: wl.reflectance(self.albedo), ..*self }
+            }
         }
     }
 

@@ -131,6 +131,8 @@ pub struct FilmDesc {
     pub sample_border: bool,
     /// The AOVs to write beside the image (Mitsuba's `aov` integrator, `[render] aov`, `--aov`).
     pub aovs: crate::film::aov::AovList,
+    /// The EXR's colour channels as CIE XYZ (`[render] xyz`, `--xyz`).
+    pub xyz: bool,
 }
 
 /// The image and its sampling, resolved: what the render loop needs.
@@ -150,6 +152,8 @@ pub struct Sampling {
     pub sampler: SamplerKind,
     pub antialias: bool,
     pub aovs: crate::film::aov::AovList,
+    /// The EXR's colour channels as CIE XYZ.
+    pub xyz: bool,
 }
 
 /// How a file is read: parameters, values put in place of the file's, strictness.
@@ -251,6 +255,7 @@ impl SceneDescription {
             // picture changes nothing in it).
             display_server: _,
             spectral,
+            xyz,
 
             photon,
         } = o.clone();
@@ -296,6 +301,7 @@ impl SceneDescription {
         if let Some(aovs) = aov {
             self.film.aovs = aovs;
         }
+        self.film.xyz = xyz.unwrap_or(self.film.xyz);
         let i = &mut self.integrator;
         i.kind = integrator.unwrap_or(i.kind);
         i.max_depth = max_depth.or(i.max_depth);
@@ -366,6 +372,7 @@ impl SceneDescription {
             sampler: s.kind,
             antialias: s.antialias,
             aovs: self.film.aovs.clone(),
+            xyz: self.film.xyz,
         })
     }
 

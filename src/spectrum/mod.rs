@@ -23,7 +23,7 @@ mod sampled;
 mod spd;
 
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
-pub use cie_tables::{CIE_MAX, CIE_MIN};
+pub use cie_tables::{CIE_MAX, CIE_MIN, XYZ_TO_SRGB};
 pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
 pub use lanes::{LANES, Wavelengths};
 pub use rgb::{
@@ -36,7 +36,7 @@ pub use sampled::{
 pub use spd::{SpdError, parse_spd};
 
 use crate::math::Color;
-use cie_tables::{CIE_STEP, CIE_X, CIE_Y, CIE_Y_NORMALIZATION, CIE_Z, D65, XYZ_TO_SRGB};
+use cie_tables::{CIE_STEP, CIE_X, CIE_Y, CIE_Y_NORMALIZATION, CIE_Z, D65};
 
 /// Number of wavelengths the conversion sums over (Mitsuba's count).
 const STEPS: usize = 1000;

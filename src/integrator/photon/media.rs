@@ -58,7 +58,6 @@ use super::PhotonIntegrator;
 use crate::geometry::{Hit, RayOrigin};
 use crate::integrator::camera_walk::MediumVertex;
 use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_through_media};
-use crate::spectrum::Wavelengths;
 use crate::integrator::sphere_bounds::SphereBounds;
 use crate::material::bsdf::Bsdf;
 use crate::math::{Color, Vec2, Vec3};
@@ -68,6 +67,7 @@ use crate::photon::{Gathered, Photon, PhotonMap};
 use crate::render::RayStats;
 use crate::sampling::Rng32;
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 /// Medium vertices per camera segment through a homogeneous medium (see the notes).
 pub const MARCH_STEPS: u32 = 16;

@@ -221,8 +221,17 @@ impl Sppm {
                         |wi, d| {
                             let m = scene.medium_after(&hit, wi, ray.medium);
                             let w = wl.as_ref();
-                            let tr =
-                                transmittance_through_media(scene, hit.origin(), wi, d, m, bias, &mut tracking, w, stats);
+                            let tr = transmittance_through_media(
+                                scene,
+                                hit.origin(),
+                                wi,
+                                d,
+                                m,
+                                bias,
+                                &mut tracking,
+                                w,
+                                stats,
+                            );
                             (1.0, tr)
                         },
                     );
