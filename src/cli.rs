@@ -548,6 +548,7 @@ mod tests {
             "--display-server",
             "localhost:14158",
             "--spectral",
+            "--xyz",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
         // Every argument is given a value of its own above: destructured without `..`, so a new
@@ -584,6 +585,7 @@ mod tests {
             aov,
             display_server,
             spectral,
+            xyz,
             photon,
         } = options;
         let PhotonOptions {
@@ -618,6 +620,7 @@ mod tests {
             aov.is_some(),
             display_server.is_some(),
             spectral.is_some(),
+            xyz.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

@@ -255,6 +255,7 @@ mod tests {
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
             aovs: Default::default(),
+            xyz: false,
         })
     }
 
@@ -347,6 +348,7 @@ mod tests {
             aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             display_server: Some("127.0.0.1:14158".into()),
             spectral: Some(true),
+            xyz: Some(true),
 
             photon: PhotonOptions {
                 photons: Some(1000),
@@ -380,6 +382,7 @@ mod tests {
             aov,
             display_server,
             spectral,
+            xyz,
 
             photon,
         } = every.clone();
@@ -417,6 +420,8 @@ mod tests {
             ("aov", Options { aov, ..none() }),
             // (The default integrator, Whitted's, refuses spectral mode.)
             ("spectral", Options { spectral, integrator, ..none() }),
+            // (Not the samples but the image the merge writes.)
+            ("xyz", Options { xyz, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),
