@@ -231,3 +231,53 @@ fn grey_is_d65_in_xyz() {
     };
     assert!(e.contains("XYZ"), "{e}");
 }
+
+/// A farm render asked for XYZ writes XYZ when merged: `--xyz` is part of the render's identity,
+/// so `caustic merge` writes the X, Y, Z channels the whole render would have, bit for bit.
+#[test]
+fn merged_shards_keep_xyz() {
+    use caustic::farm::shard::{Shard, ShardSpec};
+    let dir = common::scratch("xyz-merge");
+    let scene = REFS.dir.join("cube_area.xml");
+    let overrides = Options {
+        width: Some(12),
+        height: Some(12),
+        spp: Some(4),
+        seed: Some(2),
+        spectral: Some(true),
+        xyz: Some(true),
+        ..Options::default()
+    };
+    let whole = dir.join("whole.exr");
+    render_to(&scene, &whole, overrides.clone(), false);
+    let parts: Vec<std::path::PathBuf> = (0..2).map(|i| dir.join(format!("part-{i}.exr"))).collect();
+    for (i, part) in parts.iter().enumerate() {
+        let opts = caustic::app::RenderOptions {
+            scene: scene.clone(),
+            output: Some(part.clone()),
+            overrides: overrides.clone(),
+            quiet: true,
+            threads: Some(2),
+            shard: Some(ShardSpec::Fixed(Shard { index: i as u32, count: 2 })),
+            ..Default::default()
+        };
+        if let Err(e) = caustic::app::render_file(&opts, &std::sync::atomic::AtomicBool::new(false)) {
+            panic!("shard {i}: {e}");
+        }
+    }
+    let merged = dir.join("merged.exr");
+    if let Err(e) = caustic::app::merge_files(&parts, &merged, false, true) {
+        panic!("merge: {e}");
+    }
+    let (a, b) = (exr_channels(&whole), exr_channels(&merged));
+    for name in ["X", "Y", "Z"] {
+        assert_eq!(a[name], b[name], "{name}");
+    }
+    assert!(!b.contains_key("R"));
+    let png = dir.join("merged.png");
+    let e = match caustic::app::merge_files(&parts, &png, false, true) {
+        Ok(_) => panic!("a PNG accepted XYZ"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("XYZ"), "{e}");
+}
