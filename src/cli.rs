@@ -207,6 +207,7 @@ impl RenderArgs {
             aov,
             display_server,
             spectral,
+            xyz,
             photon,
         } = options;
         let PhotonOptions {
@@ -227,6 +228,9 @@ impl RenderArgs {
         let mut a: Vec<String> = Vec::new();
         if *spectral == Some(true) {
             a.push("--spectral".into());
+        }
+        if *xyz == Some(true) {
+            a.push("--xyz".into());
         }
         let mut opt = |name: &str, v: Option<String>| {
             if let Some(v) = v {
@@ -544,6 +548,7 @@ mod tests {
             "--display-server",
             "localhost:14158",
             "--spectral",
+            "--xyz",
         ];
         let Cli { command: Command::Render(args) } = Cli::parse_from(argv) else { panic!() };
         // Every argument is given a value of its own above: destructured without `..`, so a new
@@ -580,6 +585,7 @@ mod tests {
             aov,
             display_server,
             spectral,
+            xyz,
             photon,
         } = options;
         let PhotonOptions {
@@ -614,6 +620,7 @@ mod tests {
             aov.is_some(),
             display_server.is_some(),
             spectral.is_some(),
+            xyz.is_some(),
             photons.is_some(),
             caustic_photons.is_some(),
             gather.is_some(),

@@ -65,18 +65,18 @@ impl IntegratorKind {
 }
 
 impl IntegratorKind {
-    /// Whether the integrator renders in spectral mode (`--spectral`); the others refuse it.
-    /// Spectral media are not implemented: a scene with media refuses it too
-    /// (`SceneDescription::build`).
+    /// Whether the integrator renders in spectral mode (`--spectral`); the others (Whitted's
+    /// Phong model, which is defined on colours) refuse it.
     pub fn renders_spectrally(self) -> bool {
         match self {
             IntegratorKind::Path
+            | IntegratorKind::Volpath
             | IntegratorKind::Photon
             | IntegratorKind::Sppm
             | IntegratorKind::Light
             | IntegratorKind::Bdpt
             | IntegratorKind::Vcm => true,
-            IntegratorKind::Whitted | IntegratorKind::Volpath => false,
+            IntegratorKind::Whitted => false,
         }
     }
 
@@ -177,11 +177,18 @@ pub struct Options {
     pub display_server: Option<String>,
 
     /// Render spectrally: each path carries wavelengths instead of RGB channels, so that
-    /// dispersive glass splits white light (path, photon and sppm integrators; see
+    /// dispersive glass splits white light (path, volpath, photon and sppm integrators; see
     /// docs/scene-format.md) [default: RGB].
     // A flag that gives `Some(true)`.
     #[arg(long, num_args = 0, default_missing_value = "true")]
     pub spectral: Option<bool>,
+
+    /// Write the EXR image's colour channels as CIE 1931 XYZ (channels X, Y, Z) instead of
+    /// linear sRGB (R, G, B), in RGB and spectral mode alike; layers too. An .exr output only
+    /// (a PNG is always sRGB).
+    // A flag that gives `Some(true)`.
+    #[arg(long, num_args = 0, default_missing_value = "true")]
+    pub xyz: Option<bool>,
 
     /// Photon-mapping and SPPM settings (`[render.photon]` in a TOML scene).
     #[command(flatten)]

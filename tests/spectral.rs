@@ -213,7 +213,9 @@ fn spectral_matches_rgb_on_the_cornell_box() {
 /// The integrators without a spectral mode refuse it with an error naming the integrator.
 #[test]
 fn integrators_without_spectral_mode_refuse_it() {
-    for kind in [IntegratorKind::Whitted, IntegratorKind::Volpath] {
+    let without: Vec<IntegratorKind> = IntegratorKind::ALL.into_iter().filter(|k| !k.renders_spectrally()).collect();
+    assert_eq!(without, [IntegratorKind::Whitted]);
+    for kind in without {
         let o = Options { spectral: Some(true), integrator: Some(kind), ..Options::default() };
         let text = point_light_furnace(4);
         let e = match caustic::app::load_toml_str(&text, "s.toml", std::path::Path::new("."), &o) {

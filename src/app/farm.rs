@@ -7,7 +7,7 @@ use crate::farm::partial::SumKind;
 use crate::farm::shard::MAX_SHARDS;
 use crate::farm::slurm::{FarmPlan, submit, wait, write_scripts};
 use crate::film::LAYER_NAMES;
-use crate::film::output::{check_writable, layer_path, write_image};
+use crate::film::output::{ColourSpace, check_writable, layer_path, write_image_in};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -21,12 +21,15 @@ pub fn merge_files(
 ) -> Result<MergeReport, AppError> {
     check_writable(output)?;
     let (film, report) = merge(parts, allow_partial)?;
+    // The colour channels the render asked for (its identity names `xyz`).
+    let space = ColourSpace::xyz_if(report.xyz);
+    space.check(output)?;
     if film.has_layers() {
         for (k, name) in LAYER_NAMES.iter().enumerate() {
-            write_image(&film.layer_image(k), &layer_path(output, name))?;
+            write_image_in(&film.layer_image(k), &layer_path(output, name), space)?;
         }
     }
-    super::write_outputs(&film.image(), &film, output)?;
+    super::write_outputs(&film.image(), &film, output, space)?;
     let what = match report.sums {
         SumKind::Exact => "samples per pixel",
         SumKind::Runs => "iterations (independent progressive runs, weighted by iterations)",

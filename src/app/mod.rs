@@ -11,7 +11,9 @@ use crate::display::DisplayTarget;
 use crate::farm::FarmError;
 use crate::farm::shard::{Shard, ShardSpec};
 use crate::film::aov::AovKind;
-use crate::film::output::{Format, OutputError, aov_path, check_writable, layer_path, write_exr_channels, write_image};
+use crate::film::output::{
+    ColourSpace, Format, OutputError, aov_path, check_writable, layer_path, write_exr_channels, write_image_in,
+};
 use crate::film::{BYTES_PER_PIXEL, Film, LAYER_BYTES_PER_PIXEL, LAYER_NAMES};
 use crate::integrator::Integrator;
 use crate::options::{IntegratorKind, Options};
@@ -216,6 +218,9 @@ pub fn render_file(opts: &RenderOptions, cancel: &AtomicBool) -> Result<Summary,
     let output = opts.output.clone().unwrap_or_else(|| default_output(&opts.scene));
     // Fail on an unusable output before spending any time.
     let format = check_writable(&output)?;
+    if opts.shard.is_none() {
+        ColourSpace::xyz_if(opts.overrides.xyz == Some(true)).check(&output)?;
+    }
     let shard = resolve_shard(opts, format)?;
     thread_pool(opts.threads)?.install(|| {
         // The loaders report each file (and the builder each generated mesh and instance) to the
@@ -389,6 +394,11 @@ fn render_description(
         ),
     );
     let mut settings: RenderSettings = loaded.settings.clone();
+    // The scene file may ask for XYZ channels too (`[render] xyz`): refused for a PNG before
+    // rendering. (A shard writes a partial EXR; its merge checks the final output.)
+    if let (Some(output), None) = (output, &opts.shard) {
+        ColourSpace::xyz_if(settings.xyz).check(output)?;
+    }
     if settings.aovs.has(AovKind::Variance)
         && matches!(
             loaded.integrator.kind,
@@ -438,7 +448,7 @@ fn render_description(
     display.plan(&crate::integrator::plan(&loaded.integrator, &loaded.scene, &settings));
     let checkpoint_image = |film: &Film| {
         let Some(output) = output else { return };
-        match write_image(&film.image(), output) {
+        match write_image_in(&film.image(), output, ColourSpace::xyz_if(settings.xyz)) {
             Ok(()) => say(display, format_args!("checkpoint: wrote {} ({} spp)", output.display(), film.min_samples())),
             Err(e) => display.warn(&format!("checkpoint failed: {e}")),
         }
@@ -589,10 +599,11 @@ fn render_description(
         return Err(early());
     }
     if let Some(output) = output {
+        let space = ColourSpace::xyz_if(settings.xyz);
         for (img, name) in out.layers.iter().zip(LAYER_NAMES) {
-            write_image(img, &layer_path(output, name))?;
+            write_image_in(img, &layer_path(output, name), space)?;
         }
-        write_outputs(&out.image, &out.film, output)?;
+        write_outputs(&out.image, &out.film, output, space)?;
     }
     if stats.nonfinite_samples > 0 {
         display.warn(&format!("{} samples were NaN or infinite and counted as black", stats.nonfinite_samples));
@@ -630,20 +641,25 @@ fn render_description(
     }
 }
 
-/// Writes the image to `output` and, when the render has AOVs, their channels: in the same file
-/// for an EXR, in `NAME.aovs.exr` beside a PNG.
-pub fn write_outputs(image: &crate::film::Image, film: &Film, output: &Path) -> Result<(), OutputError> {
+/// Writes the image to `output` (an EXR's colour channels in `space`) and, when the render has
+/// AOVs, their channels: in the same file for an EXR, in `NAME.aovs.exr` beside a PNG.
+pub fn write_outputs(
+    image: &crate::film::Image,
+    film: &Film,
+    output: &Path,
+    space: ColourSpace,
+) -> Result<(), OutputError> {
     if film.aovs.is_empty() {
-        return write_image(image, output);
+        return write_image_in(image, output, space);
     }
     let channels = film.aov_images();
     let size = (image.width, image.height);
     match aov_path(output) {
         Some(beside) => {
-            write_image(image, output)?;
-            write_exr_channels(size, None, &channels, &beside)
+            write_image_in(image, output, space)?;
+            write_exr_channels(size, None, &channels, space, &beside)
         }
-        None => write_exr_channels(size, Some(image), &channels, output),
+        None => write_exr_channels(size, Some(image), &channels, space, output),
     }
 }
 

@@ -101,6 +101,7 @@ impl RenderId {
 
             layers,
             aovs,
+            xyz,
         } = settings;
         let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
         let mut fields: Vec<(String, String)> = vec![
@@ -138,6 +139,11 @@ impl RenderId {
         // before spectral mode existed.
         if *spectral {
             fields.push(("spectral".into(), "true".into()));
+        }
+        // The samples are the same either way, but the merge writes the image the render asked
+        // for; named only when on, as `spectral`.
+        if *xyz {
+            fields.push(("xyz".into(), "true".into()));
         }
         let mut defines = defines.to_vec();
         defines.sort();
@@ -249,6 +255,7 @@ mod tests {
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
             aovs: Default::default(),
+            xyz: false,
         })
     }
 
@@ -341,6 +348,7 @@ mod tests {
             aov: Some(crate::film::aov::AovList::parse("albedo").unwrap()),
             display_server: Some("127.0.0.1:14158".into()),
             spectral: Some(true),
+            xyz: Some(true),
 
             photon: PhotonOptions {
                 photons: Some(1000),
@@ -374,6 +382,7 @@ mod tests {
             aov,
             display_server,
             spectral,
+            xyz,
 
             photon,
         } = every.clone();
@@ -411,6 +420,8 @@ mod tests {
             ("aov", Options { aov, ..none() }),
             // (The default integrator, Whitted's, refuses spectral mode.)
             ("spectral", Options { spectral, integrator, ..none() }),
+            // (Not the samples but the image the merge writes.)
+            ("xyz", Options { xyz, ..none() }),
             ("photons", photon(PhotonOptions { photons, ..nop() })),
             ("caustic_photons", photon(PhotonOptions { caustic_photons, ..nop() })),
             ("gather", photon(PhotonOptions { gather, ..nop() })),

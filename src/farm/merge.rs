@@ -26,6 +26,8 @@ pub struct MergeReport {
     /// The samples no part holds, described for the user (empty when complete).
     pub missing: Vec<String>,
     pub sums: SumKind,
+    /// The render asked for XYZ colour channels (the identity's `xyz`).
+    pub xyz: bool,
 }
 
 fn refused(msg: String) -> FarmError {
@@ -158,6 +160,7 @@ pub fn merge(paths: &[PathBuf], allow_partial: bool) -> Result<(Film, MergeRepor
         max_samples: film.max_samples(),
         missing,
         sums: first.sums,
+        xyz: first.id.get("xyz") == Some("true"),
     };
     Ok((film, report))
 }

@@ -399,6 +399,7 @@ mod tests {
             sampler: crate::sampling::SamplerKind::Jittered,
             antialias: true,
             aovs: AovList::default(),
+            xyz: false,
         });
         settings.layers = layers;
         let id = RenderId::new(&[], &Default::default(), &IntegratorDesc::default(), &settings).unwrap();

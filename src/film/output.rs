@@ -1,4 +1,8 @@
 //! Writing images: 8-bit sRGB PNG (clamped) or 32-bit float linear OpenEXR, chosen by extension.
+//! An EXR's colour channels are linear sRGB (R, G, B), or on request (`--xyz`) CIE 1931 XYZ
+//! (X, Y, Z): the film's linear sRGB values times the sRGB-to-XYZ matrix, negative values kept.
+//! The matrix is the exact inverse of the one spectral mode converts XYZ to sRGB with
+//! (`spectrum::XYZ_TO_SRGB`), so a spectral render's XYZ comes back to float rounding.
 //!
 //! Files are written to a temporary name in the destination folder and renamed over the target,
 //! so a crash or error never leaves a truncated image (and never destroys a previous one).
@@ -13,6 +17,8 @@ use std::path::{Path, PathBuf};
 pub enum OutputError {
     #[error("output `{0}`: unsupported extension (use .png or .exr)")]
     Extension(String),
+    #[error("output `{0}`: XYZ channels (--xyz) need an .exr output; a PNG is always sRGB")]
+    XyzPng(String),
     #[error("cannot write `{path}`: {message}")]
     Write { path: String, message: String },
 }
@@ -31,6 +37,65 @@ impl Format {
             _ => Err(OutputError::Extension(path.display().to_string())),
         }
     }
+}
+
+/// What an EXR's colour channels hold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColourSpace {
+    /// Linear sRGB, channels R, G, B (the default).
+    #[default]
+    LinearSrgb,
+    /// CIE 1931 XYZ, channels X, Y, Z.
+    Xyz,
+}
+
+impl ColourSpace {
+    /// `Xyz` when `xyz`, else `LinearSrgb`.
+    pub fn xyz_if(xyz: bool) -> Self {
+        if xyz { ColourSpace::Xyz } else { ColourSpace::LinearSrgb }
+    }
+
+    /// The names of the colour channels.
+    pub fn channel_names(self) -> [&'static str; 3] {
+        match self {
+            ColourSpace::LinearSrgb => ["R", "G", "B"],
+            ColourSpace::Xyz => ["X", "Y", "Z"],
+        }
+    }
+
+    /// A linear sRGB colour in this space.
+    #[inline]
+    pub fn convert(self, c: Color) -> [f32; 3] {
+        match self {
+            ColourSpace::LinearSrgb => c.to_array(),
+            ColourSpace::Xyz => {
+                let m = srgb_to_xyz();
+                let c = c.to_array().map(f64::from);
+                m.map(|row| (row[0] * c[0] + row[1] * c[1] + row[2] * c[2]) as f32)
+            }
+        }
+    }
+
+    /// An error when this space cannot be written to `path` (XYZ to a PNG).
+    pub fn check(self, path: &Path) -> Result<(), OutputError> {
+        if self == ColourSpace::Xyz && Format::from_path(path)? == Format::Png {
+            return Err(OutputError::XyzPng(path.display().to_string()));
+        }
+        Ok(())
+    }
+}
+
+/// Linear sRGB to CIE XYZ (rows): the inverse of `XYZ_TO_SRGB`, in double precision.
+pub fn srgb_to_xyz() -> [[f64; 3]; 3] {
+    let m = crate::spectrum::XYZ_TO_SRGB;
+    let cof = |r: usize, c: usize| {
+        let (r0, r1) = ((r + 1) % 3, (r + 2) % 3);
+        let (c0, c1) = ((c + 1) % 3, (c + 2) % 3);
+        m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]
+    };
+    let det = m[0][0] * cof(0, 0) + m[0][1] * cof(0, 1) + m[0][2] * cof(0, 2);
+    // The inverse is the transposed cofactor matrix over the determinant.
+    std::array::from_fn(|r| std::array::from_fn(|c| cof(c, r) / det))
 }
 
 /// The sRGB transfer function applied to a linear value, clamped to [0, 1].
@@ -72,7 +137,16 @@ pub fn check_writable(path: &Path) -> Result<Format, OutputError> {
 
 /// Writes `img` to `path` atomically (temporary file, then rename).
 pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
+    write_image_in(img, path, ColourSpace::LinearSrgb)
+}
+
+/// `write_image` with an EXR's colour channels in `space` (a PNG refuses XYZ).
+pub fn write_image_in(img: &Image, path: &Path, space: ColourSpace) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
+    space.check(path)?;
+    if space != ColourSpace::LinearSrgb {
+        return write_exr_channels((img.width, img.height), Some(img), &[], space, path);
+    }
     let tmp = temp_path(path);
     let result = match format {
         Format::Png => write_png(img, &tmp),
@@ -86,19 +160,21 @@ pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
 }
 
 /// Writes a `width` x `height` OpenEXR file of float channels atomically: the image `img`'s
-/// R, G, B when given, and `extra` (name, values row by row): the AOVs beside an image
-/// (`film::aov`), in the image's file or, beside a PNG, in one of their own.
+/// colour channels in `space` (R, G, B or X, Y, Z) when given, and `extra` (name, values row by
+/// row): the AOVs beside an image (`film::aov`), in the image's file or, beside a PNG, in one of
+/// their own.
 pub fn write_exr_channels(
     (width, height): (u32, u32),
     img: Option<&Image>,
     extra: &[(String, Vec<f32>)],
+    space: ColourSpace,
     path: &Path,
 ) -> Result<(), OutputError> {
     use exr::prelude::*;
     let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
     if let Some(img) = img {
-        for (ch, name) in ["R", "G", "B"].into_iter().enumerate() {
-            let v: Vec<f32> = img.pixels.iter().map(|c| c.to_array()[ch]).collect();
+        for (ch, name) in space.channel_names().into_iter().enumerate() {
+            let v: Vec<f32> = img.pixels.iter().map(|&c| space.convert(c)[ch]).collect();
             channels.push(AnyChannel::new(name, FlatSamples::F32(v)));
         }
     }

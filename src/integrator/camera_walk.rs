@@ -139,12 +139,17 @@ impl CameraWalk {
     /// (D65) light through it, exact (the lanes' common value) while the throughput is grey.
     #[inline]
     pub fn beta_rgb(&self) -> Color {
-        let Some(wl) = &self.wl else { return self.beta };
-        let [a, b, c] = self.beta.to_array();
-        if a == b && b == c && !wl.secondary_terminated() {
-            return self.beta;
+        self.rgb_of(self.beta)
+    }
+
+    /// A throughput `beta` of the walk's kind as an RGB colour, as `beta_rgb` converts the
+    /// walk's own.
+    #[inline]
+    pub fn rgb_of(&self, beta: Color) -> Color {
+        match &self.wl {
+            Some(wl) => wl.throughput_to_srgb(beta),
+            None => beta,
         }
-        wl.to_srgb(self.beta * wl.map(crate::spectrum::d65))
     }
 
     /// Spectral light `l` the walk found, as RGB (itself in RGB mode).
@@ -166,6 +171,8 @@ impl CameraWalk {
     /// `t_max`, with offset `u`: the vertex, or `None` past the last step (the throughput then
     /// holds the segment's transmittance).
     fn march_step(&mut self, m: &Homogeneous, t_max: f32, u: f32, i: u32) -> Option<MediumVertex> {
+        // At the path's wavelengths in spectral mode.
+        let m = &m.at(self.wl.as_ref());
         let n = self.march_steps;
         if i >= n {
             self.beta *= m.transmittance(t_max);
@@ -245,7 +252,7 @@ impl CameraWalk {
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
                 let (u_channel, u) = (sampler.next_1d(), sampler.next_1d());
                 let tracking = self.tracking.get_or_insert_with(|| sampler.side_stream(TRACKING_STREAM));
-                let ms = medium.sample_distance(&self.ray, t_max, self.beta, u_channel, u, tracking);
+                let ms = medium.sample_distance(&self.ray, t_max, self.beta, u_channel, u, tracking, self.wl.as_ref());
                 if ms.scattered {
                     // This scattering event is bounce depth + 1.
                     let depth = self.depth;

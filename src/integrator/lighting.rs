@@ -180,7 +180,8 @@ pub fn light_sample_at(
 /// boundary or a mask's transparent part; anything else blocks), the medium changing at each
 /// crossing of an interface. Surfaces are met one closest hit at a time, since the segments
 /// between them must be known in order; at most `MAX_CROSSINGS` of them. A heterogeneous
-/// medium's transmittance is estimated (ratio tracking) with numbers from `rng`.
+/// medium's transmittance is estimated (ratio tracking) with numbers from `rng`. In spectral
+/// mode (`wl`) the transmittance is at the path's wavelengths.
 #[allow(clippy::too_many_arguments)]
 pub fn transmittance_through_media(
     scene: &Scene,
@@ -190,6 +191,7 @@ pub fn transmittance_through_media(
     medium: u32,
     bias: f32,
     rng: &mut crate::sampling::Rng32,
+    wl: Option<&Wavelengths>,
     stats: &mut RayStats,
 ) -> Color {
     let mut ray = from.spawn(wi, bias);
@@ -205,7 +207,7 @@ pub fn transmittance_through_media(
         }
         let hit = scene.intersect(&ray, t_max);
         if ray.medium != crate::geometry::NO_MEDIUM {
-            tr *= scene.media[ray.medium as usize].transmittance(&ray, hit.as_ref().map_or(t_max, |h| h.t), rng);
+            tr *= scene.media[ray.medium as usize].transmittance(&ray, hit.as_ref().map_or(t_max, |h| h.t), rng, wl);
             if tr == Color::ZERO {
                 return tr;
             }

@@ -82,9 +82,11 @@ impl Integrator {
                 ray_bias: desc.ray_bias(scene),
                 spectral: desc.spectral,
             }),
-            IntegratorKind::Path | IntegratorKind::Volpath => {
-                Integrator::VolPath(VolPathTracer { max_depth: depth, ray_bias: desc.ray_bias(scene) })
-            }
+            IntegratorKind::Path | IntegratorKind::Volpath => Integrator::VolPath(VolPathTracer {
+                max_depth: depth,
+                ray_bias: desc.ray_bias(scene),
+                spectral: desc.spectral,
+            }),
             IntegratorKind::Photon => {
                 let config = photon::PhotonConfig::new(&desc.photon, desc, scene, settings.seed);
                 let pm = PhotonIntegrator::build_watched(scene, config, control.cancel, control.progress)

@@ -545,7 +545,8 @@ impl PhotonIntegrator {
                 let m = &scene.media[ray.medium as usize];
                 let t_max = found.as_ref().map_or(f32::INFINITY, |h| h.t);
                 let (u_channel, u) = (rng.uniform(), rng.uniform());
-                let ms = m.sample_distance(&ray, t_max, beta, u_channel, u, rng);
+                // Final gathering is RGB in either mode (the photon maps', the RGB BSDF's light).
+                let ms = m.sample_distance(&ray, t_max, beta, u_channel, u, rng, None);
                 if ms.scattered {
                     if k == 0 {
                         dist = ms.t;
@@ -744,7 +745,7 @@ impl RayIntegrator for PhotonIntegrator {
                           sampler: &mut Sampler,
                           stats: &mut RayStats| {
                 if has_media {
-                    self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), stats)
+                    self.direct_through_media(scene, hit, bsdf, wo, medium, sampler.rng(), wl, stats)
                 } else {
                     self.lights.estimate(scene, hit, bsdf, wo, c.ray_bias, sampler.rng(), wl, stats)
                 }
@@ -754,8 +755,16 @@ impl RayIntegrator for PhotonIntegrator {
                 Some(Stop::Surface(v)) => v,
                 Some(Stop::Medium(m)) => {
                     // Light scattered in a medium goes where SPPM puts it (`sppm::media`).
-                    let l = self.medium_radiance(scene, &m, sampler.rng(), scratch, stats);
-                    layers[walk.layer.other_photons()] += walk.beta * l;
+                    let (single, multiple) =
+                        self.medium_radiance(scene, &m, walk.wavelengths(), sampler.rng(), scratch, stats);
+                    let k = walk.layer.other_photons();
+                    if c.spectral {
+                        // The photons' estimate is RGB: weighted by the path's filter as a colour.
+                        layers[k] += walk.beta * single;
+                        rgb[k] += walk.rgb_of(walk.beta * m.tr_over_pdf) * multiple;
+                    } else {
+                        layers[k] += walk.beta * (single + m.tr_over_pdf * multiple);
+                    }
                     if m.marching {
                         continue;
                     }

@@ -13,6 +13,12 @@
 //! weights). Invisible surfaces (`null` BSDFs, masks' transparent parts) are passed without
 //! counting as a bounce and without forgetting the last vertex, whose density the MIS weight of
 //! an emitter met after them needs. Russian roulette after three bounces, as the path tracer.
+//!
+//! Spectral mode (`crate::spectrum::lanes`) as in the path tracer: the lanes carry the path's
+//! wavelengths, BSDFs and lights are lifted where the path meets them, and so are the media
+//! (`Medium::sample_distance` and `transmittance` with the wavelengths). The free-flight
+//! sampling's choice of a lane by throughput and its mixture over lanes need no change: they
+//! make each lane's estimate unbiased for that lane, whatever the lanes stand for.
 
 use super::layers::LayerPath;
 use super::lighting::{bsdf_scatter, emission_found, light_sample_at, transmittance_through_media, visibility};
@@ -24,6 +30,7 @@ use crate::medium::Phase;
 use crate::render::{RayIntegrator, RayStats};
 use crate::sampling::{Rng32, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 /// The tag of the side stream (`Sampler::side_stream`) heterogeneous media draw from.
 pub const TRACKING_STREAM: u64 = 0x7472_6163_6b69_6e67;
@@ -33,6 +40,8 @@ pub struct VolPathTracer {
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
+    /// Spectral mode (`crate::spectrum::lanes`); RGB otherwise.
+    pub spectral: bool,
 }
 
 impl VolPathTracer {
@@ -49,6 +58,7 @@ impl VolPathTracer {
         u_pick: f32,
         u: Vec2,
         tracking: &mut Rng32,
+        wl: Option<&Wavelengths>,
         stats: &mut RayStats,
     ) -> Color {
         let Some((li, p_pick)) = scene.direct_picker.pick(u_pick) else { return Color::ZERO };
@@ -60,12 +70,12 @@ impl VolPathTracer {
             p,
             u,
             true,
-            None,
+            wl,
             |wi, _| {
                 let v = phase.p(wo, wi);
                 (Color::splat(v), 1.0, v)
             },
-            |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, medium, 0.0, tracking, stats)),
+            |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, medium, 0.0, tracking, wl, stats)),
         )
     }
 }
@@ -76,6 +86,8 @@ impl RayIntegrator for VolPathTracer {
     fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, _: &mut (), stats: &mut RayStats) -> Layers {
         let mut layers = [Color::ZERO; 4];
         let mut beta = Color::ONE;
+        // In spectral mode the wavelengths take the first dimension after the camera's.
+        let mut wl = self.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
         let mut ray = *ray;
         if ray.medium == NO_MEDIUM {
             ray.medium = scene.camera_medium;
@@ -95,7 +107,15 @@ impl RayIntegrator for VolPathTracer {
             if ray.medium != NO_MEDIUM {
                 let medium = &scene.media[ray.medium as usize];
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                let ms = medium.sample_distance(&ray, t_max, beta, sampler.next_1d(), sampler.next_1d(), &mut tracking);
+                let ms = medium.sample_distance(
+                    &ray,
+                    t_max,
+                    beta,
+                    sampler.next_1d(),
+                    sampler.next_1d(),
+                    &mut tracking,
+                    wl.as_ref(),
+                );
                 beta *= ms.weight;
                 if beta == Color::ZERO || !beta.is_finite() {
                     break;
@@ -108,8 +128,19 @@ impl RayIntegrator for VolPathTracer {
                     let wo = -ray.d;
                     let phase = *medium.phase();
                     let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
-                    layers[layer.other_photons()] +=
-                        beta * self.medium_direct(scene, p, wo, ray.medium, &phase, u_pick, u, &mut tracking, stats);
+                    layers[layer.other_photons()] += beta
+                        * self.medium_direct(
+                            scene,
+                            p,
+                            wo,
+                            ray.medium,
+                            &phase,
+                            u_pick,
+                            u,
+                            &mut tracking,
+                            wl.as_ref(),
+                            stats,
+                        );
                     let s = phase.sample(wo, sampler.next_2d());
                     layer.scatter_in_medium();
                     specular_bounce = false;
@@ -123,13 +154,13 @@ impl RayIntegrator for VolPathTracer {
                     continue;
                 }
             }
-            if let Some((le, w, _)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
-                layers[layer.emitted()] += beta * le * w;
+            if let Some((le, w, li)) = emission_found(scene, ray.d, hit.as_ref(), prev_p, prev_pdf, specular_bounce) {
+                layers[layer.emitted()] += beta * scene.emission_in(le, li, wl.as_ref()) * w;
             }
             // The ray leaves the scene.
             let Some(hit) = hit else { break };
             let wo = -ray.d;
-            let bsdf = scene.bsdf(&hit, wo);
+            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
             if bsdf.is_invisible() {
                 // A medium's boundary: straight on, into the medium beyond, not a bounce.
                 let medium = scene.medium_after(&hit, ray.d, ray.medium);
@@ -151,7 +182,7 @@ impl RayIntegrator for VolPathTracer {
                         hit.p,
                         u,
                         true,
-                        None,
+                        wl.as_ref(),
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, dist| {
                             if has_media {
@@ -164,6 +195,7 @@ impl RayIntegrator for VolPathTracer {
                                     medium,
                                     bias,
                                     &mut tracking,
+                                    wl.as_ref(),
                                     stats,
                                 );
                                 (1.0, tr)
@@ -196,6 +228,9 @@ impl RayIntegrator for VolPathTracer {
             }
             ray = hit.spawn(s.wi, self.ray_bias);
             ray.medium = medium;
+        }
+        if let Some(wl) = &wl {
+            layers = layers.map(|l| wl.to_srgb(l));
         }
         layers
     }

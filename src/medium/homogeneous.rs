@@ -8,6 +8,7 @@
 
 use super::phase::Phase;
 use crate::math::Color;
+use crate::spectrum::Wavelengths;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Homogeneous {
@@ -60,6 +61,22 @@ impl Homogeneous {
         self.albedo * self.sigma_t
     }
 
+    /// The medium at the path's wavelengths (spectral mode), or itself (RGB): the extinction
+    /// lifted as an unbounded spectrum, the albedo as a reflectance (`Wavelengths`). The lanes
+    /// are then wavelengths, and everything below (the channel choice by throughput, the
+    /// mixture over lanes) applies to them unchanged: each lane's estimate is unbiased for its
+    /// own wavelength whichever lane was chosen, which is all the film's per-wavelength
+    /// division by the wavelength pdfs needs (Mitsuba 3's spectral `volpathmis` does the same).
+    #[inline]
+    pub fn at(&self, wl: Option<&Wavelengths>) -> Homogeneous {
+        match wl {
+            None => *self,
+            Some(wl) => {
+                Homogeneous { sigma_t: wl.unbounded(self.sigma_t), albedo: wl.reflectance(self.albedo), ..*self }
+            }
+        }
+    }
+
     /// Beer-Lambert transmittance exp(-sigma_t t) over a distance `t` (which may be infinite: a
     /// channel without extinction then passes everything).
     #[inline]
@@ -70,7 +87,8 @@ impl Homogeneous {
 
     /// Samples where along a segment of length `t_max` light carried with throughput `beta`
     /// first interacts: `u_channel` chooses the channel (in proportion to `beta`), `u` the
-    /// distance. See the module's notes for the weights.
+    /// distance. See the module's notes for the weights. (In spectral mode call it on the
+    /// medium lifted by `at`.)
     #[inline]
     pub fn sample_distance(&self, t_max: f32, beta: Color, u_channel: f32, u: f32) -> MediumSample {
         let p = channel_probabilities(beta);

@@ -15,6 +15,7 @@ pub use phase::{Phase, PhaseSample};
 use crate::geometry::{NO_MEDIUM, Ray};
 use crate::math::{Color, Vec3};
 use crate::sampling::Rng32;
+use crate::spectrum::Wavelengths;
 
 /// A medium. Not `Copy`: a heterogeneous one shares its grids (`Arc`), and media are only ever
 /// borrowed from the scene.
@@ -42,18 +43,21 @@ impl Medium {
     }
 
     /// The transmittance along `ray` from t = 0 to `t_max` (an unbiased estimate where the
-    /// medium varies).
+    /// medium varies), at the path's wavelengths in spectral mode (`wl`).
     #[inline]
-    pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Rng32) -> Color {
+    pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Rng32, wl: Option<&Wavelengths>) -> Color {
         match self {
-            Medium::Homogeneous(m) => m.transmittance(t_max),
-            Medium::Heterogeneous(m) => m.transmittance(ray, t_max, rng),
+            Medium::Homogeneous(m) => m.at(wl).transmittance(t_max),
+            Medium::Heterogeneous(m) => m.transmittance(ray, t_max, rng, wl),
         }
     }
 
     /// Free-flight sampling along `ray` up to `t_max` for light carried with throughput `beta`
     /// (see `Homogeneous::sample_distance` for the weights): `u_channel` and `u` are the
-    /// sampler's numbers, `rng` gives any further ones.
+    /// sampler's numbers, `rng` gives any further ones. In spectral mode (`wl`) the lanes of
+    /// `beta` and of the weights are the path's wavelengths, and the medium's coefficients are
+    /// lifted to them.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn sample_distance(
         &self,
@@ -63,10 +67,11 @@ impl Medium {
         u_channel: f32,
         u: f32,
         rng: &mut Rng32,
+        wl: Option<&Wavelengths>,
     ) -> MediumSample {
         match self {
-            Medium::Homogeneous(m) => m.sample_distance(t_max, beta, u_channel, u),
-            Medium::Heterogeneous(m) => m.sample_distance(ray, t_max, beta, u, rng),
+            Medium::Homogeneous(m) => m.at(wl).sample_distance(t_max, beta, u_channel, u),
+            Medium::Heterogeneous(m) => m.sample_distance(ray, t_max, beta, u, rng, wl),
         }
     }
 }

@@ -408,7 +408,7 @@ pub fn trace_photon(
             // A heterogeneous medium draws its further numbers from the photon's own stream (the
             // homogeneous kind draws none, so its photons are as before).
             let (u_channel, u) = (rng.uniform(), rng.uniform());
-            let ms = medium.sample_distance(&ray, t_max, flux, u_channel, u, rng);
+            let ms = medium.sample_distance(&ray, t_max, flux, u_channel, u, rng, wl.as_ref());
             let before = flux;
             flux *= ms.weight;
             if ms.scattered {

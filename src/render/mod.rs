@@ -61,6 +61,8 @@ pub struct RenderSettings {
     pub layers: bool,
     /// The AOVs to write beside the image (`film::aov`).
     pub aovs: AovList,
+    /// The EXR's colour channels as CIE XYZ instead of linear sRGB (`film::output`).
+    pub xyz: bool,
 }
 
 impl RenderSettings {
@@ -90,6 +92,7 @@ impl RenderSettings {
 
             layers: false,
             aovs: s.aovs.clone(),
+            xyz: s.xyz,
         }
     }
 

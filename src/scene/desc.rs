@@ -150,6 +150,8 @@ pub struct FilmDesc {
     pub sample_border: bool,
     /// The AOVs to write beside the image (Mitsuba's `aov` integrator, `[render] aov`, `--aov`).
     pub aovs: crate::film::aov::AovList,
+    /// The EXR's colour channels as CIE XYZ (`[render] xyz`, `--xyz`).
+    pub xyz: bool,
 }
 
 /// The image and its sampling, resolved: what the render loop needs.
@@ -169,6 +171,8 @@ pub struct Sampling {
     pub sampler: SamplerKind,
     pub antialias: bool,
     pub aovs: crate::film::aov::AovList,
+    /// The EXR's colour channels as CIE XYZ.
+    pub xyz: bool,
 }
 
 /// How a file is read: parameters, values put in place of the file's, strictness.
@@ -270,6 +274,7 @@ impl SceneDescription {
             // picture changes nothing in it).
             display_server: _,
             spectral,
+            xyz,
 
             photon,
         } = o.clone();
@@ -315,6 +320,7 @@ impl SceneDescription {
         if let Some(aovs) = aov {
             self.film.aovs = aovs;
         }
+        self.film.xyz = xyz.unwrap_or(self.film.xyz);
         let i = &mut self.integrator;
         i.kind = integrator.unwrap_or(i.kind);
         i.max_depth = max_depth.or(i.max_depth);
@@ -385,6 +391,7 @@ impl SceneDescription {
             sampler: s.resolved_kind(self.integrator.kind),
             antialias: s.antialias,
             aovs: self.film.aovs.clone(),
+            xyz: self.film.xyz,
         })
     }
 
@@ -410,7 +417,7 @@ impl SceneDescription {
         let kind = self.integrator.kind;
         if self.integrator.spectral && !kind.renders_spectrally() {
             return Err(self.error(format!(
-                "the {} integrator does not render spectrally; spectral mode works with path, photon, sppm, light, bdpt and vcm",
+                "the {} integrator does not render spectrally; spectral mode works with path, volpath, photon, sppm, light, bdpt and vcm",
                 kind.name()
             )));
         }
@@ -418,12 +425,6 @@ impl SceneDescription {
         let (scene, info) =
             self.geometry.finish(camera).map_err(|message| SceneError::File { path: self.name.clone(), message })?;
         scene.check_usable().map_err(|message| SceneError::File { path: self.name.clone(), message })?;
-        if self.integrator.spectral && scene.has_media() {
-            return Err(SceneError::File {
-                path: self.name.clone(),
-                message: "spectral mode does not render participating media yet; render this scene in RGB".into(),
-            });
-        }
         Ok(BuiltScene { scene, sampling, integrator: self.integrator, info })
     }
 }

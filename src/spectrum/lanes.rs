@@ -179,6 +179,18 @@ impl Wavelengths {
         xyz.map(|c| c * (Y_NORMALIZATION / LANES as f32))
     }
 
+    /// A path's throughput `beta` (one value per lane) as an RGB colour: the colour of white
+    /// (D65) light through it, exact (the lanes' common value) while it is grey. For light the
+    /// path meets as RGB (photon estimates), which the throughput then weights as a colour.
+    #[inline]
+    pub fn throughput_to_srgb(&self, beta: Color) -> Color {
+        let [a, b, c] = beta.to_array();
+        if a == b && b == c && !self.hero_only {
+            return beta;
+        }
+        self.to_srgb(beta * self.map(d65))
+    }
+
     /// Spectral radiance `v` as linear sRGB (unclamped).
     #[inline]
     pub fn to_srgb(&self, v: Color) -> Color {

@@ -25,7 +25,7 @@ mod sampled;
 mod spd;
 
 pub use blackbody::{Blackbody, BlackbodyError, WIEN_B};
-pub use cie_tables::{CIE_MAX, CIE_MIN};
+pub use cie_tables::{CIE_MAX, CIE_MIN, XYZ_TO_SRGB};
 pub use dispersion::{Dispersion, DispersionError, LAMBDA_C, LAMBDA_D, LAMBDA_F};
 pub use emission::EmissionSpectrum;
 pub use lanes::{LANES, Wavelengths, joined};
@@ -36,7 +36,7 @@ pub use sampled::{LAMBDA_MAX, LAMBDA_MIN, cie_xyz, d65, visible_pdf, xyz_to_colo
 pub use spd::{SpdError, parse_spd};
 
 use crate::math::Color;
-use cie_tables::{CIE_STEP, CIE_X, CIE_Y, CIE_Y_NORMALIZATION, CIE_Z, D65, XYZ_TO_SRGB};
+use cie_tables::{CIE_STEP, CIE_X, CIE_Y, CIE_Y_NORMALIZATION, CIE_Z, D65};
 
 /// Number of wavelengths the conversion sums over (Mitsuba's count).
 const STEPS: usize = 1000;

@@ -67,6 +67,7 @@ use crate::photon::{Gathered, Photon, PhotonMap};
 use crate::render::RayStats;
 use crate::sampling::Rng32;
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 /// Medium vertices per camera segment through a homogeneous medium (see the notes).
 pub const MARCH_STEPS: u32 = 16;
@@ -153,19 +154,24 @@ impl PhotonIntegrator {
             }
             sum += ph.power() * phase.p(wo, -ph.direction());
         }
-        sum / bounds.volume
+        // In spectral mode the photons hold CIE XYZ; the sum converts as any of them.
+        self.colour(sum / bounds.volume)
     }
 
     /// The light scattered towards the camera at medium vertex `v` (see the module's notes),
-    /// without the walk's throughput.
+    /// without the walk's throughput, in two parts: single scattering from the light samples,
+    /// already times the vertex's weight (spectral in spectral mode, `wl`), and the volume
+    /// photons' estimate, which `v.tr_over_pdf` is still to multiply (RGB in either mode: the
+    /// photons are stored as RGB).
     pub(super) fn medium_radiance(
         &self,
         scene: &Scene,
         v: &MediumVertex,
+        wl: Option<&Wavelengths>,
         rng: &mut Rng32,
         scratch: &mut Gathered,
         stats: &mut RayStats,
-    ) -> Color {
+    ) -> (Color, Color) {
         let phase = *scene.media[v.medium as usize].phase();
         let from = RayOrigin { p: v.p, p_error: Vec3::ZERO, ng: Vec3::ZERO };
         let single = self.lights.sum(scene, rng, stats, |light, p_pick, u, rng, stats| {
@@ -176,14 +182,14 @@ impl PhotonIntegrator {
                 v.p,
                 u,
                 false,
-                None,
+                wl,
                 |wi, _| (Color::splat(phase.p(v.wo, wi)), 1.0, 0.0),
-                |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, v.medium, 0.0, rng, stats)),
+                |wi, dist| (1.0, transmittance_through_media(scene, from, wi, dist, v.medium, 0.0, rng, wl, stats)),
             )
         });
         let depth = trace::photon_depth_limit(self.config.max_depth, v.bounce).unwrap_or(0);
         let multiple = self.volume_estimate(scene, &phase, v.p, v.wo, depth, false, rng.uniform2(), scratch);
-        v.weight * single + v.tr_over_pdf * multiple
+        (v.weight * single, multiple)
     }
 
     /// Direct light at a surface hit reached in medium `medium`: every light in turn, each light
@@ -197,6 +203,7 @@ impl PhotonIntegrator {
         wo: Vec3,
         medium: u32,
         rng: &mut Rng32,
+        wl: Option<&Wavelengths>,
         stats: &mut RayStats,
     ) -> Color {
         let bias = self.config.ray_bias;
@@ -208,11 +215,11 @@ impl PhotonIntegrator {
                 hit.p,
                 u,
                 false,
-                None,
+                wl,
                 |wi, mis| bsdf_scatter(bsdf, wo, wi, mis),
                 |wi, dist| {
                     let m = scene.medium_after(hit, wi, medium);
-                    (1.0, transmittance_through_media(scene, hit.origin(), wi, dist, m, bias, rng, stats))
+                    (1.0, transmittance_through_media(scene, hit.origin(), wi, dist, m, bias, rng, wl, stats))
                 },
             )
         })

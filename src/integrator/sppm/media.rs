@@ -26,6 +26,7 @@ use crate::math::{Color, Vec2, Vec3};
 use crate::photon::trace::{self, PhotonHit};
 use crate::render::{RayStats, RenderSettings};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 
 /// Volume photons a gathering sphere holds on average in the first iteration with the default
 /// radius: enough that most spheres in lit fog find some (with far fewer, most find none and a
@@ -143,6 +144,11 @@ impl Sppm {
         let config = &self.config;
         let bias = config.ray_bias;
         let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
+        // In spectral mode the wavelengths take the first dimension after the camera's, as in
+        // `camera_sample`; the light found on the way is spectral (`ld`, `ld_layers`), the
+        // volume photons' estimates RGB (`rgb`).
+        let mut wl = config.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
+        let mut rgb = [Color::ZERO; 4];
         let mut tracking = sampler.side_stream(crate::integrator::volpath::TRACKING_STREAM);
         if ray.medium == NO_MEDIUM {
             ray.medium = scene.camera_medium;
@@ -163,12 +169,16 @@ impl Sppm {
             if ray.medium != NO_MEDIUM {
                 let medium = &scene.media[ray.medium as usize];
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                let ms = medium.sample_distance(&ray, t_max, beta, sampler.next_1d(), sampler.next_1d(), &mut tracking);
+                let (u_channel, u) = (sampler.next_1d(), sampler.next_1d());
+                let ms = medium.sample_distance(&ray, t_max, beta, u_channel, u, &mut tracking, wl.as_ref());
                 if ms.scattered {
                     // This scattering event is bounce depth + 1.
                     let Some(limit) = trace::photon_depth_limit(config.max_depth, depth + 1) else { break };
                     let l = volume.estimate(scene, medium.phase(), ray.at(ms.t), -ray.d, limit, sampler.next_2d());
-                    add(layer.other_photons(), beta * ms.tr_over_pdf * l);
+                    match &wl {
+                        Some(wl) => rgb[layer.other_photons()] += wl.throughput_to_srgb(beta * ms.tr_over_pdf) * l,
+                        None => add(layer.other_photons(), beta * ms.tr_over_pdf * l),
+                    }
                     break;
                 }
                 beta *= ms.weight;
@@ -177,15 +187,16 @@ impl Sppm {
                 }
             }
             let Some(hit) = hit else {
-                add(layer.emitted(), beta * scene.environment(ray.d));
+                let env = scene.environment.unwrap_or(crate::geometry::NO_LIGHT);
+                add(layer.emitted(), beta * scene.emission_in(scene.environment(ray.d), env, wl.as_ref()));
                 break;
             };
             dist += hit.t;
             let wo = -ray.d;
             if hit.is_emitter() && hit.is_front(ray.d) {
-                add(layer.emitted(), beta * scene.emitted(&hit, wo));
+                add(layer.emitted(), beta * scene.emission_in(scene.emitted(&hit, wo), hit.light, wl.as_ref()));
             }
-            let bsdf = scene.bsdf(&hit, wo);
+            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
             if bsdf.is_invisible() {
                 let medium = scene.medium_after(&hit, ray.d, ray.medium);
                 ray = hit.spawn(ray.d, bias);
@@ -206,12 +217,22 @@ impl Sppm {
                         hit.p,
                         u,
                         false,
-                        None,
+                        wl.as_ref(),
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, d| {
                             let m = scene.medium_after(&hit, wi, ray.medium);
-                            let tr =
-                                transmittance_through_media(scene, hit.origin(), wi, d, m, bias, &mut tracking, stats);
+                            let w = wl.as_ref();
+                            let tr = transmittance_through_media(
+                                scene,
+                                hit.origin(),
+                                wi,
+                                d,
+                                m,
+                                bias,
+                                &mut tracking,
+                                w,
+                                stats,
+                            );
                             (1.0, tr)
                         },
                     );
@@ -227,6 +248,11 @@ impl Sppm {
             };
             if sampler.next_1d() < q {
                 let photon_depth = trace::photon_depth_limit(config.max_depth, depth + 1).unwrap_or(0);
+                // The photons' light is RGB: the camera path's filter weights it as a colour.
+                let beta = match &wl {
+                    Some(wl) => wl.throughput_to_srgb(beta),
+                    None => beta,
+                };
                 let point = VisiblePoint {
                     at: Shading::of(&hit),
                     wo,
@@ -234,6 +260,7 @@ impl Sppm {
                     layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
                 };
+                let (ld, ld_layers) = to_rgb(wl.as_ref(), ld, ld_layers, rgb);
                 return CameraSample { ld, ld_layers, point: Some((point, dist)) };
             }
             if last {
@@ -251,6 +278,15 @@ impl Sppm {
             ray = hit.spawn(s.wi, bias);
             ray.medium = medium;
         }
+        let (ld, ld_layers) = to_rgb(wl.as_ref(), ld, ld_layers, rgb);
         CameraSample { ld, ld_layers, point: None }
     }
+}
+
+/// A camera sample's light as RGB: in spectral mode (`wl`) the spectral light found on the way
+/// converted, plus the RGB light from the volume photons (`rgb`, by layer); in RGB mode itself.
+fn to_rgb(wl: Option<&Wavelengths>, ld: Color, ld_layers: [Color; 4], rgb: [Color; 4]) -> (Color, [Color; 4]) {
+    let Some(wl) = wl else { return (ld, ld_layers) };
+    let layers: [Color; 4] = std::array::from_fn(|k| wl.to_srgb(ld_layers[k]) + rgb[k]);
+    (layers.iter().copied().sum(), layers)
 }

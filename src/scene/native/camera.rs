@@ -147,6 +147,7 @@ impl<'a> Cx<'a> {
             sample_border: render.sample_border.unwrap_or(false),
             // `aov` too is one of the render's options.
             aovs: Default::default(),
+            xyz: false,
         })
     }
 

@@ -159,6 +159,8 @@ pub struct RenderDesc {
     pub aov: Option<Spanned<String>>,
     /// Spectral rendering instead of RGB.
     pub spectral: Option<bool>,
+    /// The EXR's colour channels as CIE XYZ instead of linear sRGB (`--xyz`).
+    pub xyz: Option<bool>,
     /// Photon-mapping settings.
     #[serde(default)]
     pub photon: PhotonOptions,
@@ -192,6 +194,7 @@ impl RenderDesc {
             sample_border: _,
             aov: _,
             spectral,
+            xyz,
             photon,
         } = self;
         Options {
@@ -214,6 +217,7 @@ impl RenderDesc {
             // elsewhere does not open network connections.
             display_server: None,
             spectral: *spectral,
+            xyz: *xyz,
 
             photon: photon.clone(),
         }

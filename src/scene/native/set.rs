@@ -66,6 +66,7 @@ pub const ALIASES: &[(&str, &[(&str, &str)])] = &[
             ("crop", "crop"),
             ("sample_border", "sample_border"),
             ("aov", "aov"),
+            ("xyz", "xyz"),
         ],
     ),
     (
