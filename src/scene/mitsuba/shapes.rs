@@ -342,7 +342,12 @@ impl<'a> Cx<'a> {
             let reflects = match m.model {
                 crate::material::Model::Wrapper(_) => true,
                 crate::material::Model::Plain(p) => !p
-                    .lobes(true, crate::texture::TexPoint::uv(crate::math::Vec2::ZERO), b.geometry.textures())
+                    .lobes(
+                        true,
+                        crate::texture::TexPoint::uv(crate::math::Vec2::ZERO),
+                        b.geometry.textures(),
+                        &crate::material::GivenSpectra::NONE,
+                    )
                     .is_empty(),
             };
             b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
