@@ -134,3 +134,35 @@ pub fn lifted(lobe: Bxdf, ids: &LobeSpectra, table: &[GivenSpectrum], wl: &Wavel
         (_, l) => l,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::bsdf::Lobes;
+    use crate::material::bxdf::Lambert;
+    use crate::spectrum::SampledSpectrum;
+
+    /// A step at 600 nm whose colour is `rgb`: a lobe of that colour, halved by a blend, lifts
+    /// to half the step at each wavelength; a lobe without a spectrum keeps the colour's lift.
+    #[test]
+    fn lobes_evaluate_their_spectra_times_the_materials_factor() {
+        let s = SampledSpectrum::new(vec![360.0, 599.0, 601.0, 830.0], vec![0.1, 0.1, 0.8, 0.8]).unwrap();
+        let rgb = Color::new(0.6, 0.3, 0.1);
+        let table = [GivenSpectrum::new(&s, rgb).unwrap()];
+        let mut own = Lobes::default();
+        own.add_given(Bxdf::Lambert(Lambert { r: rgb }), [SpectrumId::new(0), SpectrumId::NONE, SpectrumId::NONE]);
+        let mut blend = Lobes::default();
+        blend.add_scaled(&own, 0.5);
+        blend.add(Bxdf::Lambert(Lambert { r: rgb }));
+        let wl = Wavelengths::single(500.0);
+        let lifted = blend.lifted(&wl, 1.0, &table);
+        let [Bxdf::Lambert(a), Bxdf::Lambert(b)] = lifted.as_slice() else { panic!("two Lambert lobes") };
+        for (w, v) in [(500.0, 0.05), (700.0, 0.4)] {
+            let wl = Wavelengths::single(w);
+            let Bxdf::Lambert(l) = blend.lifted(&wl, 1.0, &table).as_slice()[0] else { unreachable!() };
+            assert!((l.r[0] - v).abs() < 1e-6, "{w} nm: {}", l.r[0]);
+        }
+        assert!((a.r[0] - 0.05).abs() < 1e-6);
+        assert_eq!(b.r, wl.reflectance(rgb));
+    }
+}
