@@ -340,33 +340,34 @@ impl SceneBuilder {
     /// Adds one emitting object made of several surfaces (the faces of a cube): a light per
     /// surface, so light sampling picks among them by power (by area, as they share the
     /// radiance), and one material for all. With a `texture` (an index from `add_texture`) the
-    /// radiance is multiplied by it at each point's uv.
+    /// radiance is multiplied by it at each point's uv. Returns the index of the material made
+    /// for the emitter's surface.
     pub fn add_area_lights(
         &mut self,
         shapes: impl IntoIterator<Item = Shape>,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         let shapes = shapes.into_iter().map(|s| (s, TRIANGLE_UV));
-        self.add_emitters(shapes, radiance, texture, surface);
+        self.add_emitters(shapes, radiance, texture, surface)
     }
 
     /// Adds an emitting triangle mesh: a light per triangle (each emitting from the side its
     /// winding faces, as the mesh's geometric normals do), reading a texture at the mesh's
-    /// texture coordinates.
+    /// texture coordinates. Returns the index of the material made for its surface.
     pub fn add_mesh_area_lights(
         &mut self,
         mesh: &TriangleMesh,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         let triangles = mesh.indices.iter().enumerate().map(|(k, t)| {
             let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
             (Shape::Triangle(Triangle::new(p0, p1, p2)), mesh.vertex_uvs(k).unwrap_or(TRIANGLE_UV))
         });
-        self.add_emitters(triangles, radiance, texture, surface);
+        self.add_emitters(triangles, radiance, texture, surface)
     }
 
     /// True when some triangle of `mesh` has an area (can emit).
@@ -378,14 +379,15 @@ impl SceneBuilder {
     }
 
     /// The lights and primitives of emitting shapes, each with the texture coordinates of its
-    /// vertices when it is a triangle (read by an emission texture).
+    /// vertices when it is a triangle (read by an emission texture); returns the index of the
+    /// material made for their surface.
     fn add_emitters(
         &mut self,
         shapes: impl IntoIterator<Item = (Shape, [Vec2; 3])>,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         debug_assert!(self.open_group.is_none(), "loaders refuse emitters in instanced groups");
         let first = self.lights.len();
         let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
@@ -399,6 +401,7 @@ impl SceneBuilder {
             self.area_prims.push(Primitive { shape, material: m, light });
             self.lights.push(Light::Area { shape, radiance, texture });
         }
+        m
     }
 
     /// Records the bounding sphere and material of the object whose primitives start at
