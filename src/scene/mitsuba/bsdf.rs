@@ -405,13 +405,19 @@ impl<'a> Cx<'a> {
         b: &mut Build,
     ) -> Result<(ComplexIor, SpectrumId, SpectrumId), SceneError> {
         let material = self.string(p, "material")?;
-        self.given_spectrum = None;
-        let eta = self.color_for(p, "eta", Unbounded)?;
-        let eta_id = eta.map_or(SpectrumId::NONE, |c| self.given_id(b, c));
-        self.given_spectrum = None;
-        let k = self.color_for(p, "k", Unbounded)?;
-        let k_id = k.map_or(SpectrumId::NONE, |c| self.given_id(b, c));
-        self.given_spectrum = None;
+        // A spectrum read inside a texture (a checkerboard's colours) is not the value's.
+        let mut read = |this: &mut Self, name: &str| -> Result<(Option<Color>, SpectrumId), SceneError> {
+            this.given_spectrum = None;
+            let c = this.color_for(p, name, Unbounded)?;
+            let id = match c {
+                Some(c) if this.prop(p, name).is_some() => this.given_id(b, c),
+                _ => SpectrumId::NONE,
+            };
+            this.given_spectrum = None;
+            Ok((c, id))
+        };
+        let (eta, eta_id) = read(self, "eta")?;
+        let (k, k_id) = read(self, "k")?;
         let ior = match material {
             Some((name, at)) => {
                 if eta.is_some() || k.is_some() {
