@@ -2,7 +2,8 @@
 """Renders the Mitsuba 3 `scalar_spectral` references of tests/data/spectral, which
 tests/spectral.rs compares caustic's spectral mode with: the bundled Cornell box
 (scenes/mitsuba/cornell-box.xml at 64 x 64), the materials showcase (scenes/15-materials.toml
-as Mitsuba XML, at 96 x 72), two scenes lit by emitted spectra (black bodies; narrow lines)
+as Mitsuba XML, at 96 x 72), two scenes lit by emitted spectra (black bodies; narrow lines),
+one whose reflectances and conductor eta and k are wavelength:value lists (reflectance_lists)
 and two cases of the materials showcase
 (tests/data/materials: gold, whose eta and k Mitsuba reads as measured spectra, and a smooth
 plastic). Same procedure and manifest format as make_material_refs.py (two half-sample renders
@@ -45,7 +46,8 @@ refs.HEADER = refs.HEADER.replace("material and texture tests", "tests of the sp
     "The scenes come from\n`scripts/make_material_scenes.py`, their textures from `scripts/make_material_textures.py`.",
     "`cornell_box.xml` is\nscenes/mitsuba/cornell-box.xml at 64 x 64; `materials_showcase.xml` is scenes/15-materials.toml\n"
     "written for Mitsuba (its comment says how) at 96 x 72; `emitter_*.xml` light the scene of the material\n"
-    "cases with emitted spectra; the others are copies of tests/data/materials cases.")
+    "cases with emitted spectra; `reflectance_lists.xml` gives reflectances and a conductor's eta and k\n"
+    "as wavelength:value lists; the others are copies of tests/data/materials cases.")
 SPP = 4096
 # The showcase's glass and small light sources are noisier: more samples.
 SPP_OF = {"materials_showcase": 8192}

@@ -17,6 +17,7 @@
 //! does.
 
 use super::bxdf::{Bxdf, BxdfSample, LobeFlags, Transport};
+use super::given::{self, GivenSpectrum, LobeSpectra, NO_LOBE_SPECTRA};
 use crate::math::{Color, Frame, Vec2, Vec3};
 
 /// Most lobes a BSDF holds.
@@ -50,6 +51,9 @@ pub struct Lobes {
     photon_total: f32,
     count: u8,
     flags: LobeFlags,
+    /// The spectra given for each lobe's colours (`super::given`), which spectral mode
+    /// evaluates instead of lifting the colours; RGB mode never reads them.
+    spectra: [LobeSpectra; MAX_LOBES],
     /// Every lobe is isotropic (see `Bxdf::is_isotropic`).
     isotropic: bool,
     /// Some lobe's choice depends on the viewing direction (`Bxdf::selection`).
@@ -68,6 +72,7 @@ impl Default for Lobes {
             photon_total: 0.0,
             count: 0,
             flags: LobeFlags::NONE,
+            spectra: [NO_LOBE_SPECTRA; MAX_LOBES],
             isotropic: true,
             directional: false,
         }
@@ -78,12 +83,19 @@ impl Lobes {
     /// Adds a lobe; lobes that never scatter (zero sampling weight) are left out.
     #[inline]
     pub fn add(&mut self, lobe: Bxdf) {
+        self.add_given(lobe, NO_LOBE_SPECTRA);
+    }
+
+    /// `add`, with the spectra given for the lobe's colours.
+    #[inline]
+    pub fn add_given(&mut self, lobe: Bxdf, spectra: LobeSpectra) {
         let w = lobe.sampling_weight();
         if !(w > 0.0) || self.count as usize >= MAX_LOBES {
             return;
         }
         let i = self.count as usize;
         self.lobes[i] = lobe;
+        self.spectra[i] = spectra;
         self.lobe_flags[i] = lobe.flags();
         self.weights[i] = w;
         self.photon_weights[i] = lobe.mean_albedo().max(w * 1e-3);
@@ -95,21 +107,22 @@ impl Lobes {
         self.directional |= lobe.directional_selection();
     }
 
-    /// The lobes in spectral mode (`Lobe::lifted`): colours as spectra at `wl`, dielectric
-    /// indices times `eta_ratio`; sampling weights follow the lifted values.
+    /// The lobes in spectral mode (`Lobe::lifted`): colours as spectra at `wl` (the spectra
+    /// given for them, from `table`, or else their lifts), dielectric indices times
+    /// `eta_ratio`; sampling weights follow the lifted values.
     #[inline]
-    pub fn lifted(&self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Lobes {
+    pub fn lifted(&self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32, table: &[GivenSpectrum]) -> Lobes {
         let mut out = Lobes::default();
-        for lobe in self.as_slice() {
-            out.add(lobe.lifted(wl, eta_ratio));
+        for (lobe, ids) in self.as_slice().iter().zip(&self.spectra) {
+            out.add(given::lifted(*lobe, ids, table, wl, eta_ratio));
         }
         out
     }
 
     /// Adds every lobe of `other`, each scaled by `w` (a blend of two materials).
     pub fn add_scaled(&mut self, other: &Lobes, w: f32) {
-        for lobe in other.as_slice() {
-            self.add(lobe.scaled(w));
+        for (lobe, ids) in other.as_slice().iter().zip(&other.spectra) {
+            self.add_given(lobe.scaled(w), *ids);
         }
     }
 
@@ -214,8 +227,8 @@ impl<'a> Bsdf<'a> {
 
     /// The same BSDF in spectral mode: its lobes lifted (`Lobes::lifted`), owned.
     #[inline]
-    pub fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32) -> Self {
-        Bsdf { lobes: LobeSet::Owned(self.lobes.lifted(wl, eta_ratio)), ..self }
+    pub fn lifted(self, wl: &crate::spectrum::Wavelengths, eta_ratio: f32, table: &[GivenSpectrum]) -> Self {
+        Bsdf { lobes: LobeSet::Owned(self.lobes.lifted(wl, eta_ratio, table)), ..self }
     }
 
     /// The shading frame (z on the side of `wo`).

@@ -14,10 +14,12 @@ pub mod classic;
 mod conductor_spectra;
 pub mod conductors;
 pub mod fresnel;
+pub mod given;
 pub mod microfacet;
 pub mod set;
 
 pub use classic::{Classic, ClassicKind};
+pub use given::{GivenSpectra, GivenSpectrum, SpectrumId};
 pub use set::Materials;
 
 use crate::math::Color;
@@ -553,9 +555,12 @@ impl Plain {
     }
 
     /// The lobes at texture coordinates `uv`, seen from the outward side (`front`) or the
-    /// inside (which matters only for glass: the index is inverted).
-    pub fn lobes(&self, front: bool, at: TexPoint<'_>, textures: &[Texture]) -> Lobes {
+    /// inside (which matters only for glass: the index is inverted), with the spectra `given`
+    /// for the model's constant colours attached to the lobes they colour.
+    pub fn lobes(&self, front: bool, at: TexPoint<'_>, textures: &[Texture], given: &GivenSpectra) -> Lobes {
         let mut lobes = Lobes::default();
+        let [c0, c1] = given.colors;
+        let none = SpectrumId::NONE;
         let side = |eta: f32| if front { eta } else { 1.0 / eta };
         match *self {
             Plain::Classic(c) => {
@@ -565,55 +570,72 @@ impl Plain {
                 };
                 return c.lobes(front);
             }
-            Plain::Diffuse { reflectance } => lobes.add(Bxdf::Lambert(Lambert { r: reflectance.at(at, textures) })),
-            Plain::Conductor { ior, specular } => lobes.add(Bxdf::Conductor(Conductor {
-                eta: ior.eta,
-                k: ior.k,
-                measured: ior.measured,
-                scale: specular.at(at, textures),
-            })),
-            Plain::RoughConductor { roughness, ior, specular } => lobes.add(Bxdf::RoughConductor(RoughConductor {
-                mf: roughness.at(at, textures),
-                eta: ior.eta,
-                k: ior.k,
-                measured: ior.measured,
-                scale: specular.at(at, textures),
-            })),
-            Plain::Dielectric { eta, reflectance, transmittance } => lobes.add(Bxdf::Dielectric(Dielectric {
-                eta: side(eta),
-                r: reflectance.at(at, textures),
-                t: transmittance.at(at, textures),
-            })),
-            Plain::RoughDielectric { roughness, eta, reflectance, transmittance } => {
-                lobes.add(Bxdf::RoughDielectric(RoughDielectric {
+            Plain::Diffuse { reflectance } => {
+                lobes.add_given(Bxdf::Lambert(Lambert { r: reflectance.at(at, textures) }), [c0, none, none])
+            }
+            Plain::Conductor { ior, specular } => lobes.add_given(
+                Bxdf::Conductor(Conductor {
+                    eta: ior.eta,
+                    k: ior.k,
+                    measured: ior.measured,
+                    scale: specular.at(at, textures),
+                }),
+                [c0, given.eta, given.k],
+            ),
+            Plain::RoughConductor { roughness, ior, specular } => lobes.add_given(
+                Bxdf::RoughConductor(RoughConductor {
+                    mf: roughness.at(at, textures),
+                    eta: ior.eta,
+                    k: ior.k,
+                    measured: ior.measured,
+                    scale: specular.at(at, textures),
+                }),
+                [c0, given.eta, given.k],
+            ),
+            Plain::Dielectric { eta, reflectance, transmittance } => lobes.add_given(
+                Bxdf::Dielectric(Dielectric {
+                    eta: side(eta),
+                    r: reflectance.at(at, textures),
+                    t: transmittance.at(at, textures),
+                }),
+                [c0, c1, none],
+            ),
+            Plain::RoughDielectric { roughness, eta, reflectance, transmittance } => lobes.add_given(
+                Bxdf::RoughDielectric(RoughDielectric {
                     mf: roughness.at(at, textures),
                     eta: side(eta),
                     r: reflectance.at(at, textures),
                     t: transmittance.at(at, textures),
-                }))
-            }
+                }),
+                [c0, c1, none],
+            ),
             Plain::Plastic { diffuse, specular, eta, nonlinear, diffuse_mean } => {
                 let d = diffuse.at(at, textures);
                 let fdr = fresnel_diffuse_reflectance(1.0 / eta);
                 let d = base_through_coating(d, fdr, nonlinear) / (eta * eta);
                 let scale = specular.at(at, textures);
-                lobes.add(Bxdf::FresnelMirror(FresnelMirror { eta, scale }));
-                lobes.add(Bxdf::PlasticDiffuse(PlasticDiffuse {
-                    d,
-                    eta,
-                    d_mean: diffuse_mean.max(1e-4 * scale.mean()),
-                }));
+                lobes.add_given(Bxdf::FresnelMirror(FresnelMirror { eta, scale }), [c1, none, none]);
+                lobes.add_given(
+                    Bxdf::PlasticDiffuse(PlasticDiffuse { d, eta, d_mean: diffuse_mean.max(1e-4 * scale.mean()) }),
+                    [linear_base(c0, nonlinear), none, none],
+                );
             }
             Plain::RoughPlastic { microfacet, diffuse, specular, eta, nonlinear, diffuse_mean, table } => {
                 let d = diffuse.at(at, textures);
                 let d = base_through_coating(d, table.internal_reflectance, nonlinear) / (eta * eta);
                 let scale = specular.at(at, textures);
-                lobes.add(Bxdf::RoughCoating(RoughCoating { mf: microfacet, eta, scale, table }));
-                lobes.add(Bxdf::RoughPlasticDiffuse(RoughPlasticDiffuse {
-                    d,
-                    table,
-                    d_mean: diffuse_mean.max(1e-4 * scale.mean()),
-                }));
+                lobes.add_given(
+                    Bxdf::RoughCoating(RoughCoating { mf: microfacet, eta, scale, table }),
+                    [c1, none, none],
+                );
+                lobes.add_given(
+                    Bxdf::RoughPlasticDiffuse(RoughPlasticDiffuse {
+                        d,
+                        table,
+                        d_mean: diffuse_mean.max(1e-4 * scale.mean()),
+                    }),
+                    [linear_base(c0, nonlinear), none, none],
+                );
             }
             Plain::Principled(p) => p.lobes(front, at, textures, &mut lobes),
             Plain::PrincipledThin(p) => p.lobes(at, textures, &mut lobes),
@@ -699,6 +721,12 @@ impl Wrapper {
 /// The base's reflectance after the light bouncing between base and coating: d / (1 - F_dr), or
 /// Mitsuba's `nonlinear` d / (1 - d F_dr) where each bounce on the base also tints the light.
 #[inline]
+/// The spectrum of a plastic's base colour where the lobe's colour is that colour times a
+/// constant: a nonlinear base's is not (`base_through_coating`), and is lifted from its colour.
+fn linear_base(id: SpectrumId, nonlinear: bool) -> SpectrumId {
+    if nonlinear { SpectrumId::NONE } else { id }
+}
+
 fn base_through_coating(d: Color, fdr: f32, nonlinear: bool) -> Color {
     if nonlinear { d / (Color::ONE - d * fdr) } else { d / (1.0 - fdr) }
 }

@@ -3,7 +3,7 @@
 //! materials' lobes come from a table made once, textured ones are evaluated at the hit's (u, v).
 
 use super::bsdf::{Bsdf, LobeSet, Lobes, MAX_LOBES, front_side};
-use super::{Classic, Material, Model, Plain, Wrapper};
+use super::{Classic, GivenSpectra, GivenSpectrum, Material, Model, Plain, Wrapper};
 use crate::geometry::Hit;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::texture::{MeshPoint, TexPoint, Texture};
@@ -19,6 +19,11 @@ pub struct Materials {
     pub textures: Vec<Texture>,
     /// Lobes of untextured plain materials seen from the front and from the back, made once.
     cached: Vec<Option<[Lobes; 2]>>,
+    /// Reflectance-like spectra given as spectra (`super::given`), which spectral mode evaluates
+    /// instead of lifting the colours they stand for.
+    pub spectra: Vec<GivenSpectrum>,
+    /// Per material (or none past the end): the spectra of its constant colours in `spectra`.
+    given: Vec<GivenSpectra>,
     /// Some material is a mask: shadow rays must look through transparent parts.
     pub has_masks: bool,
     /// Per material: it (or a material it wraps) reads a mesh attribute texture, so its BSDF
@@ -30,6 +35,23 @@ impl Materials {
     /// Checks the references between materials and textures and prepares the tables. Errors
     /// name the material.
     pub fn new(list: Vec<Material>, names: Vec<String>, textures: Vec<Texture>) -> Result<Self, String> {
+        Self::with_spectra(list, names, textures, Vec::new(), Vec::new())
+    }
+
+    /// `new`, with the spectra given for the materials' constant colours: `given[m]` for
+    /// material `m`, indices into `spectra`.
+    pub fn with_spectra(
+        list: Vec<Material>,
+        names: Vec<String>,
+        textures: Vec<Texture>,
+        spectra: Vec<GivenSpectrum>,
+        given: Vec<GivenSpectra>,
+    ) -> Result<Self, String> {
+        let known = |id: super::SpectrumId| id.is_none() || (id.index() < spectra.len());
+        if let Some(i) = given.iter().position(|g| !g.colors.iter().chain([&g.eta, &g.k]).all(|&id| known(id))) {
+            let name = names.get(i).map_or("?", String::as_str);
+            return Err(format!("material `{name}` refers to a spectrum that does not exist"));
+        }
         for (i, m) in list.iter().enumerate() {
             let name = names.get(i).map_or("?", String::as_str);
             for c in m.model.children() {
@@ -58,8 +80,16 @@ impl Materials {
                 _ => {}
             }
         }
-        let mut set =
-            Materials { list, names, textures, cached: Vec::new(), has_masks: false, reads_attributes: Vec::new() };
+        let mut set = Materials {
+            list,
+            names,
+            textures,
+            cached: Vec::new(),
+            spectra,
+            given,
+            has_masks: false,
+            reads_attributes: Vec::new(),
+        };
         for i in 0..set.list.len() {
             if let Model::Wrapper(Wrapper::Blend { first, second, .. }) = set.list[i].model {
                 let n = set.plain_lobe_count(first) + set.plain_lobe_count(second);
@@ -79,10 +109,12 @@ impl Materials {
         set.cached = set
             .list
             .iter()
-            .map(|m| match m.model {
+            .enumerate()
+            .map(|(i, m)| match m.model {
                 Model::Plain(p) if !p.is_textured() => {
                     let at = TexPoint::uv(Vec2::ZERO);
-                    Some([p.lobes(true, at, &set.textures), p.lobes(false, at, &set.textures)])
+                    let given = set.given_of(i as u32);
+                    Some([p.lobes(true, at, &set.textures, &given), p.lobes(false, at, &set.textures, &given)])
                 }
                 Model::Plain(_) | Model::Wrapper(_) => None,
             })
@@ -138,7 +170,9 @@ impl Materials {
     /// Lobes a plain material (or the plain material a chain of wrappers ends in) has.
     fn plain_lobes_of(&self, m: u32) -> Lobes {
         match self.walk(m, true, |_| {}).0 {
-            WalkEnd::Plain(p) => self.plain(p).lobes(true, TexPoint::uv(Vec2::ZERO), &self.textures),
+            WalkEnd::Plain(p) => {
+                self.plain(p).lobes(true, TexPoint::uv(Vec2::ZERO), &self.textures, &GivenSpectra::NONE)
+            }
             WalkEnd::Blend(_) | WalkEnd::Black => Lobes::default(),
         }
     }
@@ -162,6 +196,12 @@ impl Materials {
         }
     }
 
+    /// The spectra given for material `m`'s constant colours.
+    #[inline]
+    fn given_of(&self, m: u32) -> GivenSpectra {
+        self.given.get(m as usize).copied().unwrap_or(GivenSpectra::NONE)
+    }
+
     pub fn len(&self) -> usize {
         self.list.len()
     }
@@ -178,7 +218,7 @@ impl Materials {
         if let Some(c) = &self.cached[m as usize] {
             return LobeSet::Shared(&c[usize::from(!outward)]);
         }
-        LobeSet::Owned(self.plain(m).lobes(outward, at, &self.textures))
+        LobeSet::Owned(self.plain(m).lobes(outward, at, &self.textures, &self.given_of(m)))
     }
 
     /// Which lobes plain material `m` shows on side `front` (`as_front` as in `lobes`): its

@@ -13,7 +13,7 @@ use crate::accel::{Bvh, Instance, Instances};
 use crate::camera::Camera;
 use crate::geometry::{Aabb, NO_LIGHT, Transform};
 use crate::light::{EmissionTexture, Environment, Light, LightPicker, PhotonDisk};
-use crate::material::{Material, Materials, Param, Wrapper};
+use crate::material::{GivenSpectra, GivenSpectrum, Material, Materials, Param, SpectrumId, Wrapper};
 use crate::math::{Color, Vec2, Vec3};
 use crate::medium::{Medium, MediumInterface};
 use crate::shape::{Plane, Primitive, Primitives, Shape, TRIANGLE_UV, Triangle, TriangleMesh};
@@ -64,6 +64,10 @@ pub struct SceneBuilder {
     /// (first light, end, spectrum), `usize::MAX` as the first light for the environment.
     spectra: Vec<EmissionSpectrum>,
     spectrum_users: Vec<(usize, usize, u32)>,
+    /// Reflectance-like spectra kept as given, for spectral mode, and by material the ones its
+    /// constant colours use (`Materials::with_spectra`; materials past the end have none).
+    given_spectra: Vec<GivenSpectrum>,
+    material_spectra: Vec<GivenSpectra>,
 }
 
 impl SceneBuilder {
@@ -114,6 +118,7 @@ impl SceneBuilder {
         }
         let name = self.material_names[material as usize].clone();
         let copy = self.add_material(name, self.materials[material as usize]);
+        self.set_material_spectra(copy, self.material_spectra(material));
         self.interfaces[copy as usize] = Some(interface);
         self.interface_copies.push(((material, interface), copy));
         copy
@@ -284,6 +289,33 @@ impl SceneBuilder {
         self.spectrum_users.push((first.unwrap_or(usize::MAX), end, id));
     }
 
+    /// Keeps a reflectance-like spectrum for spectral mode; returns its index (none when the
+    /// table is full: the colour it stands for is then lifted).
+    pub fn add_given_spectrum(&mut self, spectrum: GivenSpectrum) -> SpectrumId {
+        let id = SpectrumId::new(self.given_spectra.len());
+        if !id.is_none() {
+            self.given_spectra.push(spectrum);
+        }
+        id
+    }
+
+    /// Spectral mode evaluates the spectra `given` for material `m`'s constant colours.
+    pub fn set_material_spectra(&mut self, m: u32, given: GivenSpectra) {
+        let m = m as usize;
+        if m >= self.material_spectra.len() {
+            if given.is_none() {
+                return;
+            }
+            self.material_spectra.resize(m + 1, GivenSpectra::NONE);
+        }
+        self.material_spectra[m] = given;
+    }
+
+    /// The spectra given for material `m`'s constant colours.
+    pub fn material_spectra(&self, m: u32) -> GivenSpectra {
+        self.material_spectra.get(m as usize).copied().unwrap_or(GivenSpectra::NONE)
+    }
+
     /// Sets the environment light (an environment map or a constant radiance); a scene has at
     /// most one, as in Mitsuba.
     pub fn set_environment(&mut self, env: Environment) -> Result<(), String> {
@@ -308,33 +340,34 @@ impl SceneBuilder {
     /// Adds one emitting object made of several surfaces (the faces of a cube): a light per
     /// surface, so light sampling picks among them by power (by area, as they share the
     /// radiance), and one material for all. With a `texture` (an index from `add_texture`) the
-    /// radiance is multiplied by it at each point's uv.
+    /// radiance is multiplied by it at each point's uv. Returns the index of the material made
+    /// for the emitter's surface.
     pub fn add_area_lights(
         &mut self,
         shapes: impl IntoIterator<Item = Shape>,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         let shapes = shapes.into_iter().map(|s| (s, TRIANGLE_UV));
-        self.add_emitters(shapes, radiance, texture, surface);
+        self.add_emitters(shapes, radiance, texture, surface)
     }
 
     /// Adds an emitting triangle mesh: a light per triangle (each emitting from the side its
     /// winding faces, as the mesh's geometric normals do), reading a texture at the mesh's
-    /// texture coordinates.
+    /// texture coordinates. Returns the index of the material made for its surface.
     pub fn add_mesh_area_lights(
         &mut self,
         mesh: &TriangleMesh,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         let triangles = mesh.indices.iter().enumerate().map(|(k, t)| {
             let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
             (Shape::Triangle(Triangle::new(p0, p1, p2)), mesh.vertex_uvs(k).unwrap_or(TRIANGLE_UV))
         });
-        self.add_emitters(triangles, radiance, texture, surface);
+        self.add_emitters(triangles, radiance, texture, surface)
     }
 
     /// True when some triangle of `mesh` has an area (can emit).
@@ -346,14 +379,15 @@ impl SceneBuilder {
     }
 
     /// The lights and primitives of emitting shapes, each with the texture coordinates of its
-    /// vertices when it is a triangle (read by an emission texture).
+    /// vertices when it is a triangle (read by an emission texture); returns the index of the
+    /// material made for their surface.
     fn add_emitters(
         &mut self,
         shapes: impl IntoIterator<Item = (Shape, [Vec2; 3])>,
         radiance: Color,
         texture: Option<u32>,
         surface: Option<Material>,
-    ) {
+    ) -> u32 {
         debug_assert!(self.open_group.is_none(), "loaders refuse emitters in instanced groups");
         let first = self.lights.len();
         let m = self.add_material(format!("(area light {})", first + 1), surface.unwrap_or_else(Material::black));
@@ -367,6 +401,7 @@ impl SceneBuilder {
             self.area_prims.push(Primitive { shape, material: m, light });
             self.lights.push(Light::Area { shape, radiance, texture });
         }
+        m
     }
 
     /// Records the bounding sphere and material of the object whose primitives start at
@@ -391,7 +426,13 @@ impl SceneBuilder {
     /// Builds the BVH and the scene seen through `camera`; fails when materials refer to each
     /// other or to textures wrongly.
     pub fn finish(mut self, camera: Camera) -> Result<(Scene, LoadInfo), String> {
-        let materials = Materials::new(self.materials, self.material_names, self.textures)?;
+        let materials = Materials::with_spectra(
+            self.materials,
+            self.material_names,
+            self.textures,
+            std::mem::take(&mut self.given_spectra),
+            std::mem::take(&mut self.material_spectra),
+        )?;
         self.prims.append(std::mem::take(&mut self.area_prims));
         let t0 = Instant::now();
         let bvh = Bvh::build(std::mem::take(&mut self.prims), &self.meshes);

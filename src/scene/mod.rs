@@ -376,7 +376,7 @@ impl Scene {
             }
             None => 1.0,
         };
-        bsdf.lifted(wl, ratio)
+        bsdf.lifted(wl, ratio, &self.materials.spectra)
     }
 
     /// Light `light`'s emitted colour `le` (radiance, or radiance over a density) in the mode

@@ -88,7 +88,7 @@ const CASES: [&str; 7] =
     ["defaults", "metal_sheen_coat", "anisotropic", "glass", "flat_sheen", "polished_metal", "everything"];
 
 fn lobes(p: &Plain, front: bool) -> Lobes {
-    p.lobes(front, TexPoint::uv(Vec2::ZERO), &[])
+    p.lobes(front, TexPoint::uv(Vec2::ZERO), &[], &crate::material::GivenSpectra::NONE)
 }
 
 /// The BSDF in the frame z = normal, seen from `wo`: our `Bsdf` picks the side.

@@ -10,8 +10,10 @@ use super::xml::El;
 use crate::material::conductors::ComplexIor;
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{Classic, ClassicKind, Material, Param, Plain, Roughness, Wrapper, conductors};
+use crate::material::{GivenSpectra, SpectrumId};
 use crate::math::Color;
 use crate::scene::SceneError;
+use crate::spectrum::SpectrumUse::{Reflectance, Unbounded};
 
 /// Mitsuba's default BSDF: diffuse with reflectance 0.5 (one-sided).
 pub(super) fn default_diffuse() -> Material {
@@ -40,11 +42,13 @@ impl<'a> Cx<'a> {
             return Ok(i);
         }
         let m = self.bsdf(el, b, depth)?;
+        let given = std::mem::replace(&mut self.bsdf_given, GivenSpectra::NONE);
         let name = match self.attr(el, "id")? {
             Some((id, _)) => id,
             None => format!("(bsdf {})", b.geometry.material_count() + 1),
         };
         let i = b.geometry.add_material(name, m);
+        b.geometry.set_material_spectra(i, given);
         b.bsdf_cache.insert(key, i);
         Ok(i)
     }
@@ -95,14 +99,21 @@ impl<'a> Cx<'a> {
         let p = self.props(el)?;
         let one = Material::one_sided;
         let unit = Param::Const(Color::ONE);
+        // The spectra the constant colours were given as (for spectral mode), in the order
+        // `GivenSpectra` says.
+        let mut given = GivenSpectra::NONE;
         let m = match p.kind.as_str() {
             "diffuse" => {
-                let reflectance = self.color_param(&p, "reflectance", b)?.unwrap_or(Param::Const(Color::splat(0.5)));
-                one(Plain::Diffuse { reflectance })
+                let (reflectance, id) = self.color_param_given(&p, "reflectance", b, Reflectance)?;
+                given.colors[0] = id;
+                one(Plain::Diffuse { reflectance: reflectance.unwrap_or(Param::Const(Color::splat(0.5))) })
             }
             "conductor" | "roughconductor" => {
-                let ior = self.complex_ior(&p)?;
-                let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
+                let ior;
+                (ior, given.eta, given.k) = self.complex_ior(&p, b)?;
+                let (specular, id) = self.color_param_given(&p, "specular_reflectance", b, Reflectance)?;
+                given.colors[0] = id;
+                let specular = specular.unwrap_or(unit);
                 if p.kind == "conductor" {
                     one(Plain::Conductor { ior, specular })
                 } else {
@@ -118,8 +129,10 @@ impl<'a> Cx<'a> {
                     Some(d) => d.n_d() / self.ior(&p, "ext_ior", AIR)?,
                     None => self.eta(&p, BK7)?,
                 };
-                let reflectance = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
-                let transmittance = self.color_param(&p, "specular_transmittance", b)?.unwrap_or(unit);
+                let (reflectance, r_id) = self.color_param_given(&p, "specular_reflectance", b, Reflectance)?;
+                let (transmittance, t_id) = self.color_param_given(&p, "specular_transmittance", b, Reflectance)?;
+                given.colors = [r_id, t_id];
+                let (reflectance, transmittance) = (reflectance.unwrap_or(unit), transmittance.unwrap_or(unit));
                 let m = if p.kind == "dielectric" {
                     Material::two_sided(Plain::Dielectric { eta, reflectance, transmittance })
                 } else {
@@ -165,9 +178,11 @@ impl<'a> Cx<'a> {
                 .into()
             }
             "plastic" | "roughplastic" => {
-                let diffuse =
-                    self.color_param(&p, "diffuse_reflectance", b)?.unwrap_or(Param::Const(Color::splat(0.5)));
-                let specular = self.color_param(&p, "specular_reflectance", b)?.unwrap_or(unit);
+                let (diffuse, d_id) = self.color_param_given(&p, "diffuse_reflectance", b, Reflectance)?;
+                let (specular, s_id) = self.color_param_given(&p, "specular_reflectance", b, Reflectance)?;
+                given.colors = [d_id, s_id];
+                let diffuse = diffuse.unwrap_or(Param::Const(Color::splat(0.5)));
+                let specular = specular.unwrap_or(unit);
                 let eta = self.eta(&p, POLYPROPYLENE)?;
                 let nonlinear = self.boolean(&p, "nonlinear")?.unwrap_or(false);
                 let textures = b.geometry.textures();
@@ -197,6 +212,7 @@ impl<'a> Cx<'a> {
                 match inner.as_slice() {
                     [m] => {
                         check(self, *m)?;
+                        given = b.geometry.material_spectra(*m);
                         Material { two_sided: true, ..*b.geometry.material(*m) }
                     }
                     [front, back] => {
@@ -264,6 +280,7 @@ impl<'a> Cx<'a> {
             }
         };
         self.finish(&p)?;
+        self.bsdf_given = given;
         Ok(m)
     }
 
@@ -380,12 +397,28 @@ impl<'a> Cx<'a> {
     }
 
     /// A conductor's complex index: a named `material` (default `none`: a perfect mirror), or
-    /// `eta` and `k` (0 and 1 when missing, as Mitsuba).
-    fn complex_ior(&mut self, p: &Props<'a>) -> Result<ComplexIor, SceneError> {
+    /// `eta` and `k` (0 and 1 when missing, as Mitsuba), with the spectra `eta` and `k` were
+    /// given as (for spectral mode).
+    fn complex_ior(
+        &mut self,
+        p: &Props<'a>,
+        b: &mut Build,
+    ) -> Result<(ComplexIor, SpectrumId, SpectrumId), SceneError> {
         let material = self.string(p, "material")?;
-        let eta = self.color_for(p, "eta", crate::spectrum::SpectrumUse::Unbounded)?;
-        let k = self.color_for(p, "k", crate::spectrum::SpectrumUse::Unbounded)?;
-        match material {
+        // A spectrum read inside a texture (a checkerboard's colours) is not the value's.
+        let mut read = |this: &mut Self, name: &str| -> Result<(Option<Color>, SpectrumId), SceneError> {
+            this.given_spectrum = None;
+            let c = this.color_for(p, name, Unbounded)?;
+            let id = match c {
+                Some(c) if this.prop(p, name).is_some() => this.given_id(b, c),
+                _ => SpectrumId::NONE,
+            };
+            this.given_spectrum = None;
+            Ok((c, id))
+        };
+        let (eta, eta_id) = read(self, "eta")?;
+        let (k, k_id) = read(self, "k")?;
+        let ior = match material {
             Some((name, at)) => {
                 if eta.is_some() || k.is_some() {
                     return Err(self.err(at, "give either `material` or `eta` and `k`, not both"));
@@ -396,7 +429,8 @@ impl<'a> Cx<'a> {
                 })
             }
             None => Ok(ComplexIor::rgb(eta.unwrap_or(Color::ZERO), k.unwrap_or(Color::ONE))),
-        }
+        }?;
+        Ok((ior, eta_id, k_id))
     }
 
     /// `distribution` and `alpha` (or `alpha_u` and `alpha_v` when `anisotropic` is allowed).

@@ -86,6 +86,7 @@ pub fn load_mitsuba_text(
         aovs: Default::default(),
         files,
         given_spectrum: None,
+        bsdf_given: crate::material::GivenSpectra::NONE,
     };
     for (k, v) in &options.defines {
         cx.defines.insert(k.clone(), v.clone());

@@ -70,9 +70,12 @@ pub(super) struct Cx<'a> {
     pub files: &'a crate::scene::FileBudget,
     /// The AOVs an `aov` integrator asks for.
     pub aovs: crate::film::aov::AovList,
-    /// The last emitted spectrum read as a spectrum (not an RGB colour), which the emitter
-    /// reading it takes (`emission_color`) for spectral mode.
+    /// The last `<spectrum>` read as a spectrum (not an RGB colour), which the emitter or BSDF
+    /// reading it takes (`emission_color`, `given_id`) for spectral mode.
     pub given_spectrum: Option<crate::spectrum::SampledSpectrum>,
+    /// The spectra the BSDF just read kept for its constant colours (`bsdf` leaves them here
+    /// for `material_at`, which files them under the material's index).
+    pub bsdf_given: crate::material::GivenSpectra,
 }
 
 /// A transform with, when it is exactly one `lookat`, that lookat's (origin, target, up).

@@ -342,12 +342,21 @@ impl<'a> Cx<'a> {
             let reflects = match m.model {
                 crate::material::Model::Wrapper(_) => true,
                 crate::material::Model::Plain(p) => !p
-                    .lobes(true, crate::texture::TexPoint::uv(crate::math::Vec2::ZERO), b.geometry.textures())
+                    .lobes(
+                        true,
+                        crate::texture::TexPoint::uv(crate::math::Vec2::ZERO),
+                        b.geometry.textures(),
+                        &crate::material::GivenSpectra::NONE,
+                    )
                     .is_empty(),
             };
-            b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
+            // The emitter's surface is a copy of its BSDF: it keeps the BSDF's spectra.
+            let spectra = if reflects { b.geometry.material_spectra(material) } else { Default::default() };
+            let surface = b.geometry.add_area_lights(emitters_out, radiance, texture, reflects.then_some(m));
+            b.geometry.set_material_spectra(surface, spectra);
             if let Some(mesh) = &emitting_mesh {
-                b.geometry.add_mesh_area_lights(mesh, radiance, texture, reflects.then_some(m));
+                let surface = b.geometry.add_mesh_area_lights(mesh, radiance, texture, reflects.then_some(m));
+                b.geometry.set_material_spectra(surface, spectra);
             }
             self.keep_spectrum(b, Some(first_light), spectrum, radiance);
             return self.finish(&p);

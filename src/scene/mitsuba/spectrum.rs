@@ -2,25 +2,34 @@
 //! an `.spd` file, or a spectrum plugin (`uniform`, `regular`, `irregular`, `srgb`, `d65`,
 //! `blackbody`), each becoming one linear sRGB colour (see `crate::spectrum`).
 
+use super::Build;
 use super::plugins::PluginKind;
 use super::props::Cx;
 use super::xml::El;
+use crate::material::{GivenSpectrum, SpectrumId};
 use crate::math::Color;
 use crate::scene::{FileKind, SceneError};
 use crate::spectrum::{CIE_MAX, CIE_MIN, SampledSpectrum, SpectrumUse, equal_energy_white, parse_spd};
 use std::ops::Range;
 
 impl<'a> Cx<'a> {
-    /// The colour of a `<spectrum>` element for property `name`. An emitted spectrum given
-    /// as a spectrum (a constant, a list, a file, `uniform`, `regular`, `irregular`,
-    /// `blackbody`: all but `srgb` and `d65`) is also kept in `given_spectrum`.
+    /// The colour of a `<spectrum>` element for property `name`. A spectrum given as a
+    /// spectrum (a constant, a list, a file, `uniform`, `regular`, `irregular`, `blackbody`:
+    /// all but `srgb` and `d65`) is also kept in `given_spectrum`, for an emitter or a BSDF to
+    /// take.
     pub(super) fn spectrum_color(&mut self, el: &'a El, name: &str, usage: SpectrumUse) -> Result<Color, SceneError> {
         self.given_spectrum = None;
-        let color = self.spectrum_color_of(el, name, usage)?;
-        if usage != SpectrumUse::Emission {
-            self.given_spectrum = None;
+        self.spectrum_color_of(el, name, usage)
+    }
+
+    /// The spectrum the colour `color` just read was given as, kept in the scene's table of
+    /// reflectance-like spectra for spectral mode (none when it was not given as a spectrum,
+    /// or the colour is black).
+    pub(super) fn given_id(&mut self, b: &mut Build, color: Color) -> SpectrumId {
+        match self.given_spectrum.take().and_then(|s| GivenSpectrum::new(&s, color)) {
+            Some(s) => b.geometry.add_given_spectrum(s),
+            None => SpectrumId::NONE,
         }
-        Ok(color)
     }
 
     /// The colour of an emitter's property `name` and, when it was given as a spectrum, that

@@ -42,6 +42,25 @@ impl<'a> Cx<'a> {
         Ok(None)
     }
 
+    /// `color_param_for`, and the spectrum a constant was given as (`given_id`; none for a
+    /// texture, which spectral mode lifts from its colours).
+    pub(super) fn color_param_given(
+        &mut self,
+        p: &Props<'a>,
+        name: &str,
+        b: &mut Build,
+        usage: crate::spectrum::SpectrumUse,
+    ) -> Result<(Option<ColorParam>, crate::material::SpectrumId), SceneError> {
+        self.given_spectrum = None;
+        let param = self.color_param_for(p, name, b, usage)?;
+        let id = match param {
+            Some(Param::Const(c)) => self.given_id(b, c),
+            _ => crate::material::SpectrumId::NONE,
+        };
+        self.given_spectrum = None;
+        Ok((param, id))
+    }
+
     /// A scalar parameter: a number, a colour read as Mitsuba reads it for a scalar (the mean
     /// of its channels), or a nested texture (read with `Texture::eval_1`).
     pub(super) fn float_param(
