@@ -7,6 +7,7 @@
 pub mod chi2;
 pub mod distribution;
 pub mod sampler;
+mod sobol;
 pub mod warp;
 
 pub use sampler::{PixelSampler, Sampler, SamplerKind};

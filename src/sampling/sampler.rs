@@ -1,11 +1,12 @@
 //! Per-pixel sample generators: stratified jitter (the seed report's sampler) and Owen-scrambled
-//! Sobol (Burley 2020, via `sobol_burley`).
+//! Sobol (Burley 2020: `sobol::sobol_pair`).
 //!
 //! A `Sampler` is created for one (pixel, sample index) and hands out the sample's dimensions in a
 //! fixed order: the pixel position, the lens position, then anything the integrator asks for.
 //! Its state depends only on (seed, pixel, index), so images do not depend on thread count or on
 //! how samples are split into passes.
 
+use super::sobol::sobol_pair;
 use super::{Rng32, SeedPrefix, hash_seed, permutation_element};
 use glam::Vec2;
 
@@ -207,10 +208,8 @@ impl Sampler {
             }
             SamplerKind::Sobol => {
                 let i = self.index & ((1 << SOBOL_INDEX_BITS) - 1);
-                Vec2::new(
-                    sobol_burley::sample(i, 0, scramble).min(ONE_MINUS_EPS),
-                    sobol_burley::sample(i, 1, scramble).min(ONE_MINUS_EPS),
-                )
+                let (x, y) = sobol_pair(i, scramble);
+                Vec2::new(x.min(ONE_MINUS_EPS), y.min(ONE_MINUS_EPS))
             }
         }
     }

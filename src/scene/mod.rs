@@ -356,7 +356,7 @@ impl Scene {
     /// glass the path keeps only its hero wavelength from here on, and `beta`, its throughput,
     /// is multiplied by the factor that takes (`Wavelengths::terminate_secondary`). In RGB mode
     /// (`None`) it is `bsdf` exactly.
-    #[inline]
+    #[inline(always)]
     pub fn bsdf_for(
         &self,
         h: &Hit,
@@ -364,8 +364,23 @@ impl Scene {
         wl: Option<&mut crate::spectrum::Wavelengths>,
         beta: &mut Color,
     ) -> Bsdf<'_> {
+        // Inlined so that RGB mode builds the BSDF in its caller's frame (out of line, the
+        // returned BSDF was copied: 64 instructions of memcpy per surface hit).
+        match wl {
+            None => self.bsdf(h, wo),
+            Some(wl) => self.bsdf_lifted(h, wo, wl, beta),
+        }
+    }
+
+    #[inline(never)]
+    fn bsdf_lifted(
+        &self,
+        h: &Hit,
+        wo: crate::math::Vec3,
+        wl: &mut crate::spectrum::Wavelengths,
+        beta: &mut Color,
+    ) -> Bsdf<'_> {
         let bsdf = self.bsdf(h, wo);
-        let Some(wl) = wl else { return bsdf };
         let front = crate::material::bsdf::front_side(wo, h.ng);
         let ratio = match self.materials.dispersion(h, front, wl.hero()) {
             Some(r) => {

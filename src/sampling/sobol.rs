@@ -1,0 +1,88 @@
+//! The first two dimensions of Burley's (2020) Owen-scrambled, shuffled Sobol sequence, the only
+//! dimensions the sampler reads (every 2-D pair is its own shuffled sequence: `Sampler`).
+//!
+//! `sobol_burley::sample(i, 0 | 1, seed)` gives the same numbers bit for bit (a test checks it),
+//! but walks the 16 index bits through its direction table for each call and shuffles the
+//! index once per dimension; here the index is shuffled once per pair and each dimension's
+//! generator matrix is applied by two byte-table lookups (the matrices are linear over GF(2)).
+//! With the SSE version of the crate a pair cost about 345 instructions in SPPM's camera pass
+//! (BENCHMARKS.md, issue 29).
+
+/// Sobol's generator matrices for dimensions 0 and 1 in the bit-reversed form the crate works
+/// in: `TABLES[d][b][byte]` is the XOR of the reversed direction numbers selected by `byte`, the
+/// `b`-th byte from the top of a reversed index.
+static TABLES: [[[u32; 256]; 2]; 2] = tables();
+
+/// Reversed direction number `k` (k = 0 for the index's lowest bit) of dimension `d`: dimension
+/// 0 is the van der Corput sequence (v_k = 2^(31-k)); dimension 1's polynomial is x + 1, so
+/// v_k = v_(k-1) ^ (v_(k-1) >> 1) from v_0 = 2^31 (the rows of Pascal's triangle mod 2).
+const fn direction_rev(d: usize, k: u32) -> u32 {
+    let mut v = 1u32 << 31;
+    let mut j = 0;
+    while j < k {
+        v = if d == 0 { v >> 1 } else { v ^ (v >> 1) };
+        j += 1;
+    }
+    v.reverse_bits()
+}
+
+const fn tables() -> [[[u32; 256]; 2]; 2] {
+    let mut t = [[[0u32; 256]; 2]; 2];
+    let mut d = 0;
+    while d < 2 {
+        let mut b = 0;
+        while b < 2 {
+            let mut byte = 0;
+            while byte < 256 {
+                let mut x = 0u32;
+                let mut bit = 0;
+                while bit < 8 {
+                    // Bit 7 - bit of the byte is index bit 8 b + bit (the reversed index's top
+                    // bit is the index's lowest).
+                    if byte & (0x80 >> bit) != 0 {
+                        x ^= direction_rev(d, 8 * b as u32 + bit);
+                    }
+                    bit += 1;
+                }
+                t[d][b][byte] = x;
+                byte += 1;
+            }
+            b += 1;
+        }
+        d += 1;
+    }
+    t
+}
+
+/// Point `index` (below 2^16) of the shuffled, Owen-scrambled 2-D Sobol sequence `seed`, each
+/// coordinate in [0, 1): `(sample(index, 0, seed), sample(index, 1, seed))` of `sobol_burley`.
+#[inline]
+pub fn sobol_pair(index: u32, seed: u32) -> (f32, f32) {
+    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
+    debug_assert!(index < 1 << 16);
+    let shuffled = owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
+    let (hi, lo) = ((shuffled >> 24) as usize, ((shuffled >> 16) & 0xff) as usize);
+    let x = TABLES[0][0][hi] ^ TABLES[0][1][lo];
+    let y = TABLES[1][0][hi] ^ TABLES[1][1][lo];
+    // The crate's per-dimension scramble seeds for dimensions 0 and 1.
+    let s = seed.wrapping_mul(0x9c8f_2d3b);
+    let x = owen_scramble_rev(x, hash(s ^ 0x912f_69ba));
+    let y = owen_scramble_rev(y, hash(s ^ 0x174f_18ab));
+    (u32_to_f32_norm(x.reverse_bits()), u32_to_f32_norm(y.reverse_bits()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equals_sobol_burley_bit_for_bit() {
+        for seed in [0u32, 1, 7, 0x1234_5678, 0xdead_beef, u32::MAX] {
+            for index in 0..1u32 << 16 {
+                let (x, y) = sobol_pair(index, seed);
+                assert_eq!(x.to_bits(), sobol_burley::sample(index, 0, seed).to_bits(), "index {index} seed {seed}");
+                assert_eq!(y.to_bits(), sobol_burley::sample(index, 1, seed).to_bits(), "index {index} seed {seed}");
+            }
+        }
+    }
+}
