@@ -3,6 +3,7 @@
 
 use crate::math::Vec3;
 use crate::photon::trace::PhotonHit;
+use glam::Vec4;
 
 /// Photons of one iteration sorted into a hash grid: entries in bucket order, and within a
 /// bucket in photon order.
@@ -13,9 +14,34 @@ pub(super) struct PhotonGrid {
     /// bucket -> range in `entries` (one more than the buckets; also the sort's write cursors
     /// while it runs).
     pub(super) starts: Vec<u32>,
-    /// (photon position, photon index): a query tests the distance on entries read in order,
-    /// and reads a photon only when it is in range.
-    pub(super) entries: Vec<(Vec3, u32)>,
+    /// The entries' photon positions, one coordinate per array (a query tests four entries'
+    /// distances at once), and their photon indices with `FOCUSED_BIT` set for focused photons:
+    /// the caller reads a photon only when it is in range (and, for a focused one, within the
+    /// near disc).
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    ids: Vec<u32>,
+}
+
+/// The entry bit that marks a photon `trace::FOCUSED`; the other 31 bits hold its index (an
+/// iteration's photons are far fewer than 2^31: 2^31 hits would be 96 GiB).
+const FOCUSED_BIT: u32 = 1 << 31;
+
+/// A photon a query found: its index, squared distance from the query point, and whether it
+/// is focused (`trace::FOCUSED`), read from the grid without touching the photon itself.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Found {
+    pub(super) index: u32,
+    pub(super) d2: f32,
+    pub(super) focused: bool,
+}
+
+impl Found {
+    #[inline(always)]
+    fn of(entry: u32, d2: f32) -> Self {
+        Found { index: entry & !FOCUSED_BIT, d2, focused: entry & FOCUSED_BIT != 0 }
+    }
 }
 
 #[inline]
@@ -47,7 +73,16 @@ fn insert_sorted(list: &mut [u32; 8], n: usize, b: u32) {
 
 impl PhotonGrid {
     pub(super) fn build(hits: &[PhotonHit], cell: f32, origin: Vec3) -> Self {
-        let mut grid = PhotonGrid { cell, origin, mask: 0, starts: Vec::new(), entries: Vec::new() };
+        let mut grid = PhotonGrid {
+            cell,
+            origin,
+            mask: 0,
+            starts: Vec::new(),
+            xs: Vec::new(),
+            ys: Vec::new(),
+            zs: Vec::new(),
+            ids: Vec::new(),
+        };
         grid.rebuild(hits, cell, origin);
         grid
     }
@@ -69,13 +104,21 @@ impl PhotonGrid {
         for b in 0..size {
             self.starts[b + 1] += self.starts[b];
         }
-        self.entries.clear();
-        self.entries.resize(hits.len(), (Vec3::ZERO, 0));
+        for v in [&mut self.xs, &mut self.ys, &mut self.zs] {
+            v.clear();
+            v.resize(hits.len(), 0.0);
+        }
+        self.ids.clear();
+        self.ids.resize(hits.len(), 0);
         // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
         // starts are then one bucket behind, and shifting them back restores them.
+        debug_assert!(hits.len() < FOCUSED_BIT as usize);
         for (i, h) in hits.iter().enumerate() {
             let b = bucket(key(h));
-            self.entries[self.starts[b] as usize] = (h.p, i as u32);
+            let focused = if h.flags & crate::photon::trace::FOCUSED != 0 { FOCUSED_BIT } else { 0 };
+            let k = self.starts[b] as usize;
+            (self.xs[k], self.ys[k], self.zs[k]) = (h.p.x, h.p.y, h.p.z);
+            self.ids[k] = i as u32 | focused;
             self.starts[b] += 1;
         }
         self.starts.copy_within(0..size, 1);
@@ -85,7 +128,8 @@ impl PhotonGrid {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.entries.capacity() * std::mem::size_of::<(Vec3, u32)>() + self.starts.capacity() * 4
+        (self.xs.capacity() + self.ys.capacity() + self.zs.capacity() + self.ids.capacity() + self.starts.capacity())
+            * 4
     }
 
     #[inline]
@@ -94,14 +138,14 @@ impl PhotonGrid {
         [floor_clamped(c.x), floor_clamped(c.y), floor_clamped(c.z)]
     }
 
-    /// Calls `f(photon index)` for every photon within distance `r` of `p` (at most `r`), each
-    /// once, in a fixed order. A cell's bucket holds photons of other cells too, which the
+    /// Calls `f` for every photon within distance `r` of `p` (at most `r`), each once, in a
+    /// fixed order. A cell's bucket holds photons of other cells too, which the
     /// distance test leaves out; each bucket is read once (in increasing order, each in photon
     /// order), so a photon in range is met once however many of the query's cells share its
     /// bucket. A query of more than `MAX_BUCKETS` cells (a radius far above the cells' size)
     /// reads the cells in turn instead and counts a photon when its own cell is read.
     #[inline]
-    pub(super) fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(u32)) {
+    pub(super) fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(Found)) {
         const MAX_BUCKETS: usize = 64;
         let lo = Self::coords(p - Vec3::splat(r), self.origin, self.cell);
         let hi = Self::coords(p + Vec3::splat(r), self.origin, self.cell);
@@ -144,9 +188,9 @@ impl PhotonGrid {
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    self.scan(bucket([x, y, z]), p, r2, |q, i| {
+                    self.scan(bucket([x, y, z]), p, r2, |q, found| {
                         if Self::coords(q, self.origin, self.cell) == [x, y, z] {
-                            f(i);
+                            f(found);
                         }
                     });
                 }
@@ -156,23 +200,46 @@ impl PhotonGrid {
 
     /// Scans the buckets of a sorted list (repeats once).
     #[inline(always)]
-    fn scan_buckets(&self, buckets: &[u32], p: Vec3, r2: f32, f: &mut impl FnMut(u32)) {
+    fn scan_buckets(&self, buckets: &[u32], p: Vec3, r2: f32, f: &mut impl FnMut(Found)) {
         let mut last = u32::MAX;
         for &b in buckets {
             if b != last {
-                self.scan(b as usize, p, r2, |_, i| f(i));
+                self.scan(b as usize, p, r2, |_, found| f(found));
                 last = b;
             }
         }
     }
 
-    /// Calls `f(position, index)` for the photons of bucket `b` within squared distance `r2` of
+    /// Calls `f(position, found)` for the photons of bucket `b` within squared distance `r2` of
     /// `p`.
     #[inline(always)]
-    fn scan(&self, b: usize, p: Vec3, r2: f32, mut f: impl FnMut(Vec3, u32)) {
-        for &(q, i) in &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize] {
-            if (q - p).length_squared() <= r2 {
-                f(q, i);
+    fn scan(&self, b: usize, p: Vec3, r2: f32, mut f: impl FnMut(Vec3, Found)) {
+        let (start, end) = (self.starts[b] as usize, self.starts[b + 1] as usize);
+        let (xs, ys, zs, ids) =
+            (&self.xs[start..end], &self.ys[start..end], &self.zs[start..end], &self.ids[start..end]);
+        // Four entries at a time: each lane computes (q - p) . (q - p) with the scalar
+        // `length_squared`'s operations in its order, so the distances are the same bit for bit.
+        let (px, py, pz, r2s) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(r2));
+        let quads = xs.len() / 4;
+        for k in 0..quads {
+            let at = 4 * k;
+            let dx = Vec4::from_slice(&xs[at..at + 4]) - px;
+            let dy = Vec4::from_slice(&ys[at..at + 4]) - py;
+            let dz = Vec4::from_slice(&zs[at..at + 4]) - pz;
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let mut hits = d2.cmple(r2s).bitmask();
+            while hits != 0 {
+                let lane = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let i = at + lane;
+                f(Vec3::new(xs[i], ys[i], zs[i]), Found::of(ids[i], d2[lane]));
+            }
+        }
+        for i in 4 * quads..xs.len() {
+            let q = Vec3::new(xs[i], ys[i], zs[i]);
+            let d2 = (q - p).length_squared();
+            if d2 <= r2 {
+                f(q, Found::of(ids[i], d2));
             }
         }
     }
@@ -221,7 +288,10 @@ mod tests {
             for _ in 0..200 {
                 let q = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
                 let mut found = Vec::new();
-                grid.for_each_within(q, r, |i| found.push(i));
+                grid.for_each_within(q, r, |f| {
+                    assert_eq!(f.d2, (hits[f.index as usize].p - q).length_squared());
+                    found.push(f.index)
+                });
                 let mut brute: Vec<u32> =
                     (0..hits.len() as u32).filter(|&i| (hits[i as usize].p - q).length_squared() <= r * r).collect();
                 // Each once: sorted, the lists are equal only without repeats.

@@ -76,8 +76,8 @@ impl VolumePhotons {
     ) -> Color {
         let bounds = SphereBounds::probe(scene, p, self.r, u);
         let mut sum = Color::ZERO;
-        self.grid.for_each_within(p, self.r, |i| {
-            let ph = &self.hits[i as usize];
+        self.grid.for_each_within(p, self.r, |found| {
+            let ph = &self.hits[found.index as usize];
             if u32::from(ph.depth) <= max_depth && bounds.keeps(ph.p) {
                 sum += ph.flux * phase.p(wo, -ph.dir);
             }

@@ -48,7 +48,7 @@ use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
 use crate::spectrum::Wavelengths;
 use budget::{IterationCosts, PhotonBudget, fixed_square};
-use grid::PhotonGrid;
+use grid::{Found, PhotonGrid};
 use rayon::iter::Either;
 use rayon::prelude::*;
 use std::cell::{Cell, RefCell};
@@ -652,44 +652,63 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
     let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
     let wide = r_wide > 0.0;
     let r2 = r * r;
-    grid.for_each_within(p, if wide { r_wide.max(r) } else { r }, |i| {
-        let ph = &hits[i as usize];
-        // Light that may still be focused (through mirrors, glass or glossy surfaces only) stays in
-        // the near disc; light after a diffuse bounce is smooth enough for the wide one.
-        let focused = ph.flags & trace::FOCUSED != 0;
-        let caustic = ph.flags & trace::CAUSTIC != 0;
-        let within_r = !wide || (ph.p - p).length_squared() <= r2;
-        if within_r {
-            g.m_near += 1;
+    let reach = if wide { r_wide.max(r) } else { r };
+    // Which disc a found photon counts in (and whether it is counted at all): light that may
+    // still be focused (through mirrors, glass or glossy surfaces only) stays in the near disc;
+    // light after a diffuse bounce is smooth enough for the wide one. The grid knows which is
+    // which, so focused photons beyond r are passed over unread.
+    #[inline(always)]
+    fn disc_of(g: &mut Gathered, found: Found, wide: bool, r2: f32) -> Option<bool> {
+        let within_r = !wide || found.d2 <= r2;
+        g.m_near += u32::from(within_r);
+        if !wide {
+            return Some(false);
         }
-        if wide {
-            if focused && !within_r {
-                return;
+        if found.focused {
+            return within_r.then_some(false);
+        }
+        g.m_wide += 1;
+        Some(true)
+    }
+    #[inline(always)]
+    fn add(g: &mut Gathered, in_wide: bool, f: Color, ph: &PhotonHit) {
+        if in_wide {
+            g.wide += f * ph.flux;
+        } else {
+            g.near += f * ph.flux;
+            if ph.flags & trace::CAUSTIC != 0 {
+                g.near_caustic += f * ph.flux;
             }
-            if !focused {
-                g.m_wide += 1;
-            }
         }
-        if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
-            return;
-        }
-        let wi = -ph.dir;
-        let f = match constant {
-            Some(c) if wi.dot(ng) > 0.0 && wi.dot(ns) > 0.0 => c,
-            Some(_) => Color::ZERO,
-            None => bsdf.f(v.wo, wi, Transport::Radiance),
-        };
-        if f != Color::ZERO {
-            if wide && !focused {
-                g.wide += f * ph.flux;
-            } else {
-                g.near += f * ph.flux;
-                if caustic {
-                    g.near_caustic += f * ph.flux;
+    }
+    match constant {
+        // The usual case, a Lambertian surface: a photon counts when it arrives from above both
+        // normals (`wi . ns > 0` also says it is not from behind, the general case's first test).
+        Some(c) => {
+            let passes = c != Color::ZERO;
+            grid.for_each_within(p, reach, |found| {
+                let Some(in_wide) = disc_of(&mut g, found, wide, r2) else { return };
+                let ph = &hits[found.index as usize];
+                let wi = -ph.dir;
+                if passes && ph.depth <= v.photon_depth && wi.dot(ng) > 0.0 && wi.dot(ns) > 0.0 {
+                    add(&mut g, in_wide, c, ph);
                 }
-            }
+            });
         }
-    });
+        None => {
+            grid.for_each_within(p, reach, |found| {
+                let Some(in_wide) = disc_of(&mut g, found, wide, r2) else { return };
+                let ph = &hits[found.index as usize];
+                if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
+                    return;
+                }
+                let f = bsdf.f(v.wo, -ph.dir, Transport::Radiance);
+                if f != Color::ZERO {
+                    add(&mut g, in_wide, f, ph);
+                }
+            });
+        }
+    }
     g
 }
 
