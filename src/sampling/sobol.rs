@@ -13,6 +13,25 @@
 /// `b`-th byte from the top of a reversed index.
 static TABLES: [[[u32; 256]; 2]; 2] = tables();
 
+/// Each byte's bits reversed: the build's target has no bit-reversal instruction, and
+/// `u32::reverse_bits` in shifts and masks cost three times the four lookups of `reverse`.
+static REVERSED_BYTES: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut b = 0;
+    while b < 256 {
+        t[b] = (b as u8).reverse_bits();
+        b += 1;
+    }
+    t
+};
+
+/// `x.reverse_bits()` by bytes.
+#[inline(always)]
+fn reverse(x: u32) -> u32 {
+    let r = |shift: u32| u32::from(REVERSED_BYTES[((x >> shift) & 0xff) as usize]);
+    r(0) << 24 | r(8) << 16 | r(16) << 8 | r(24)
+}
+
 /// Reversed direction number `k` (k = 0 for the index's lowest bit) of dimension `d`: dimension
 /// 0 is the van der Corput sequence (v_k = 2^(31-k)); dimension 1's polynomial is x + 1, so
 /// v_k = v_(k-1) ^ (v_(k-1) >> 1) from v_0 = 2^31 (the rows of Pascal's triangle mod 2).
@@ -60,7 +79,9 @@ const fn tables() -> [[[u32; 256]; 2]; 2] {
 pub fn sobol_pair(index: u32, seed: u32) -> (f32, f32) {
     use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
     debug_assert!(index < 1 << 16);
-    let shuffled = owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
+    let index_rev = u32::from(REVERSED_BYTES[(index & 0xff) as usize]) << 24
+        | u32::from(REVERSED_BYTES[((index >> 8) & 0xff) as usize]) << 16;
+    let shuffled = owen_scramble_rev(index_rev, hash(seed ^ 0x79c6_8e4a));
     let (hi, lo) = ((shuffled >> 24) as usize, ((shuffled >> 16) & 0xff) as usize);
     let x = TABLES[0][0][hi] ^ TABLES[0][1][lo];
     let y = TABLES[1][0][hi] ^ TABLES[1][1][lo];
@@ -68,12 +89,20 @@ pub fn sobol_pair(index: u32, seed: u32) -> (f32, f32) {
     let s = seed.wrapping_mul(0x9c8f_2d3b);
     let x = owen_scramble_rev(x, hash(s ^ 0x912f_69ba));
     let y = owen_scramble_rev(y, hash(s ^ 0x174f_18ab));
-    (u32_to_f32_norm(x.reverse_bits()), u32_to_f32_norm(y.reverse_bits()))
+    (u32_to_f32_norm(reverse(x)), u32_to_f32_norm(reverse(y)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reverse_is_reverse_bits() {
+        let mut rng = crate::sampling::Rng32::new(3);
+        for x in [0u32, 1, 0x8000_0000, u32::MAX, 0x1234_5678].into_iter().chain((0..10_000).map(|_| rng.next_u32())) {
+            assert_eq!(reverse(x), x.reverse_bits(), "{x:#x}");
+        }
+    }
 
     #[test]
     fn equals_sobol_burley_bit_for_bit() {
