@@ -220,19 +220,21 @@ impl PhotonGrid {
         // Four entries at a time: each lane computes (q - p) . (q - p) with the scalar
         // `length_squared`'s operations in its order, so the distances are the same bit for bit.
         let (px, py, pz, r2s) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(r2));
+        let load = |c: &[f32]| Vec4::from(<[f32; 4]>::try_from(c).unwrap_or_default());
         let quads = xs.len() / 4;
-        for k in 0..quads {
-            let at = 4 * k;
-            let dx = Vec4::from_slice(&xs[at..at + 4]) - px;
-            let dy = Vec4::from_slice(&ys[at..at + 4]) - py;
-            let dz = Vec4::from_slice(&zs[at..at + 4]) - pz;
+        let chunks = xs.chunks_exact(4).zip(ys.chunks_exact(4)).zip(zs.chunks_exact(4).zip(ids.chunks_exact(4)));
+        for ((cx, cy), (cz, ci)) in chunks {
+            let (dx, dy, dz) = (load(cx) - px, load(cy) - py, load(cz) - pz);
             let d2 = dx * dx + dy * dy + dz * dz;
             let mut hits = d2.cmple(r2s).bitmask();
+            if hits == 0 {
+                continue;
+            }
+            let d2 = d2.to_array();
             while hits != 0 {
-                let lane = hits.trailing_zeros() as usize;
+                let lane = hits.trailing_zeros() as usize & 3;
                 hits &= hits - 1;
-                let i = at + lane;
-                f(Vec3::new(xs[i], ys[i], zs[i]), Found::of(ids[i], d2[lane]));
+                f(Vec3::new(cx[lane], cy[lane], cz[lane]), Found::of(ci[lane], d2[lane]));
             }
         }
         for i in 4 * quads..xs.len() {
