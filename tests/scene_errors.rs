@@ -78,6 +78,25 @@ fn cases() -> Vec<(&'static str, String, &'static str, usize)> {
         ("fov too wide", "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 180\n".into(), "180", 1),
         ("focus behind", "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfocus_on = [0, 0, 9]\n".into(), "front", 1),
         ("bad lights array", format!("lights = 3\n{CAMERA}"), "array", 1),
+        (
+            "missing spectrum file",
+            with_cam("[materials.m]\ntype = \"diffuse\"\ncolor = { spectrum = \"no/such.spd\" }\n"),
+            "spectrum file `",
+            6,
+        ),
+        (
+            "spectrum pair of one number",
+            with_cam("[materials.m]\ntype = \"diffuse\"\ncolor = { spectrum = [[400], [500, 1]] }\n"),
+            "a spectrum",
+            6,
+        ),
+        (
+            "spectrum wavelengths out of order",
+            with_cam("[[lights]]\ntype = \"point\"\ncolor = { spectrum = [[500, 1], [400, 1]] }\n"),
+            "wavelengths must increase",
+            6,
+        ),
+        ("cold black body", with_cam("[[lights]]\ntype = \"point\"\ncolor = { blackbody = -5 }\n"), "kelvin", 6),
         ("huge number", with_cam("[[objects]]\ntype = \"sphere\"\nradius = 1e300\n"), "too large", 6),
         (
             "torus knot too big",

@@ -519,3 +519,64 @@ fn spectral_images_are_the_same_on_any_thread_count() {
         assert!(a.pixels.iter().zip(&b.pixels).all(|(x, y)| x.to_array() == y.to_array()), "{}", kind.name());
     }
 }
+
+/// Spectra written in a TOML scene (a light's `color` as a black body, a diffuse `color` as
+/// samples) are used as given in spectral mode and as their colours in RGB mode. A matte wall
+/// faces a directional light and the camera head on, so every pixel is rho / pi times the
+/// irradiance: in spectral mode the colour of the product of the two spectra, in RGB mode the
+/// product of their colours, both worked out here from the spectra.
+#[test]
+fn toml_spectra_are_used_as_given() {
+    use caustic::spectrum::{SampledSpectrum, SpectrumUse, planck};
+    // A step from grey to bright red: unlike any smooth spectrum of its colour.
+    let (steps, values) = (vec![360.0, 590.0, 600.0, 830.0], vec![0.3, 0.3, 0.9, 0.9]);
+    let rho = SampledSpectrum::new(steps.clone(), values.clone()).unwrap();
+    let (kelvin, intensity) = (3000.0, 1e-3);
+    let pairs: Vec<String> = steps.iter().zip(&values).map(|(w, v)| format!("[{w}, {v}]")).collect();
+    let text = format!(
+        r#"
+[render]
+integrator = "path"
+max_depth = 1
+[camera]
+eye = [0, 0, -3]
+look_at = [0, 0, 0]
+fov = 20
+[materials.wall]
+type = "diffuse"
+color = {{ spectrum = [{}] }}
+kd = 1
+ks = 0
+ka = 0
+[[lights]]
+type = "directional"
+direction = [0, 0, 1]
+color = {{ blackbody = {kelvin} }}
+intensity = {intensity}
+[[objects]]
+type = "quad"
+corner = [-5, -5, 0]
+edge1 = [0, 10, 0]
+edge2 = [10, 0, 0]
+material = "wall"
+"#,
+        pairs.join(", ")
+    );
+    let grid: Vec<f64> = (360..=830).map(f64::from).collect();
+    let light = SampledSpectrum::new(grid.clone(), grid.iter().map(|&w| planck(kelvin, w)).collect()).unwrap();
+    let product =
+        SampledSpectrum::new(grid.clone(), grid.iter().map(|&w| rho.eval(w) * planck(kelvin, w)).collect()).unwrap();
+    let k = intensity / std::f64::consts::PI;
+    let spectral_expected = product.to_srgb(SpectrumUse::Emission).0.to_array().map(|c| c as f64 * k);
+    let (r, l) = (rho.to_srgb(SpectrumUse::Reflectance).0, light.to_srgb(SpectrumUse::Emission).0);
+    let rgb_expected = (r * l).to_array().map(|c| c as f64 * k);
+    // The two answers differ, so the comparisons below tell which one was rendered.
+    assert!(
+        (0..3).any(|c| (spectral_expected[c] / rgb_expected[c] - 1.0).abs() > 0.1),
+        "{spectral_expected:?} {rgb_expected:?}"
+    );
+    let o = Options { width: Some(32), height: Some(32), spp: Some(64), seed: Some(2), ..Options::default() };
+    assert_close("spectral", render_mean(&text, o.clone()), spectral_expected, 0.01);
+    let rgb = mean(&scene_with(&text, &Options { spectral: Some(false), ..o }).render().image);
+    assert_close("rgb", rgb, rgb_expected, 1e-3);
+}

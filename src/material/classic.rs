@@ -6,7 +6,7 @@
 use super::bsdf::Lobes;
 use super::bxdf::{Bxdf, Dielectric, Lambert, Mirror, Phong, Transmission};
 use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
-use super::{Materials, Model, Param, Plain, Wrapper};
+use super::{Materials, Model, Param, Plain, SpectrumId, Wrapper};
 use crate::math::Color;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,6 +95,12 @@ impl Classic {
     /// lobes of a smooth dielectric. If the lobes' albedos add up to more than one they are
     /// scaled down together, so no surface reflects more than it receives.
     pub fn lobes(&self, front: bool) -> Lobes {
+        self.lobes_given(front, SpectrumId::NONE)
+    }
+
+    /// `lobes`, with spectrum `color` (spectral mode's) standing for the constant `color` in the
+    /// diffuse lobe, whose reflectance is that colour times `kd` and the energy scale.
+    pub fn lobes_given(&self, front: bool, color: SpectrumId) -> Lobes {
         let mut lobes = Lobes::default();
         // The index of the side light enters over the side it comes from.
         let eta = if front { self.ior } else { 1.0 / self.ior };
@@ -121,7 +127,7 @@ impl Classic {
             mirror *= s;
             transmit *= s;
         }
-        lobes.add(Bxdf::Lambert(Lambert { r: diffuse }));
+        lobes.add_given(Bxdf::Lambert(Lambert { r: diffuse }), [color, SpectrumId::NONE, SpectrumId::NONE]);
         lobes.add(Bxdf::Phong(Phong { ks: glossy, exponent: self.exponent }));
         lobes.add(Bxdf::Mirror(Mirror { r: mirror }));
         lobes.add(Bxdf::Transmission(Transmission { t: transmit, eta }));

@@ -564,11 +564,10 @@ impl Plain {
         let side = |eta: f32| if front { eta } else { 1.0 / eta };
         match *self {
             Plain::Classic(c) => {
-                let c = match c.color_texture {
-                    Some(t) => Classic { color: textures[t as usize].eval_at(at), ..c },
-                    None => c,
+                return match c.color_texture {
+                    Some(t) => Classic { color: textures[t as usize].eval_at(at), ..c }.lobes(front),
+                    None => c.lobes_given(front, c0),
                 };
-                return c.lobes(front);
             }
             Plain::Diffuse { reflectance } => {
                 lobes.add_given(Bxdf::Lambert(Lambert { r: reflectance.at(at, textures) }), [c0, none, none])

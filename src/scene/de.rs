@@ -116,10 +116,93 @@ impl<'de> Deserialize<'de> for Rgb {
     }
 }
 
-/// A colour or the name of a texture giving it.
+/// A spectrum written in a scene file where a colour may be: `{ spectrum = [[nm, value], ...] }`
+/// (samples, linear between them), `{ spectrum = "file.spd" }` (a file of wavelength-value lines,
+/// found beside the scene) or `{ blackbody = kelvin }` (Planck's law, in Mitsuba's units). RGB
+/// mode renders its colour, spectral mode the spectrum itself (docs/scene-format.md).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpectrumSpec {
+    Samples(Vec<(f64, f64)>),
+    File(String),
+    Blackbody(f64),
+}
+
+/// The table form of a spectrum, before it is checked.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpectrumTable {
+    spectrum: Option<SpectrumValues>,
+    blackbody: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum SpectrumValues {
+    File(String),
+    Samples(Vec<[f64; 2]>),
+}
+
+const SPECTRUM_FORMS: &str = "{ spectrum = [[nm, value], ...] }, { spectrum = \"file.spd\" } or { blackbody = kelvin }";
+
+impl SpectrumTable {
+    fn check<E: Error>(self) -> Result<SpectrumSpec, E> {
+        match (self.spectrum, self.blackbody) {
+            (Some(SpectrumValues::File(f)), None) => Ok(SpectrumSpec::File(f)),
+            (Some(SpectrumValues::Samples(pairs)), None) => {
+                if let Some(bad) = pairs.iter().flatten().find(|v| !v.is_finite()) {
+                    return Err(E::custom(format!("spectrum values must be finite, found {bad}")));
+                }
+                Ok(SpectrumSpec::Samples(pairs.into_iter().map(|[w, v]| (w, v)).collect()))
+            }
+            (None, Some(t)) if t.is_finite() && t > 0.0 => Ok(SpectrumSpec::Blackbody(t)),
+            (None, Some(t)) => Err(E::custom(format!("a black body needs a temperature in kelvin > 0, found {t}"))),
+            (Some(_), Some(_)) => Err(E::custom("give `spectrum` or `blackbody`, not both")),
+            (None, None) => Err(E::custom(format!("a spectrum is written {SPECTRUM_FORMS}"))),
+        }
+    }
+}
+
+/// Three finite components >= 0 as a colour.
+fn checked_rgb<E: Error>(a: [f64; 3]) -> Result<Color, E> {
+    if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
+        return Err(E::custom(format!("colour components must be finite and >= 0, found {bad}")));
+    }
+    Ok(Color::new(a[0] as f32, a[1] as f32, a[2] as f32))
+}
+
+/// A colour or a spectrum (`SpectrumSpec`): what lights and emitting objects take.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ColorSpec {
+    Rgb(Color),
+    Spectrum(SpectrumSpec),
+}
+impl<'de> Deserialize<'de> for ColorSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Grey(f64),
+            Rgb([f64; 3]),
+            Table(SpectrumTable),
+        }
+        let raw = Raw::deserialize(d).map_err(|_| {
+            D::Error::custom(format!(
+                "expected a colour ([r, g, b] or a single number) or a spectrum ({SPECTRUM_FORMS})"
+            ))
+        })?;
+        match raw {
+            Raw::Grey(g) => checked_rgb([g; 3]).map(ColorSpec::Rgb),
+            Raw::Rgb(a) => checked_rgb(a).map(ColorSpec::Rgb),
+            Raw::Table(t) => t.check().map(ColorSpec::Spectrum),
+        }
+    }
+}
+
+/// A colour, a spectrum (`SpectrumSpec`) or the name of a texture giving it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ColorOrTexture {
     Color(Color),
+    Spectrum(SpectrumSpec),
     Texture(String),
 }
 impl<'de> Deserialize<'de> for ColorOrTexture {
@@ -130,18 +213,19 @@ impl<'de> Deserialize<'de> for ColorOrTexture {
             Name(String),
             Grey(f64),
             Rgb([f64; 3]),
+            Table(SpectrumTable),
         }
-        let raw = Raw::deserialize(d)
-            .map_err(|_| D::Error::custom("expected a colour ([r, g, b] or a single number) or a texture's name"))?;
-        let a = match raw {
-            Raw::Name(n) => return Ok(ColorOrTexture::Texture(n)),
-            Raw::Grey(g) => [g; 3],
-            Raw::Rgb(a) => a,
-        };
-        if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
-            return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
+        let raw = Raw::deserialize(d).map_err(|_| {
+            D::Error::custom(format!(
+                "expected a colour ([r, g, b] or a single number), a spectrum ({SPECTRUM_FORMS}) or a texture's name"
+            ))
+        })?;
+        match raw {
+            Raw::Name(n) => Ok(ColorOrTexture::Texture(n)),
+            Raw::Grey(g) => checked_rgb([g; 3]).map(ColorOrTexture::Color),
+            Raw::Rgb(a) => checked_rgb(a).map(ColorOrTexture::Color),
+            Raw::Table(t) => t.check().map(ColorOrTexture::Spectrum),
         }
-        Ok(ColorOrTexture::Color(Color::new(a[0] as f32, a[1] as f32, a[2] as f32)))
     }
 }
 

@@ -4,6 +4,7 @@
 
 use super::Cx;
 use super::schema::{self, DispersionFormula, DispersionSpec, MaterialDesc, TextureDesc};
+use super::spectra::{MaterialSpectra, keep_material};
 use crate::material::conductors::ComplexIor;
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::material::{
@@ -16,6 +17,7 @@ use crate::scene::builder::SceneBuilder;
 use crate::scene::de::{ColorOrTexture, NumberOrTexture};
 use crate::scene::footprint::FileKind;
 use crate::spectrum::Dispersion;
+use crate::spectrum::SpectrumUse;
 use crate::texture::image::{TexImage, load_image};
 use crate::texture::{Bitmap, Filter, Texture, Wrap};
 use glam::Affine2;
@@ -140,8 +142,11 @@ impl<'a> Cx<'a> {
                     let i = if p.kind == "null" {
                         geometry.null_material()
                     } else {
-                        let m = self.material(&p, textures, &names, geometry)?;
-                        geometry.add_material(p.name.clone(), m)
+                        let mut spectra = MaterialSpectra::default();
+                        let m = self.material(&p, textures, &names, geometry, &mut spectra)?;
+                        let i = geometry.add_material(p.name.clone(), m);
+                        keep_material(geometry, i, spectra);
+                        i
                     };
                     names.index.insert(p.name.clone(), i);
                     names.names.push(p.name);
@@ -194,6 +199,10 @@ impl<'a> Cx<'a> {
             None => Ok(Param::Const(default)),
             Some(s) => match s.get_ref() {
                 ColorOrTexture::Color(c) => Ok(Param::Const(*c)),
+                // Its colour (a material keeps the spectrum itself: `reflectance_spectrum`).
+                ColorOrTexture::Spectrum(spec) => {
+                    Ok(Param::Const(self.spectrum(spec, SpectrumUse::Reflectance, s.span())?.0))
+                }
                 ColorOrTexture::Texture(n) => Ok(Param::Texture(self.texture_index(textures, n, s.span())?)),
             },
         }
@@ -281,6 +290,7 @@ impl<'a> Cx<'a> {
         textures: &TextureNames,
         names: &MaterialNames,
         geometry: &SceneBuilder,
+        spectra: &mut MaterialSpectra,
     ) -> Result<Material, SceneError> {
         let d = &p.desc;
         let two_sided = d.two_sided.unwrap_or(true);
@@ -295,6 +305,10 @@ impl<'a> Cx<'a> {
                     _ => ClassicKind::Dielectric,
                 };
                 let mut c = classic(d, kind);
+                if let Some(s) = self.reflectance_spectrum(d.color.as_ref())? {
+                    c.color = s.1;
+                    spectra[0] = Some(s);
+                }
                 if let Some(s) = &d.color
                     && let ColorOrTexture::Texture(n) = s.get_ref()
                 {
@@ -319,6 +333,7 @@ impl<'a> Cx<'a> {
                     (None, eta, k) => ComplexIor::rgb(eta.map_or(Color::ZERO, |c| c.0), k.map_or(Color::ONE, |c| c.0)),
                 };
                 let specular = self.color_param(&d.specular, Color::ONE, textures)?;
+                spectra[0] = self.reflectance_spectrum(d.specular.as_ref())?;
                 if p.kind == "conductor" {
                     with_sides(Plain::Conductor { ior, specular })
                 } else {
@@ -342,6 +357,8 @@ impl<'a> Cx<'a> {
             "plastic" | "roughplastic" => {
                 let diffuse = self.color_param(&d.color, Color::splat(0.5), textures)?;
                 let specular = self.color_param(&d.specular, Color::ONE, textures)?;
+                *spectra =
+                    [self.reflectance_spectrum(d.color.as_ref())?, self.reflectance_spectrum(d.specular.as_ref())?];
                 let eta = d.ior.map_or(1.49, |v| v.0);
                 let nonlinear = d.nonlinear.unwrap_or(false);
                 let tex = geometry.textures();
@@ -468,8 +485,8 @@ fn classic(desc: &MaterialDesc, kind: ClassicKind) -> Classic {
     let clear = kind == ClassicKind::Dielectric || kind == ClassicKind::Transparent;
     let color = match desc.color.as_ref().map(|c| c.get_ref()) {
         Some(ColorOrTexture::Color(c)) => *c,
-        // A texture's colour is looked up per hit; the constant is unused.
-        Some(ColorOrTexture::Texture(_)) => Color::ONE,
+        // A texture's colour is looked up per hit, a spectrum's set by the caller.
+        Some(ColorOrTexture::Texture(_) | ColorOrTexture::Spectrum(_)) => Color::ONE,
         None if clear => Color::ONE,
         None => d.color,
     };

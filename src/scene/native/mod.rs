@@ -15,6 +15,7 @@ mod objects;
 mod params;
 mod schema;
 mod set;
+mod spectra;
 
 pub use set::{ALIASES, key_path, parse_set};
 

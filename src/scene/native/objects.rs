@@ -5,6 +5,7 @@ use super::Cx;
 use super::materials::{MaterialNames, TextureNames};
 use super::media::MediumNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
+use super::spectra::keep_emission;
 use crate::geometry::Transform;
 use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
 use crate::math::{Color, Vec3};
@@ -70,7 +71,10 @@ impl<'a> Cx<'a> {
         span: Range<usize>,
         geometry: &mut SceneBuilder,
     ) -> Result<(), SceneError> {
-        let power = d.color.map_or(Color::ONE, |c| c.0) * d.intensity.map_or(1.0, |i| i.0);
+        let (color, spectrum) = self.emitted(d.color.as_ref())?;
+        let color = color.unwrap_or(Color::ONE);
+        let power = color * d.intensity.map_or(1.0, |i| i.0);
+        let first = geometry.light_count();
         match kind {
             "point" => {
                 geometry.add_light(Light::Point { position: d.position.map_or(Vec3::ZERO, |p| p.0), intensity: power })
@@ -155,6 +159,7 @@ impl<'a> Cx<'a> {
                 geometry.add_area_light(emitter, power, None);
             }
         }
+        keep_emission(geometry, (kind != "constant").then_some(first), spectrum, color);
         Ok(())
     }
 
@@ -246,29 +251,41 @@ impl<'a> Cx<'a> {
             Some(i) => geometry.with_interface(material, i),
             None => material,
         };
-        let emission = self.emission(&d, textures)?;
+        let (emission, spectrum) = self.emission(&d, textures)?;
         if emission.is_some() && groups.is_none() {
             return Err(self.at(
                 span,
                 "an object in a group cannot emit (instanced emitters are not supported, as in Mitsuba): put it in [[objects]]",
             ));
         }
-        self.object(kind, &d, &transform, span, Surface { material, emission }, geometry)
+        let first = geometry.light_count();
+        self.object(kind, &d, &transform, span, Surface { material, emission }, geometry)?;
+        // (A textured emission is lifted texel by texel: its spectrum would stand for one colour.)
+        if let Some((color, None)) = emission {
+            keep_emission(geometry, Some(first), spectrum, color);
+        }
+        Ok(())
     }
 
     /// What object `d` emits: `emission` (1 when only a texture is given) times its
     /// `emission_texture`; `None` when it emits nothing.
-    fn emission(&self, d: &ObjectDesc, textures: &TextureNames) -> Result<Emission, SceneError> {
+    /// With it, the spectrum `emission` was written as (for spectral mode).
+    fn emission(
+        &self,
+        d: &ObjectDesc,
+        textures: &TextureNames,
+    ) -> Result<(Emission, Option<crate::spectrum::SampledSpectrum>), SceneError> {
         let texture = match &d.emission_texture {
             Some(n) => Some(self.texture_index(textures, n.get_ref(), n.span())?),
             None => None,
         };
-        let radiance = d.emission.map(|c| c.0);
-        Ok(match (radiance, texture) {
+        let (radiance, spectrum) = self.emitted(d.emission.as_ref())?;
+        let emission = match (radiance, texture) {
             (None, None) => None,
             (Some(c), None) => (c.max_element() > 0.0).then_some((c, None)),
             (c, Some(t)) => Some((c.unwrap_or(Color::ONE), Some(t))),
-        })
+        };
+        Ok((emission, spectrum))
     }
 
     fn instance(

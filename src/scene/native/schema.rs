@@ -5,7 +5,7 @@ use super::camera::{CropSpec, FilterSpec};
 use crate::options::{IntegratorKind, Options, PhotonOptions};
 use crate::sampling::SamplerKind;
 use crate::scene::de::{
-    ColorOrTexture, Direction, Finite, NonNegative, NumberOrTexture, Pair, Point, Positive, Rgb, Scale, Unit,
+    ColorOrTexture, ColorSpec, Direction, Finite, NonNegative, NumberOrTexture, Pair, Point, Positive, Rgb, Scale, Unit,
 };
 use serde::Deserialize;
 use std::path::PathBuf;
@@ -333,7 +333,7 @@ pub struct LightDesc {
     /// Spot cone half-angle and the half-angle where the fall-off starts, in degrees.
     pub angle: Option<Positive>,
     pub falloff: Option<NonNegative>,
-    pub color: Option<Rgb>,
+    pub color: Option<Spanned<ColorSpec>>,
     pub intensity: Option<NonNegative>,
     pub shape: Option<String>,
     pub corner: Option<Point>,
@@ -372,7 +372,7 @@ pub struct ObjectDesc {
     pub transform: Option<Vec<TransformOp>>,
     /// Radiance the object's surface emits (W/(m^2 sr)) from its outer side: it becomes an area
     /// light that also reflects with its material.
-    pub emission: Option<Rgb>,
+    pub emission: Option<Spanned<ColorSpec>>,
     /// A texture (named in `[textures]`) the emission is multiplied by, read at the surface's
     /// uv; `emission` defaults to 1 with it.
     pub emission_texture: Option<Spanned<String>>,
