@@ -281,15 +281,7 @@ impl CameraWalk {
             }
             let Some(hit) = hit else {
                 if !self.lit_by_light_sample {
-                    add(
-                        self.layer.emitted(),
-                        self.beta
-                            * scene.emission_in(
-                                scene.environment(self.ray.d),
-                                scene.environment.unwrap_or(crate::geometry::NO_LIGHT),
-                                self.wl.as_ref(),
-                            ),
-                    );
+                    add(self.layer.emitted(), self.beta * scene.environment_in(self.ray.d, self.wl.as_ref()));
                 }
                 return None;
             };

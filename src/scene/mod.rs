@@ -256,6 +256,16 @@ impl Scene {
         }
     }
 
+    /// `environment(d)` in the mode `wl` says (`emission_in`): the environment's spectrum, or
+    /// its colour lifted, at the path's wavelengths in spectral mode.
+    #[inline]
+    pub fn environment_in(&self, d: crate::math::Vec3, wl: Option<&crate::spectrum::Wavelengths>) -> Color {
+        match self.environment {
+            Some(i) => self.emission_in(self.lights[i as usize].environment_radiance(d), i, wl),
+            None => Color::ZERO,
+        }
+    }
+
     /// Bytes held by the geometry: meshes, the BVH (nodes, leaf shapes, primitives), instances.
     pub fn geometry_bytes(&self) -> u64 {
         (self.meshes.iter().map(TriangleMesh::memory_bytes).sum::<usize>()

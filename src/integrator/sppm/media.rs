@@ -187,8 +187,7 @@ impl Sppm {
                 }
             }
             let Some(hit) = hit else {
-                let env = scene.environment.unwrap_or(crate::geometry::NO_LIGHT);
-                add(layer.emitted(), beta * scene.emission_in(scene.environment(ray.d), env, wl.as_ref()));
+                add(layer.emitted(), beta * scene.environment_in(ray.d, wl.as_ref()));
                 break;
             };
             dist += hit.t;
