@@ -234,7 +234,7 @@ pub fn estimated_record_level_bytes(n: u64) -> u64 {
 }
 
 fn to_photons(pass: &PhotonPass) -> Vec<Photon> {
-    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, trace::packed_flags(h))).collect()
+    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux.get(), trace::packed_flags(h))).collect()
 }
 
 impl PhotonIntegrator {

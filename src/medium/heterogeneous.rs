@@ -41,7 +41,7 @@ use super::phase::Phase;
 use crate::geometry::{Ray, Transform};
 use crate::math::{Color, Vec3};
 use crate::sampling::Rng32;
-use crate::spectrum::Wavelengths;
+use crate::spectrum::{LANES, Wavelengths};
 use crate::volume::{VolGrid, texel_range};
 use std::sync::Arc;
 
@@ -314,7 +314,7 @@ impl Heterogeneous {
             None => self.sigma_t_local(p),
             Some(wl) => wl.unbounded(self.sigma_t.eval_local(p)) * self.scale,
         };
-        Color::new(s.r().min(majorant), s.g().min(majorant), s.b().min(majorant))
+        s.min_splat(majorant)
     }
 
     /// The majorant grid's value `m` as the bound of the extinction in the mode `wl` says.
@@ -377,6 +377,8 @@ impl Heterogeneous {
         let length = ray.d.length();
         let mut w = Color::ONE;
         let mut first = Some(u);
+        // The lanes the tracking probabilities average over: the channels, or the wavelengths.
+        let lanes = if wl.is_some() { LANES } else { 3 };
         for (start, end, majorant) in self.majorant.walk(o, d, t0, t1) {
             let majorant = self.majorant_in(majorant, wl);
             if !(majorant > 0.0) {
@@ -392,11 +394,11 @@ impl Heterogeneous {
                 }
                 let sigma_t = self.sigma_t_below(o + d * t, majorant, wl);
                 let carried = (beta * w).max(Color::ZERO);
-                let total = carried.sum();
+                let total = carried.lane_sum(lanes);
                 let p_real = if total > 0.0 && total.is_finite() {
-                    (carried * sigma_t).sum() / (total * majorant)
+                    (carried * sigma_t).lane_sum(lanes) / (total * majorant)
                 } else {
-                    sigma_t.mean() / majorant
+                    sigma_t.lane_sum(lanes) / (lanes as f32 * majorant)
                 }
                 .clamp(0.0, 1.0);
                 if rng.uniform() < p_real {

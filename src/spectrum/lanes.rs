@@ -36,7 +36,7 @@ use crate::math::Color;
 use std::cell::RefCell;
 
 /// Wavelengths per path in spectral mode: one per lane of `Color`.
-pub const LANES: usize = 3;
+pub const LANES: usize = 4;
 
 /// The visible-light distribution's inverse CDF constants (see `sampled.rs`).
 const VISIBLE_A: f32 = 0.0072;
@@ -48,7 +48,7 @@ const VISIBLE_NORM: f32 = VISIBLE_A / (TANH_HI - TANH_LO);
 /// The CIE Y normalisation the conversion scales by (`cie_tables.rs`'s).
 const Y_NORMALIZATION: f32 = super::cie_tables::CIE_Y_NORMALIZATION as f32;
 
-/// The three wavelengths (nm) of a path in spectral mode and their pdfs (per nm); lane 0 is the
+/// The four wavelengths (nm) of a path in spectral mode and their pdfs (per nm); lane 0 is the
 /// hero.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wavelengths {
@@ -59,8 +59,8 @@ pub struct Wavelengths {
 }
 
 impl Wavelengths {
-    /// The wavelengths for `u` in [0, 1): the hero at `u`, the others at u + 1/3 and u + 2/3
-    /// (mod 1), through the visible-light distribution.
+    /// The wavelengths for `u` in [0, 1): the hero at `u`, the others at u + 1/4, u + 1/2 and
+    /// u + 3/4 (mod 1), through the visible-light distribution.
     pub fn sample(u: f32) -> Self {
         let mut lambda = [0.0; LANES];
         let mut pdf = [0.0; LANES];
@@ -100,7 +100,7 @@ impl Wavelengths {
     /// `f` at each wavelength, one per lane.
     #[inline(always)]
     pub fn map(&self, f: impl Fn(f32) -> f32) -> Color {
-        Color::new(f(self.lambda[0]), f(self.lambda[1]), f(self.lambda[2]))
+        Color::from_lanes(self.lambda.map(f))
     }
 
     /// A reflectance or transmittance colour (clamped to [0, 1]) as its smooth spectrum at the
@@ -146,14 +146,16 @@ impl Wavelengths {
     }
 
     /// Keeps only the hero (a dispersive interface): the factor to multiply the throughput by,
-    /// (3, 0, 0), the first time; `None` once the secondary wavelengths are gone.
+    /// (4, 0, 0, 0), the first time; `None` once the secondary wavelengths are gone.
     #[inline]
     pub fn terminate_secondary(&mut self) -> Option<Color> {
         if self.hero_only {
             return None;
         }
         self.hero_only = true;
-        Some(Color::new(LANES as f32, 0.0, 0.0))
+        let mut factor = [0.0; LANES];
+        factor[0] = LANES as f32;
+        Some(Color::from_lanes(factor))
     }
 
     /// True once `terminate_secondary` has been called.
@@ -166,7 +168,7 @@ impl Wavelengths {
     /// the average of v_i xyz-bar(lambda_i) / pdf_i, scaled by the Y normalisation.
     pub fn to_xyz(&self, v: Color) -> [f32; 3] {
         let mut xyz = [0.0f32; 3];
-        for ((value, lambda), pdf) in v.to_array().into_iter().zip(self.lambda).zip(self.pdf) {
+        for ((value, lambda), pdf) in v.lanes().into_iter().zip(self.lambda).zip(self.pdf) {
             if value == 0.0 || !(pdf > 0.0) {
                 continue;
             }
@@ -184,8 +186,8 @@ impl Wavelengths {
     /// path meets as RGB (photon estimates), which the throughput then weights as a colour.
     #[inline]
     pub fn throughput_to_srgb(&self, beta: Color) -> Color {
-        let [a, b, c] = beta.to_array();
-        if a == b && b == c && !self.hero_only {
+        let [a, b, c, d] = beta.lanes();
+        if a == b && b == c && c == d && !self.hero_only {
             return beta;
         }
         self.to_srgb(beta * self.map(d65))
@@ -303,21 +305,22 @@ mod tests {
         }
     }
 
-    /// A path joined from two terminated subpaths carries the factor (3, 0, 0) once.
+    /// A path joined from two terminated subpaths carries the factor (4, 0, 0, 0) once.
     #[test]
     fn joined_paths_carry_the_factor_once() {
         let mut a = Wavelengths::sample(0.3);
         let mut b = a;
         let (fa, fb) = (a.terminate_secondary().unwrap(), b.terminate_secondary().unwrap());
-        assert_eq!(joined(fa * fb, true, true), Color::new(3.0, 0.0, 0.0));
-        assert_eq!(joined(fa * Color::ONE, true, false), Color::new(3.0, 0.0, 0.0));
+        let factor = Color::from_lanes([4.0, 0.0, 0.0, 0.0]);
+        assert_eq!(joined(fa * fb, true, true), factor);
+        assert_eq!(joined(fa * Color::ONE, true, false), factor);
         assert_eq!(joined(Color::ONE, false, false), Color::ONE);
     }
 
     #[test]
     fn termination_keeps_the_hero_once() {
         let mut wl = Wavelengths::sample(0.3);
-        assert_eq!(wl.terminate_secondary(), Some(Color::new(3.0, 0.0, 0.0)));
+        assert_eq!(wl.terminate_secondary(), Some(Color::from_lanes([4.0, 0.0, 0.0, 0.0])));
         assert_eq!(wl.terminate_secondary(), None);
         assert!(wl.secondary_terminated());
     }

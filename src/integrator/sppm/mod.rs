@@ -39,7 +39,7 @@ use crate::film::{Film, Image, Layers};
 use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3, luminance};
+use crate::math::{Color, PackedColor, Vec3, luminance};
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::Sampler;
@@ -149,8 +149,8 @@ pub struct Disc {
     pub n: f32,
     /// Current search radius; 0 until the pixel has had a visible point (or when unused).
     pub r: f32,
-    /// Accumulated flux tau (already rescaled to the current radius).
-    pub tau: Color,
+    /// Accumulated flux tau (already rescaled to the current radius); RGB in either mode.
+    pub tau: PackedColor,
 }
 
 impl Disc {
@@ -166,7 +166,7 @@ impl Disc {
         let m = m as f32;
         let n_new = self.n + alpha * m;
         let ratio = n_new / (self.n + m);
-        self.tau = (self.tau + phi) * ratio;
+        self.tau = ((self.tau.get() + phi) * ratio).into();
         self.r *= ratio.sqrt();
         self.n = n_new;
         ratio
@@ -182,8 +182,8 @@ impl Disc {
 /// What one pixel has gathered so far.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelStats {
-    /// Sum over iterations of emitted and direct light.
-    pub ld: Color,
+    /// Sum over iterations of emitted and direct light (RGB in either mode).
+    pub ld: PackedColor,
     /// The estimate within the pixel's radius: every photon with `indirect_reach` 1, focused
     /// photons only otherwise. (The wide disc's estimate is kept apart, in `State::wide`, so
     /// that the classic algorithm's memory stays as it was.)
@@ -194,9 +194,9 @@ impl PixelStats {
     /// Radiance after `iterations` iterations, with the pixel's wide disc if it has one.
     pub fn radiance(&self, wide: Option<&Disc>, iterations: u32) -> Color {
         let it = iterations.max(1) as f32;
-        let l = self.ld / it + self.near.radiance(self.near.tau, iterations);
+        let l = self.ld.get() / it + self.near.radiance(self.near.tau.get(), iterations);
         match wide {
-            Some(w) => l + w.radiance(w.tau, iterations),
+            Some(w) => l + w.radiance(w.tau.get(), iterations),
             None => l,
         }
     }
@@ -221,7 +221,8 @@ struct VisiblePoint {
     /// What the BSDF is made from (`Shading::hit`).
     at: Shading,
     wo: Vec3,
-    beta: Color,
+    /// The throughput as RGB (in spectral mode too: `CameraWalk::beta_rgb`).
+    beta: PackedColor,
     /// The layers of the light gathered there.
     layer: LayerPath,
     /// Most scattering events a photon gathered there may have had, so that whole paths keep
@@ -421,9 +422,9 @@ impl Sppm {
                 let mut dev = 0;
                 if sample.ld.is_finite() {
                     if done > 0 {
-                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld) / prior);
+                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld.get()) / prior);
                     }
-                    px.ld += sample.ld;
+                    px.ld = (px.ld.get() + sample.ld).into();
                     if let Some(l) = layers {
                         for (a, b) in l.ld.iter_mut().zip(sample.ld_layers) {
                             *a += b;
@@ -496,7 +497,8 @@ impl Sppm {
                     let mut unused = Disc::default();
                     let wide = wide.unwrap_or(&mut unused);
                     let g = gather(scene, v, px.near.r, wide.r, grid, &hits);
-                    let (g_near, g_wide) = (v.beta * g.near, v.beta * g.wide);
+                    let beta = v.beta.get();
+                    let (g_near, g_wide) = (beta * g.near, beta * g.wide);
                     if !(g_near.is_finite() && g_wide.is_finite()) {
                         driver.record(&RayStats::default(), 1, 0);
                         return 0;
@@ -505,7 +507,7 @@ impl Sppm {
                     // discs of the current radii.
                     let dev = if done > 0 {
                         let now = px.near.radiance(g_near, 1) + wide.radiance(g_wide, 1);
-                        let mean = px.near.radiance(px.near.tau, 1) + wide.radiance(wide.tau, 1);
+                        let mean = px.near.radiance(px.near.tau.get(), 1) + wide.radiance(wide.tau.get(), 1);
                         fixed_square(luminance(now) - luminance(mean) / prior)
                     } else {
                         0
@@ -513,7 +515,7 @@ impl Sppm {
                     let ratio_near = px.near.update(g.m_near, g_near, config.alpha);
                     let ratio_wide = wide.update(g.m_wide, g_wide, config.alpha);
                     if let Some(l) = layers {
-                        let caustic = v.beta * g.near_caustic;
+                        let caustic = beta * g.near_caustic;
                         let mut parts = [Color::ZERO; 4];
                         parts[v.layer.caustic_photons()] += caustic;
                         parts[v.layer.other_photons()] += g_near - caustic;
@@ -609,7 +611,7 @@ impl Sppm {
                 VisiblePoint {
                     at: Shading::of(&v.hit),
                     wo: v.wo,
-                    beta: walk.beta_rgb() / q,
+                    beta: (walk.beta_rgb() / q).into(),
                     layer: walk.layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
                 },
@@ -681,11 +683,11 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
         };
         if f != Color::ZERO {
             if wide && !focused {
-                g.wide += f * ph.flux;
+                g.wide += f * ph.flux.get();
             } else {
-                g.near += f * ph.flux;
+                g.near += f * ph.flux.get();
                 if caustic {
-                    g.near_caustic += f * ph.flux;
+                    g.near_caustic += f * ph.flux.get();
                 }
             }
         }
