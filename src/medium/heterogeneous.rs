@@ -586,7 +586,7 @@ mod tests {
             // tau per lane of the lifted extinction, by the midpoint rule.
             let steps = 20_000;
             let h = t_max / steps as f32;
-            let mut tau = [0.0f64; 3];
+            let mut tau = [0.0f64; LANES];
             for i in 0..steps {
                 let p = m.sigma_t.to_local.point(ray.at((i as f32 + 0.5) * h));
                 if p.cmpge(Vec3::ZERO).all() && p.cmple(Vec3::ONE).all() {
@@ -601,7 +601,7 @@ mod tests {
             let mut rng = Rng32::new(31);
             let n = 200_000;
             // Sums and squares of: ratio tracking, passing weights, scattering weights.
-            let mut sums = [[0.0f64; 6]; 3];
+            let mut sums = [[0.0f64; 6]; LANES];
             for _ in 0..n {
                 let tr = m.transmittance(&ray, t_max, &mut rng, Some(&wl));
                 let u = rng.uniform();
@@ -615,7 +615,7 @@ mod tests {
                     sum[k + 1] += b * b;
                 }
             }
-            for c in 0..3 {
+            for c in 0..LANES {
                 let want_tr = (-tau[c]).exp();
                 let want_scatter = f64::from(albedo[c]) * (1.0 - want_tr);
                 for (k, want, what) in [(0, want_tr, "ratio"), (2, want_tr, "pass"), (4, want_scatter, "scatter")] {

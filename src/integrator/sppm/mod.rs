@@ -798,7 +798,7 @@ mod tests {
         VisiblePoint {
             at: Shading::of(&hit.unwrap()),
             wo: Vec3::Z,
-            beta: Color::ONE,
+            beta: Color::ONE.into(),
             layer: LayerPath::CAMERA,
             photon_depth: trace::MAX_PHOTON_DEPTH as u8,
         }
@@ -808,7 +808,7 @@ mod tests {
     fn every_photon_in_range_counts_in_m() {
         let scene = grey_quad();
         let v = centre_point(&scene);
-        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, depth: 0, n: Vec3::Z };
+        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE.into(), flags: 0, depth: 0, n: Vec3::Z };
         let hits = [
             hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
             hit(Vec3::new(0.0, -0.2, 0.0), Vec3::Z), // in range, from below: no light, counted
@@ -835,7 +835,7 @@ mod tests {
         let hit = |x: f32, flags: u8| PhotonHit {
             p: Vec3::new(x, 0.0, 0.0),
             dir: -Vec3::Z,
-            flux: Color::ONE,
+            flux: Color::ONE.into(),
             flags,
             depth: 1,
             n: Vec3::Z,
@@ -866,8 +866,8 @@ mod tests {
         // Each disc shrinks by its own photons: a pixel whose near disc is empty still has its
         // wide disc shrink as photons come into it (where one schedule for both would keep a
         // shadowed pixel's wide disc taking a bright neighbour's light for ever).
-        let mut p = PixelStats { ld: Color::ZERO, near: Disc { n: 0.0, r: 0.2, tau: Color::ZERO } };
-        let mut wide = Disc { n: 0.0, r: 0.6, tau: Color::ZERO };
+        let mut p = PixelStats { ld: PackedColor::ZERO, near: Disc { n: 0.0, r: 0.2, tau: PackedColor::ZERO } };
+        let mut wide = Disc { n: 0.0, r: 0.6, tau: PackedColor::ZERO };
         assert_eq!(p.near.update(0, Color::ZERO, 2.0 / 3.0), 1.0);
         let ratio = wide.update(3, Color::splat(3.0), 2.0 / 3.0);
         assert!((ratio - 2.0 / 3.0).abs() < 1e-6 && (wide.r * wide.r - 0.36 * 2.0 / 3.0).abs() < 1e-6);
@@ -933,18 +933,18 @@ mod tests {
     fn update_follows_hachisuka_formulas() {
         // N = 10, r = 1, tau = 5; M = 6 new photons with flux 3, alpha = 2/3:
         // N' = 10 + 4 = 14, r'^2 = r^2 N'/(N + M) = 14/16, tau' = (5 + 3) 14/16 = 7.
-        let mut d = Disc { n: 10.0, r: 1.0, tau: Color::splat(5.0) };
+        let mut d = Disc { n: 10.0, r: 1.0, tau: Color::splat(5.0).into() };
         d.update(6, Color::splat(3.0), 2.0 / 3.0);
         assert!((d.n - 14.0).abs() < 1e-6);
         assert!((d.r * d.r - 14.0 / 16.0).abs() < 1e-6);
-        assert!((d.tau.r() - 7.0).abs() < 1e-6);
+        assert!((d.tau.get().r() - 7.0).abs() < 1e-6);
         // No photons: nothing changes.
         let before = d;
         d.update(0, Color::ZERO, 2.0 / 3.0);
         assert_eq!((d.n, d.r, d.tau), (before.n, before.r, before.tau));
-        let mut p = PixelStats { ld: Color::ZERO, near: d };
+        let mut p = PixelStats { ld: PackedColor::ZERO, near: d };
         // The estimate: tau / (iterations pi r^2) plus the mean direct light.
-        p.ld = Color::splat(4.0);
+        p.ld = Color::splat(4.0).into();
         let l = p.radiance(None, 2);
         assert!((l.r() - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
     }
