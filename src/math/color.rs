@@ -351,3 +351,23 @@ impl From<Color> for PackedColor {
         PackedColor(c.to_array())
     }
 }
+
+/// A four-lane value stored in 16 bytes aligned to 4, for stored records that keep spectral
+/// mode's four wavelengths (VCM's light vertices): a [`Color`] aligns to 16, which would pad
+/// the records around it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PackedLanes([f32; 4]);
+
+impl PackedLanes {
+    #[inline(always)]
+    pub fn get(self) -> Color {
+        Color::from_lanes(self.0)
+    }
+}
+
+impl From<Color> for PackedLanes {
+    #[inline(always)]
+    fn from(c: Color) -> Self {
+        PackedLanes(c.lanes())
+    }
+}

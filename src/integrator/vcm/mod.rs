@@ -631,10 +631,10 @@ impl MergeVertex {
     fn of(v: &LightVertex) -> Self {
         MergeVertex {
             wo: v.wo,
-            beta: v.beta,
+            beta: v.beta.get(),
             mis: v.mis,
             depth: v.depth,
-            bounces: v.bounces,
+            bounces: u32::from(v.bounces),
             delta_only: v.delta_only,
             hero_only: v.hero_only,
         }
