@@ -419,7 +419,14 @@ pub fn trace_photon(
                 let p = ray.at(ms.t);
                 if matches!(store, Store::Media | Store::Volume) {
                     let flux = stored(flux, &wl);
-                    out.push(PhotonHit { p, dir: ray.d, flux: flux.into(), flags: VOLUME, depth: depth as u8, n: Vec3::ZERO });
+                    out.push(PhotonHit {
+                        p,
+                        dir: ray.d,
+                        flux: flux.into(),
+                        flags: VOLUME,
+                        depth: depth as u8,
+                        n: Vec3::ZERO,
+                    });
                 }
                 let s = medium.phase().sample(-ray.d, rng.uniform2());
                 // Roulette keeps the photon's power as at a surface (`scatter_photon`).
@@ -454,7 +461,14 @@ pub fn trace_photon(
             if caustic_only {
                 if caustic {
                     let flux = stored(flux, &wl);
-                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux: flux.into(), flags: CAUSTIC, depth: depth as u8, n });
+                    out.push(PhotonHit {
+                        p: hit.p,
+                        dir: ray.d,
+                        flux: flux.into(),
+                        flags: CAUSTIC,
+                        depth: depth as u8,
+                        n,
+                    });
                 }
                 // The mirror or glass part of a mixed material (or plastic's coating) can still
                 // send it on along an L S+ D path.

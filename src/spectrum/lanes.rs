@@ -1,18 +1,22 @@
-//! Spectral mode's wavelengths, carried in the three lanes of `Color`: in a spectral render a
+//! Spectral mode's wavelengths, carried in the four lanes of `Color`: in a spectral render a
 //! path's throughput and radiance are the existing `Color` values, each lane holding the value
 //! at one of the path's wavelengths instead of a colour channel. Everything the integrators do
 //! to colours (products, sums, Russian roulette on the largest lane, the layers) then works on
 //! spectra unchanged, and the RGB mode keeps its code and its images bit for bit.
 //!
-//! Three wavelengths per path, not the four of Wilkie et al. (2014) and pbrt-v4: `Color` has three lanes, and giving it a fourth would make
-//! every colour operation of the RGB mode wider (a `Vec4` where a `Vec3` is, its memory in the
-//! photon records, the film and the lobes grown by a third) for a render mode that is not the
-//! default. Three hero-rotated wavelengths (u, u + 1/3, u + 2/3 through the visible
-//! distribution's inverse CDF) still stratify the spectrum; the cost is more colour noise per
-//! sample than four would give. Measured on one path's estimate of a white furnace's colour
-//! (D65 light; `sampled.rs`'s tests), the standard deviation is (0.418, 0.072, 0.877) with
-//! three against (0.151, 0.031, 0.579) with four (measured before the four-wavelength code was
-//! removed): more than the sqrt(4/3) that independent samples would give.
+//! Four wavelengths per path, as Wilkie et al. (2014) and pbrt-v4 carry: `Color` is a `Vec4`
+//! whose fourth lane an RGB colour fills with a copy of its red, which every lane-wise operation
+//! keeps exact, so that the largest and smallest lane, finiteness and equality see what they saw
+//! on three channels (`math::color`); the channel sums and means stay over three. The RGB mode
+//! costs no more for it: fewer instructions (one SSE operation where a `Vec3` did three), and
+//! the stored arrays of colours that are RGB in either mode (SPPM's pixels and visible points,
+//! photon hits, photon mapping's irradiance records) keep 12 bytes a colour as `PackedColor`,
+//! VCM's light vertices keep their size with `PackedLanes` (BENCHMARKS.md, "Four wavelengths per
+//! path"). The hero-rotated wavelengths (u, u + 1/4, u + 1/2, u + 3/4 through the visible
+//! distribution's inverse CDF) stratify the spectrum more finely than three did: on one path's
+//! estimate of a white furnace's colour (D65 light; `sampled.rs`'s tests), the standard
+//! deviation is (0.151, 0.031, 0.579) against (0.418, 0.072, 0.877) with three, more than the
+//! sqrt(4/3) that independent samples would give.
 //!
 //! Scene values become spectra where they enter the path: reflectances through
 //! [`super::RgbAlbedoSpectrum`]'s table (greys exactly), unbounded values (conductors' eta and
@@ -23,9 +27,9 @@
 //! CIE XYZ, each lane divided by its wavelength's pdf, mapped to linear sRGB ([`Wavelengths::to_srgb`]).
 //!
 //! At a dispersive interface the path keeps only its hero wavelength: the lanes of the other
-//! two would follow a direction they cannot take. [`Wavelengths::terminate_secondary`] returns
-//! the factor (3, 0, 0) that the throughput is multiplied by once, so that the hero alone stands
-//! for the three from there on while the light found before the interface keeps all three.
+//! three would follow a direction they cannot take. [`Wavelengths::terminate_secondary`] returns
+//! the factor (4, 0, 0, 0) that the throughput is multiplied by once, so that the hero alone
+//! stands for the four from there on while the light found before the interface keeps all four.
 //! Bidirectional methods join two subpaths at one set of wavelengths; when both crossed a
 //! dispersive interface, each throughput holds the factor and the joined path takes it once
 //! ([`joined`]).

@@ -2,8 +2,8 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg32;
 
 use super::*;
-use crate::spectrum::{LANES, Wavelengths};
 use crate::spectrum::cie_tables::CIE_Y_NORMALIZATION;
+use crate::spectrum::{LANES, Wavelengths};
 
 /// Largest relative deviation of a colour's chromaticity (each channel over the sum) from
 /// that of white, (1/3, 1/3, 1/3).
