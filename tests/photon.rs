@@ -42,7 +42,7 @@ material = "floor"
 fn photon_irradiance_under_a_point_light_matches_i_cos_over_d2() {
     let s = common::scene(FLOOR_UNDER_POINT_LIGHT);
     let pass = trace::trace_global(&s.scene, 1_000_000, 1, common::bias(&s), trace::Watch::none());
-    let map = PhotonMap::build(pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, h.flags)).collect());
+    let map = PhotonMap::build(pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux.get(), h.flags)).collect());
     let light = Vec3::new(0.0, 2.0, 0.0);
     let mut g = Gathered::new(4000);
     for p in [Vec3::ZERO, Vec3::new(1.0, 0.0, 0.5), Vec3::new(-1.5, 0.0, 1.0), Vec3::new(2.0, 0.0, -2.0)] {
@@ -61,7 +61,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
         .replace("type = \"quad\"\ncorner = [-20, 0, 20]\nedge1 = [40, 0, 0]\nedge2 = [0, 0, -40]", "type = \"plane\"");
     let s = common::scene(&text);
     let pass = trace::trace_global(&s.scene, 400_000, 3, common::bias(&s), trace::Watch::none());
-    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
+    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.get().r()).sum();
     let expected = 4.0 * PI * 10.0 * 0.5;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
     // A 2 x 2 square 2 below the light subtends 4 asin(1 / 5) of the sphere of directions.
@@ -71,7 +71,7 @@ fn first_hits_carry_light_power_times_hit_fraction() {
     );
     let s = common::scene(&square);
     let pass = trace::trace_global(&s.scene, 400_000, 4, common::bias(&s), trace::Watch::none());
-    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.r()).sum();
+    let direct: f32 = pass.hits.iter().filter(|h| h.flags & DIRECT != 0).map(|h| h.flux.get().r()).sum();
     let fraction = 4.0 * (1.0f32 / 5.0).asin() / (4.0 * PI);
     let expected = 4.0 * PI * 10.0 * fraction;
     assert!((direct - expected).abs() < 0.01 * expected, "{direct} vs {expected}");
@@ -299,12 +299,12 @@ fn caustic_photons_are_stored_exactly_as_many_as_asked() {
     let ratio = large.emitted as f32 / small.emitted as f32;
     for (a, b) in small.hits.iter().zip(&large.hits) {
         assert_eq!(a.p, b.p);
-        let want = b.flux * ratio;
-        assert!((a.flux - want).abs().max_element() <= 1e-5 * want.max_element(), "{:?} vs {:?}", a.flux, want);
+        let want = b.flux.get() * ratio;
+        assert!((a.flux.get() - want).abs().max_element() <= 1e-5 * want.max_element(), "{:?} vs {:?}", a.flux, want);
     }
     // Dividing by the photons emitted keeps the caustic's power: both maps carry the same total
     // (within the noise of 7,000 photons).
-    let power = |p: &trace::PhotonPass| p.hits.iter().map(|h| h.flux.sum() as f64).sum::<f64>();
+    let power = |p: &trace::PhotonPass| p.hits.iter().map(|h| h.flux.get().sum() as f64).sum::<f64>();
     let (ps, pl) = (power(&small), power(&large));
     assert!((ps / pl - 1.0).abs() < 0.04, "caustic power {ps} with 7,000 photons, {pl} with 100,000");
 }

@@ -77,7 +77,7 @@ fn assert_close(what: &str, a: [f64; 3], b: [f64; 3], tolerance: f64) {
 /// --height 32 --spp 4096 --seed S`); their spread puts this mean within (0.08%, 0.03%, 0.11%)
 /// (one standard deviation). The path tracer's own colour noise at test cost, 1.2% in blue
 /// at 256 samples per pixel (the light seen directly, whose colour each sample estimates from
-/// three wavelengths), would hide a 1% error.
+/// its wavelengths; measured with three, before the fourth), would hide a 1% error.
 const CORNELL_PATH: [f64; 3] = [0.197_427_56, 0.182_957_43, 0.164_443_53];
 
 /// The same for the dispersive box (`dispersive_cornell`), with the Sobol sampler: four renders

@@ -180,7 +180,11 @@ impl CameraWalk {
         }
         // Free-flight sampling by the mean extinction, restricted to the segment: the strata
         // hold equal probability F(t_max) / n, F(t) = 1 - exp(-sigma t).
-        let sigma = m.sigma_t.sum() / 3.0;
+        // (Over the four wavelengths in spectral mode, the three channels in RGB.)
+        let sigma = match self.wl {
+            Some(_) => m.sigma_t.lane_sum(crate::spectrum::LANES) / crate::spectrum::LANES as f32,
+            None => m.sigma_t.sum() / 3.0,
+        };
         let x = (i as f32 + u) / n as f32;
         let (t, pdf) = if sigma * t_max > 1e-4 {
             let f_max = -(-sigma * t_max).exp_m1();

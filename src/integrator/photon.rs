@@ -32,7 +32,7 @@ use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3};
+use crate::math::{Color, PackedColor, Vec3};
 use crate::options::PhotonOptions;
 use crate::photon::trace::{self, PhotonPass, Watch};
 use crate::photon::{Gathered, Photon, PhotonMap};
@@ -207,7 +207,7 @@ pub struct PhotonIntegrator {
     /// Each record's irradiance (in the map's order) from photons of at most
     /// `PhotonConfig::record_depth() - j` bounces, for 1 <= j < `RECORD_LEVELS` (j = 0 is the
     /// record's own power): a gather hit deeper in the camera path allows photons fewer bounces.
-    irradiance_levels: Vec<[Color; RECORD_LEVELS - 1]>,
+    irradiance_levels: Vec<[PackedColor; RECORD_LEVELS - 1]>,
     /// Irradiance cache over the camera's first diffuse hits (empty when off or when gathering
     /// is off): filled once before rendering, then only read.
     cache: IrradianceCache,
@@ -230,11 +230,12 @@ pub fn estimated_map_bytes(n: u64) -> u64 {
 /// Bytes the depth levels of `n` precomputed irradiance records need beside their map, at the
 /// peak (the levels kept and those computed before the first moves into the records).
 pub fn estimated_record_level_bytes(n: u64) -> u64 {
-    n * (std::mem::size_of::<[Color; RECORD_LEVELS]>() + std::mem::size_of::<[Color; RECORD_LEVELS - 1]>()) as u64
+    n * (std::mem::size_of::<[PackedColor; RECORD_LEVELS]>() + std::mem::size_of::<[PackedColor; RECORD_LEVELS - 1]>())
+        as u64
 }
 
 fn to_photons(pass: &PhotonPass) -> Vec<Photon> {
-    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux, trace::packed_flags(h))).collect()
+    pass.hits.iter().map(|h| Photon::new(h.p, h.dir, h.flux.get(), trace::packed_flags(h))).collect()
 }
 
 impl PhotonIntegrator {
@@ -381,7 +382,7 @@ impl PhotonIntegrator {
             Some(&(_, i)) => {
                 let e = self.colour(match level {
                     0 => self.irradiance.photon(i).power(),
-                    _ => self.irradiance_levels[i as usize][level - 1],
+                    _ => self.irradiance_levels[i as usize][level - 1].get(),
                 });
                 by.diffuse_albedo() * e * std::f32::consts::FRAC_1_PI
             }

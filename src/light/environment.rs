@@ -17,7 +17,7 @@
 
 use super::EmissionSample;
 use super::disk::PhotonDisk;
-use crate::math::{Color, Frame, Vec2, Vec3, luminance};
+use crate::math::{Color, Frame, PackedColor, Vec2, Vec3, luminance};
 use crate::sampling::distribution::Distribution2D;
 use crate::sampling::warp::uniform_sphere;
 use std::collections::HashMap;
@@ -29,8 +29,8 @@ use std::sync::{Mutex, OnceLock};
 pub struct EnvMap {
     width: u32,
     height: u32,
-    /// Linear RGB, row-major, row 0 at the top (+y).
-    texels: Vec<Color>,
+    /// Linear RGB, row-major, row 0 at the top (+y); 12 bytes a texel (`PackedColor`).
+    texels: Vec<PackedColor>,
     /// Over (u - 0.5 / W, v) in [0, 1)^2: W x (H - 1) cells.
     distribution: Distribution2D,
     /// Integral of the radiance over the sphere of directions (W/m^2 per unit scale).
@@ -87,6 +87,7 @@ impl EnvMap {
         }
         let distribution = Distribution2D::new(&cells, w, h - 1);
         let integral = Color::new(integral[0] as f32, integral[1] as f32, integral[2] as f32);
+        let texels = texels.into_iter().map(PackedColor::from).collect();
         Ok(EnvMap { width, height, texels, distribution, integral })
     }
 
@@ -105,7 +106,9 @@ impl EnvMap {
         };
         let key = (width, height, hash);
         let mut maps = MAPS.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
-        let same = maps.get(&key).and_then(|v| v.iter().find(|m| m.texels == texels).copied());
+        let same = maps
+            .get(&key)
+            .and_then(|v| v.iter().find(|m| m.texels.iter().map(|t| t.get()).eq(texels.iter().copied())).copied());
         if let Some(m) = same {
             return Ok(m);
         }
@@ -120,7 +123,7 @@ impl EnvMap {
 
     /// Bytes held by the texels and the distribution.
     pub fn memory_bytes(&self) -> usize {
-        self.texels.len() * std::mem::size_of::<Color>() + self.distribution.memory_bytes()
+        self.texels.len() * std::mem::size_of::<PackedColor>() + self.distribution.memory_bytes()
     }
 
     /// Bilinear radiance at (u, v) (Mitsuba's lookup with its half-texel shift in u).
@@ -134,7 +137,7 @@ impl EnvMap {
         let (x0, y0) = ((x as usize).min(w - 1), (y as usize).min(h - 2));
         let (fx, fy) = (x - x0 as f32, y - y0 as f32);
         let x1 = if x0 + 1 == w { 0 } else { x0 + 1 };
-        let row = |r: usize| self.texels[r * w + x0] * (1.0 - fx) + self.texels[r * w + x1] * fx;
+        let row = |r: usize| self.texels[r * w + x0].get() * (1.0 - fx) + self.texels[r * w + x1].get() * fx;
         row(y0) * (1.0 - fy) + row(y0 + 1) * fy
     }
 }

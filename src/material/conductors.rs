@@ -12,7 +12,7 @@
 
 use super::conductor_spectra::{MEASURED, NAMES};
 use crate::math::Color;
-use crate::spectrum::Wavelengths;
+use crate::spectrum::{LANES, Wavelengths};
 
 /// A conductor's complex index eta + i k: the colours RGB mode uses and, for a metal given by
 /// name, its measured spectra, which spectral mode uses instead.
@@ -40,12 +40,12 @@ impl Measured {
     #[inline]
     pub fn at(self, wl: &Wavelengths) -> (Color, Color) {
         let m = &MEASURED[self.0 as usize];
-        let mut eta = [0.0; 3];
-        let mut k = [0.0; 3];
-        for i in 0..3 {
+        let mut eta = [0.0; LANES];
+        let mut k = [0.0; LANES];
+        for i in 0..LANES {
             (eta[i], k[i]) = interpolate(m.lambda, m.eta, m.k, wl.lambda(i));
         }
-        (Color::from_array(eta), Color::from_array(k))
+        (Color::from_lanes(eta), Color::from_lanes(k))
     }
 
     /// eta and k at `lambda` nm.

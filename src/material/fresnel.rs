@@ -77,14 +77,10 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     0.5 * (rs + rp)
 }
 
-/// `fresnel_conductor` per colour channel.
+/// `fresnel_conductor` per colour channel (per lane: per wavelength in spectral mode).
 #[inline]
 pub fn fresnel_conductor_rgb(cos_i: f32, eta: crate::math::Color, k: crate::math::Color) -> crate::math::Color {
-    crate::math::Color::new(
-        fresnel_conductor(cos_i, eta.r(), k.r()),
-        fresnel_conductor(cos_i, eta.g(), k.g()),
-        fresnel_conductor(cos_i, eta.b(), k.b()),
-    )
+    eta.zip_map(k, |eta, k| fresnel_conductor(cos_i, eta, k))
 }
 
 /// The hemispherical average of the dielectric Fresnel reflectance for relative index `eta`

@@ -3,7 +3,7 @@
 mod color;
 pub mod float;
 
-pub use color::Color;
+pub use color::{Color, PackedColor, PackedLanes};
 pub use glam::{Vec2, Vec3, Vec3A};
 
 /// Relative luminance of a linear sRGB colour (Rec. 709 weights).

@@ -41,7 +41,7 @@ use super::phase::Phase;
 use crate::geometry::{Ray, Transform};
 use crate::math::{Color, Vec3};
 use crate::sampling::Rng32;
-use crate::spectrum::Wavelengths;
+use crate::spectrum::{LANES, Wavelengths};
 use crate::volume::{VolGrid, texel_range};
 use std::sync::Arc;
 
@@ -314,7 +314,7 @@ impl Heterogeneous {
             None => self.sigma_t_local(p),
             Some(wl) => wl.unbounded(self.sigma_t.eval_local(p)) * self.scale,
         };
-        Color::new(s.r().min(majorant), s.g().min(majorant), s.b().min(majorant))
+        s.min_splat(majorant)
     }
 
     /// The majorant grid's value `m` as the bound of the extinction in the mode `wl` says.
@@ -377,6 +377,8 @@ impl Heterogeneous {
         let length = ray.d.length();
         let mut w = Color::ONE;
         let mut first = Some(u);
+        // The lanes the tracking probabilities average over: the channels, or the wavelengths.
+        let lanes = if wl.is_some() { LANES } else { 3 };
         for (start, end, majorant) in self.majorant.walk(o, d, t0, t1) {
             let majorant = self.majorant_in(majorant, wl);
             if !(majorant > 0.0) {
@@ -392,11 +394,11 @@ impl Heterogeneous {
                 }
                 let sigma_t = self.sigma_t_below(o + d * t, majorant, wl);
                 let carried = (beta * w).max(Color::ZERO);
-                let total = carried.sum();
+                let total = carried.lane_sum(lanes);
                 let p_real = if total > 0.0 && total.is_finite() {
-                    (carried * sigma_t).sum() / (total * majorant)
+                    (carried * sigma_t).lane_sum(lanes) / (total * majorant)
                 } else {
-                    sigma_t.mean() / majorant
+                    sigma_t.lane_sum(lanes) / (lanes as f32 * majorant)
                 }
                 .clamp(0.0, 1.0);
                 if rng.uniform() < p_real {
@@ -584,7 +586,7 @@ mod tests {
             // tau per lane of the lifted extinction, by the midpoint rule.
             let steps = 20_000;
             let h = t_max / steps as f32;
-            let mut tau = [0.0f64; 3];
+            let mut tau = [0.0f64; LANES];
             for i in 0..steps {
                 let p = m.sigma_t.to_local.point(ray.at((i as f32 + 0.5) * h));
                 if p.cmpge(Vec3::ZERO).all() && p.cmple(Vec3::ONE).all() {
@@ -599,7 +601,7 @@ mod tests {
             let mut rng = Rng32::new(31);
             let n = 200_000;
             // Sums and squares of: ratio tracking, passing weights, scattering weights.
-            let mut sums = [[0.0f64; 6]; 3];
+            let mut sums = [[0.0f64; 6]; LANES];
             for _ in 0..n {
                 let tr = m.transmittance(&ray, t_max, &mut rng, Some(&wl));
                 let u = rng.uniform();
@@ -613,7 +615,7 @@ mod tests {
                     sum[k + 1] += b * b;
                 }
             }
-            for c in 0..3 {
+            for c in 0..LANES {
                 let want_tr = (-tau[c]).exp();
                 let want_scatter = f64::from(albedo[c]) * (1.0 - want_tr);
                 for (k, want, what) in [(0, want_tr, "ratio"), (2, want_tr, "pass"), (4, want_scatter, "scatter")] {

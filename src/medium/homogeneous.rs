@@ -81,8 +81,7 @@ impl Homogeneous {
     /// channel without extinction then passes everything).
     #[inline]
     pub fn transmittance(&self, t: f32) -> Color {
-        let tr = |s: f32| if s > 0.0 { (-s * t).exp() } else { 1.0 };
-        Color::new(tr(self.sigma_t.r()), tr(self.sigma_t.g()), tr(self.sigma_t.b()))
+        self.sigma_t.map(|s| if s > 0.0 { (-s * t).exp() } else { 1.0 })
     }
 
     /// Samples where along a segment of length `t_max` light carried with throughput `beta`
@@ -90,39 +89,38 @@ impl Homogeneous {
     /// distance. See the module's notes for the weights. (In spectral mode call it on the
     /// medium lifted by `at`.)
     #[inline]
-    pub fn sample_distance(&self, t_max: f32, beta: Color, u_channel: f32, u: f32) -> MediumSample {
-        let p = channel_probabilities(beta);
-        let c = if u_channel < p.r() {
-            0
-        } else if u_channel < p.r() + p.g() {
-            1
-        } else {
-            2
-        };
+    pub fn sample_distance(&self, t_max: f32, beta: Color, u_channel: f32, u: f32, lanes: usize) -> MediumSample {
+        let p = channel_probabilities(beta, lanes);
+        let mut c = 0;
+        let mut cdf = p[0];
+        while c + 1 < lanes && !(u_channel < cdf) {
+            c += 1;
+            cdf += p[c];
+        }
         let s = self.sigma_t[c];
         let t = if s > 0.0 { -(1.0 - u).ln() / s } else { f32::INFINITY };
         if t < t_max {
             let tr = self.transmittance(t);
-            let pdf = (p * self.sigma_t * tr).sum();
+            let pdf = (p * self.sigma_t * tr).lane_sum(lanes);
             if pdf > 0.0 {
                 let tr_over_pdf = tr / pdf;
                 return MediumSample { t, scattered: true, weight: self.sigma_s() * tr_over_pdf, tr_over_pdf };
             }
         }
         let tr = self.transmittance(t_max);
-        let prob = (p * tr).sum();
+        let prob = (p * tr).lane_sum(lanes);
         let weight = if prob > 0.0 { tr / prob } else { Color::ZERO };
         MediumSample { t: t_max, scattered: false, weight, tr_over_pdf: weight }
     }
 }
 
-/// The probabilities of choosing each channel: in proportion to `beta`, uniform when it is
-/// zero or not finite.
+/// The probabilities of choosing each of the first `lanes` lanes (3 channels, or the
+/// wavelengths in spectral mode): in proportion to `beta`, uniform when it is zero or not finite.
 #[inline]
-fn channel_probabilities(beta: Color) -> Color {
+fn channel_probabilities(beta: Color, lanes: usize) -> Color {
     let b = beta.max(Color::ZERO);
-    let sum = b.sum();
-    if sum > 0.0 && sum.is_finite() { b / sum } else { Color::splat(1.0 / 3.0) }
+    let sum = b.lane_sum(lanes);
+    if sum > 0.0 && sum.is_finite() { b / sum } else { Color::splat(1.0 / lanes as f32) }
 }
 
 #[cfg(test)]
@@ -154,7 +152,7 @@ mod tests {
             let n = 400_000;
             let (mut pass, mut scatter) = (Color::ZERO, Color::ZERO);
             for _ in 0..n {
-                let s = m.sample_distance(t_max, beta, rng.uniform(), rng.uniform());
+                let s = m.sample_distance(t_max, beta, rng.uniform(), rng.uniform(), 3);
                 if s.scattered {
                     assert!(s.t < t_max);
                     scatter += s.weight;

@@ -70,7 +70,10 @@ impl Medium {
         wl: Option<&Wavelengths>,
     ) -> MediumSample {
         match self {
-            Medium::Homogeneous(m) => m.at(wl).sample_distance(t_max, beta, u_channel, u),
+            Medium::Homogeneous(m) => {
+                let lanes = if wl.is_some() { crate::spectrum::LANES } else { 3 };
+                m.at(wl).sample_distance(t_max, beta, u_channel, u, lanes)
+            }
             Medium::Heterogeneous(m) => m.sample_distance(ray, t_max, beta, u, rng, wl),
         }
     }

@@ -18,7 +18,7 @@ use crate::geometry::Ray;
 use crate::light::Light;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Frame, Vec2, Vec3};
+use crate::math::{Color, Frame, PackedColor, Vec2, Vec3};
 use crate::progress::Progress;
 use crate::sampling::warp::{concentric_disk, uniform_cone};
 use crate::sampling::{Rng32, SeedPrefix};
@@ -72,7 +72,8 @@ pub struct PhotonHit {
     pub p: Vec3,
     /// Direction of travel (towards the surface).
     pub dir: Vec3,
-    pub flux: Color,
+    /// RGB (or CIE XYZ) in either mode.
+    pub flux: PackedColor,
     pub flags: u8,
     /// Scattering events before this hit (0: straight from the light).
     pub depth: u8,
@@ -286,7 +287,7 @@ pub fn trace_caustic(
         emitted = sources[n_store as usize - 1] + 1;
     }
     let scale = 1.0 / emitted.max(1) as f32;
-    hits.iter_mut().for_each(|h| h.flux *= scale);
+    hits.iter_mut().for_each(|h| h.flux = (h.flux.get() * scale).into());
     let capped = (hits.len() as u64) < n_store;
     PhotonPass { hits, emitted, capped, cancelled: watch.cancelled() }
 }
@@ -357,7 +358,7 @@ fn run_chunks(
                 }
             }
             if scale != 1.0 {
-                out.iter_mut().for_each(|h| h.flux *= scale);
+                out.iter_mut().for_each(|h| h.flux = (h.flux.get() * scale).into());
             }
             watch.advance(end - start);
             (out, sources)
@@ -418,7 +419,14 @@ pub fn trace_photon(
                 let p = ray.at(ms.t);
                 if matches!(store, Store::Media | Store::Volume) {
                     let flux = stored(flux, &wl);
-                    out.push(PhotonHit { p, dir: ray.d, flux, flags: VOLUME, depth: depth as u8, n: Vec3::ZERO });
+                    out.push(PhotonHit {
+                        p,
+                        dir: ray.d,
+                        flux: flux.into(),
+                        flags: VOLUME,
+                        depth: depth as u8,
+                        n: Vec3::ZERO,
+                    });
                 }
                 let s = medium.phase().sample(-ray.d, rng.uniform2());
                 // Roulette keeps the photon's power as at a surface (`scatter_photon`).
@@ -453,7 +461,14 @@ pub fn trace_photon(
             if caustic_only {
                 if caustic {
                     let flux = stored(flux, &wl);
-                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags: CAUSTIC, depth: depth as u8, n });
+                    out.push(PhotonHit {
+                        p: hit.p,
+                        dir: ray.d,
+                        flux: flux.into(),
+                        flags: CAUSTIC,
+                        depth: depth as u8,
+                        n,
+                    });
                 }
                 // The mirror or glass part of a mixed material (or plastic's coating) can still
                 // send it on along an L S+ D path.
@@ -473,7 +488,7 @@ pub fn trace_photon(
                 if depth > 0 || matches!(store, Store::All | Store::Volume) {
                     // (`Store::Indirect` and `Store::Media` leave the first hit to direct light.)
                     let flux = stored(flux, &wl);
-                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux, flags, depth: depth as u8, n });
+                    out.push(PhotonHit { p: hit.p, dir: ray.d, flux: flux.into(), flags, depth: depth as u8, n });
                 }
             }
         }
@@ -698,7 +713,7 @@ mod tests {
         assert_eq!(photon_depth_limit(8, 9), None);
         assert_eq!(photon_depth_limit(1000, 2), Some(MAX_PHOTON_DEPTH));
         for (flags, depth) in [(0, 0), (DIRECT, 5), (CAUSTIC, MAX_PHOTON_DEPTH as u8)] {
-            let h = PhotonHit { p: Vec3::ZERO, dir: Vec3::Z, flux: Color::ONE, flags, depth, n: Vec3::Z };
+            let h = PhotonHit { p: Vec3::ZERO, dir: Vec3::Z, flux: Color::ONE.into(), flags, depth, n: Vec3::Z };
             let packed = packed_flags(&h);
             assert_eq!((packed & (DIRECT | CAUSTIC), packed_depth(packed)), (flags, u32::from(depth)));
         }

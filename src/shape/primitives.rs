@@ -116,7 +116,7 @@ impl Primitives {
     /// through the mesh's indices. (Material and light come from `material_light`: returned
     /// together with the surface, the whole went through a temporary whose copy stalled on the
     /// stores just made to it.)
-    #[inline]
+    #[inline(always)]
     pub fn surface(
         &self,
         i: usize,

@@ -1,18 +1,22 @@
-//! Spectral mode's wavelengths, carried in the three lanes of `Color`: in a spectral render a
+//! Spectral mode's wavelengths, carried in the four lanes of `Color`: in a spectral render a
 //! path's throughput and radiance are the existing `Color` values, each lane holding the value
 //! at one of the path's wavelengths instead of a colour channel. Everything the integrators do
 //! to colours (products, sums, Russian roulette on the largest lane, the layers) then works on
 //! spectra unchanged, and the RGB mode keeps its code and its images bit for bit.
 //!
-//! Three wavelengths per path, not the four of Wilkie et al. (2014) and pbrt-v4: `Color` has three lanes, and giving it a fourth would make
-//! every colour operation of the RGB mode wider (a `Vec4` where a `Vec3` is, its memory in the
-//! photon records, the film and the lobes grown by a third) for a render mode that is not the
-//! default. Three hero-rotated wavelengths (u, u + 1/3, u + 2/3 through the visible
-//! distribution's inverse CDF) still stratify the spectrum; the cost is more colour noise per
-//! sample than four would give. Measured on one path's estimate of a white furnace's colour
-//! (D65 light; `sampled.rs`'s tests), the standard deviation is (0.418, 0.072, 0.877) with
-//! three against (0.151, 0.031, 0.579) with four (measured before the four-wavelength code was
-//! removed): more than the sqrt(4/3) that independent samples would give.
+//! Four wavelengths per path, as Wilkie et al. (2014) and pbrt-v4 carry: `Color` is a `Vec4`
+//! whose fourth lane an RGB colour fills with a copy of its red, which every lane-wise operation
+//! keeps exact, so that the largest and smallest lane, finiteness and equality see what they saw
+//! on three channels (`math::color`); the channel sums and means stay over three. The RGB mode
+//! costs no more for it: fewer instructions (one SSE operation where a `Vec3` did three), and
+//! the stored arrays of colours that are RGB in either mode (SPPM's pixels and visible points,
+//! photon hits, photon mapping's irradiance records) keep 12 bytes a colour as `PackedColor`,
+//! VCM's light vertices keep their size with `PackedLanes` (BENCHMARKS.md, "Four wavelengths per
+//! path"). The hero-rotated wavelengths (u, u + 1/4, u + 1/2, u + 3/4 through the visible
+//! distribution's inverse CDF) stratify the spectrum more finely than three did: on one path's
+//! estimate of a white furnace's colour (D65 light; `sampled.rs`'s tests), the standard
+//! deviation is (0.151, 0.031, 0.579) against (0.418, 0.072, 0.877) with three, more than the
+//! sqrt(4/3) that independent samples would give.
 //!
 //! Scene values become spectra where they enter the path: reflectances through
 //! [`super::RgbAlbedoSpectrum`]'s table (greys exactly), unbounded values (conductors' eta and
@@ -23,9 +27,9 @@
 //! CIE XYZ, each lane divided by its wavelength's pdf, mapped to linear sRGB ([`Wavelengths::to_srgb`]).
 //!
 //! At a dispersive interface the path keeps only its hero wavelength: the lanes of the other
-//! two would follow a direction they cannot take. [`Wavelengths::terminate_secondary`] returns
-//! the factor (3, 0, 0) that the throughput is multiplied by once, so that the hero alone stands
-//! for the three from there on while the light found before the interface keeps all three.
+//! three would follow a direction they cannot take. [`Wavelengths::terminate_secondary`] returns
+//! the factor (4, 0, 0, 0) that the throughput is multiplied by once, so that the hero alone
+//! stands for the four from there on while the light found before the interface keeps all four.
 //! Bidirectional methods join two subpaths at one set of wavelengths; when both crossed a
 //! dispersive interface, each throughput holds the factor and the joined path takes it once
 //! ([`joined`]).
@@ -36,7 +40,7 @@ use crate::math::Color;
 use std::cell::RefCell;
 
 /// Wavelengths per path in spectral mode: one per lane of `Color`.
-pub const LANES: usize = 3;
+pub const LANES: usize = 4;
 
 /// The visible-light distribution's inverse CDF constants (see `sampled.rs`).
 const VISIBLE_A: f32 = 0.0072;
@@ -48,7 +52,7 @@ const VISIBLE_NORM: f32 = VISIBLE_A / (TANH_HI - TANH_LO);
 /// The CIE Y normalisation the conversion scales by (`cie_tables.rs`'s).
 const Y_NORMALIZATION: f32 = super::cie_tables::CIE_Y_NORMALIZATION as f32;
 
-/// The three wavelengths (nm) of a path in spectral mode and their pdfs (per nm); lane 0 is the
+/// The four wavelengths (nm) of a path in spectral mode and their pdfs (per nm); lane 0 is the
 /// hero.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wavelengths {
@@ -59,8 +63,8 @@ pub struct Wavelengths {
 }
 
 impl Wavelengths {
-    /// The wavelengths for `u` in [0, 1): the hero at `u`, the others at u + 1/3 and u + 2/3
-    /// (mod 1), through the visible-light distribution.
+    /// The wavelengths for `u` in [0, 1): the hero at `u`, the others at u + 1/4, u + 1/2 and
+    /// u + 3/4 (mod 1), through the visible-light distribution.
     pub fn sample(u: f32) -> Self {
         let mut lambda = [0.0; LANES];
         let mut pdf = [0.0; LANES];
@@ -100,7 +104,7 @@ impl Wavelengths {
     /// `f` at each wavelength, one per lane.
     #[inline(always)]
     pub fn map(&self, f: impl Fn(f32) -> f32) -> Color {
-        Color::new(f(self.lambda[0]), f(self.lambda[1]), f(self.lambda[2]))
+        Color::from_lanes(self.lambda.map(f))
     }
 
     /// A reflectance or transmittance colour (clamped to [0, 1]) as its smooth spectrum at the
@@ -146,14 +150,16 @@ impl Wavelengths {
     }
 
     /// Keeps only the hero (a dispersive interface): the factor to multiply the throughput by,
-    /// (3, 0, 0), the first time; `None` once the secondary wavelengths are gone.
+    /// (4, 0, 0, 0), the first time; `None` once the secondary wavelengths are gone.
     #[inline]
     pub fn terminate_secondary(&mut self) -> Option<Color> {
         if self.hero_only {
             return None;
         }
         self.hero_only = true;
-        Some(Color::new(LANES as f32, 0.0, 0.0))
+        let mut factor = [0.0; LANES];
+        factor[0] = LANES as f32;
+        Some(Color::from_lanes(factor))
     }
 
     /// True once `terminate_secondary` has been called.
@@ -166,7 +172,7 @@ impl Wavelengths {
     /// the average of v_i xyz-bar(lambda_i) / pdf_i, scaled by the Y normalisation.
     pub fn to_xyz(&self, v: Color) -> [f32; 3] {
         let mut xyz = [0.0f32; 3];
-        for ((value, lambda), pdf) in v.to_array().into_iter().zip(self.lambda).zip(self.pdf) {
+        for ((value, lambda), pdf) in v.lanes().into_iter().zip(self.lambda).zip(self.pdf) {
             if value == 0.0 || !(pdf > 0.0) {
                 continue;
             }
@@ -184,8 +190,8 @@ impl Wavelengths {
     /// path meets as RGB (photon estimates), which the throughput then weights as a colour.
     #[inline]
     pub fn throughput_to_srgb(&self, beta: Color) -> Color {
-        let [a, b, c] = beta.to_array();
-        if a == b && b == c && !self.hero_only {
+        let [a, b, c, d] = beta.lanes();
+        if a == b && b == c && c == d && !self.hero_only {
             return beta;
         }
         self.to_srgb(beta * self.map(d65))
@@ -303,21 +309,22 @@ mod tests {
         }
     }
 
-    /// A path joined from two terminated subpaths carries the factor (3, 0, 0) once.
+    /// A path joined from two terminated subpaths carries the factor (4, 0, 0, 0) once.
     #[test]
     fn joined_paths_carry_the_factor_once() {
         let mut a = Wavelengths::sample(0.3);
         let mut b = a;
         let (fa, fb) = (a.terminate_secondary().unwrap(), b.terminate_secondary().unwrap());
-        assert_eq!(joined(fa * fb, true, true), Color::new(3.0, 0.0, 0.0));
-        assert_eq!(joined(fa * Color::ONE, true, false), Color::new(3.0, 0.0, 0.0));
+        let factor = Color::from_lanes([4.0, 0.0, 0.0, 0.0]);
+        assert_eq!(joined(fa * fb, true, true), factor);
+        assert_eq!(joined(fa * Color::ONE, true, false), factor);
         assert_eq!(joined(Color::ONE, false, false), Color::ONE);
     }
 
     #[test]
     fn termination_keeps_the_hero_once() {
         let mut wl = Wavelengths::sample(0.3);
-        assert_eq!(wl.terminate_secondary(), Some(Color::new(3.0, 0.0, 0.0)));
+        assert_eq!(wl.terminate_secondary(), Some(Color::from_lanes([4.0, 0.0, 0.0, 0.0])));
         assert_eq!(wl.terminate_secondary(), None);
         assert!(wl.secondary_terminated());
     }

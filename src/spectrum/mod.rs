@@ -9,7 +9,7 @@
 //! spectrum of ones is white; emitted spectra are not, so a flat emission spectrum is the
 //! slightly purple colour of an equal-energy white in sRGB.
 //!
-//! Spectral rendering (issue 31): `lanes` (`Wavelengths`, a path's three wavelengths in the
+//! Spectral rendering (issue 31): `lanes` (`Wavelengths`, a path's four wavelengths in the
 //! lanes of `Color`, the lifts of colours and the conversion back), `sampled` (the CIE tables at
 //! any wavelength, the visible-light distribution), `rgb` (RGB colours uplifted to smooth
 //! spectra, Jakob and Hanika 2019), `emission` (emitted spectra kept as given), `blackbody` and

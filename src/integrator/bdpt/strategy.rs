@@ -28,7 +28,7 @@ use crate::integrator::lighting::visibility;
 use crate::light::Light;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec2, Vec3};
+use crate::math::{Color, PackedLanes, Vec2, Vec3};
 use crate::render::RayStats;
 use crate::scene::Scene;
 use crate::spectrum::{Wavelengths, joined};
@@ -104,15 +104,17 @@ pub struct LightVertex {
     /// Towards the previous vertex of the light path: where its light comes from.
     pub wo: Vec3,
     /// Throughput from the light to here: emitted flux over its densities, times each earlier
-    /// vertex's BSDF, cosine and correction over its density (not this vertex's BSDF).
-    pub beta: Color,
+    /// vertex's BSDF, cosine and correction over its density (not this vertex's BSDF). Packed
+    /// (16 bytes aligned to 4) so that the record keeps its RGB-era 160 bytes.
+    pub beta: PackedLanes,
     pub mis: SubpathMis,
     /// Surface vertices of the light path up to and including this one (its bounces when it
     /// is connected or merged).
     pub depth: u32,
     /// Scattering events before this vertex, passages through masks included (for the layers),
     /// and whether all were delta (mirrors, glass, straight through).
-    pub bounces: u32,
+    /// (Saturating at `u16::MAX`: the layers tell apart only the first few.)
+    pub bounces: u16,
     pub delta_only: bool,
     /// Spectral mode: the light path kept only its hero wavelength up to here (`beta` holds
     /// the factor; see the module header). Always false in RGB mode.
@@ -126,7 +128,7 @@ impl LightVertex {
     /// connection to the camera, whose state is then `LayerPath::CAMERA`).
     #[inline]
     pub fn layer(&self, camera: LayerPath, joins: u32) -> usize {
-        light_layer(self.bounces, self.delta_only, camera, joins)
+        light_layer(u32::from(self.bounces), self.delta_only, camera, joins)
     }
 }
 
@@ -418,7 +420,7 @@ pub fn connect(
     }
     let cos_x = d.dot(x.bsdf.normal()).abs();
     let cos_y = d.dot(y_bsdf.normal()).abs() * y_bsdf.shading_normal_correction(y.wo, -d);
-    let contribution = joined(x.beta * f_x * f_y * y.beta * (cos_x * cos_y / dist2), x.hero_only, y.hero_only);
+    let contribution = joined(x.beta * f_x * f_y * y.beta.get() * (cos_x * cos_y / dist2), x.hero_only, y.hero_only);
     if contribution == Color::ZERO || !contribution.is_finite() {
         return None;
     }
@@ -460,7 +462,7 @@ pub fn connect_to_camera(
         return None;
     }
     let cos = cw.wi.dot(bsdf.normal()).abs() * bsdf.shading_normal_correction(y.wo, cw.wi);
-    let contribution = y.beta * f * (cos * cw.importance / cw.pdf * ctx.light_scale);
+    let contribution = y.beta.get() * f * (cos * cw.importance / cw.pdf * ctx.light_scale);
     if contribution == Color::ZERO {
         return None;
     }

@@ -85,7 +85,9 @@ pub fn trace_light_path<'a>(
         }
         depth += 1;
         let hero_only = wl.is_some_and(|wl| wl.secondary_terminated());
-        let v = LightVertex { hit, wo, beta, mis: arrived, depth, bounces, delta_only, hero_only };
+        let saturated = bounces.min(u32::from(u16::MAX)) as u16;
+        let v =
+            LightVertex { hit, wo, beta: beta.into(), mis: arrived, depth, bounces: saturated, delta_only, hero_only };
         if bsdf.has_smooth() {
             vertex(&v, &bsdf, rng, stats);
         }

@@ -87,7 +87,7 @@ pub(super) fn split_volume(hits: &mut Vec<PhotonHit>) -> Vec<Photon> {
         let v = h.flags & trace::VOLUME != 0;
         if v {
             let packed = PhotonHit { flags: 0, ..*h };
-            volume.push(Photon::new(h.p, h.dir, h.flux, trace::packed_flags(&packed)));
+            volume.push(Photon::new(h.p, h.dir, h.flux.get(), trace::packed_flags(&packed)));
         }
         !v
     });

@@ -3,7 +3,7 @@
 //! k photons.
 
 use super::{IRRADIANCE_STRIDE, RECORD_LEVELS, disc_radius2};
-use crate::math::Color;
+use crate::math::{Color, PackedColor};
 use crate::photon::trace::{self, Watch};
 use crate::photon::{Gathered, Photon, PhotonMap};
 use std::f32::consts::PI;
@@ -19,12 +19,13 @@ pub(super) fn precompute_irradiance(
     max_r: f32,
     depth: u32,
     watch: Watch,
-) -> Option<(PhotonMap, Vec<[Color; RECORD_LEVELS - 1]>)> {
+) -> Option<(PhotonMap, Vec<[PackedColor; RECORD_LEVELS - 1]>)> {
     use rayon::prelude::*;
     let records: Vec<Photon> =
         hits.par_iter().step_by(IRRADIANCE_STRIDE).map(|h| Photon::new(h.p, h.n, Color::ZERO, 0)).collect();
     let mut records = PhotonMap::build_cancellable(records, watch.cancel)?;
-    let levels: Vec<[Color; RECORD_LEVELS]> = records
+    // Packed (12 bytes a level): the records are RGB in either mode.
+    let levels: Vec<[PackedColor; RECORD_LEVELS]> = records
         .photons()
         .par_chunks(4096)
         .flat_map_iter(|chunk| {
@@ -57,7 +58,7 @@ pub(super) fn precompute_irradiance(
                             *level /= PI * r2;
                         }
                     }
-                    e
+                    e.map(PackedColor::from)
                 })
                 .collect::<Vec<_>>()
         })
@@ -66,6 +67,6 @@ pub(super) fn precompute_irradiance(
         return None;
     }
     // The common level is read with the record itself (one cache line); the others beside it.
-    records.set_powers(|i| levels[i][0]);
+    records.set_powers(|i| levels[i][0].get());
     Some((records, levels.iter().map(|l| std::array::from_fn(|j| l[j + 1])).collect()))
 }

@@ -277,7 +277,7 @@ mod tests {
             .map(|_| PhotonHit {
                 p: Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0,
                 dir: -Vec3::Y,
-                flux: Color::ONE,
+                flux: Color::ONE.into(),
                 flags: 0,
                 depth: 0,
                 n: Vec3::Y,

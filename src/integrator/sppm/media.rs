@@ -79,7 +79,7 @@ impl VolumePhotons {
         self.grid.for_each_within(p, self.r, |found| {
             let ph = &self.hits[found.index as usize];
             if u32::from(ph.depth) <= max_depth && bounds.keeps(ph.p) {
-                sum += ph.flux * phase.p(wo, -ph.dir);
+                sum += ph.flux.get() * phase.p(wo, -ph.dir);
             }
         });
         sum / bounds.volume
@@ -255,7 +255,7 @@ impl Sppm {
                 let point = VisiblePoint {
                     at: Shading::of(&hit),
                     wo,
-                    beta: beta / q,
+                    beta: (beta / q).into(),
                     layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
                 };

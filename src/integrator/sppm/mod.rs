@@ -39,7 +39,7 @@ use crate::film::{Film, Image, Layers};
 use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
-use crate::math::{Color, Vec3, luminance};
+use crate::math::{Color, PackedColor, Vec3, luminance};
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::Sampler;
@@ -149,8 +149,8 @@ pub struct Disc {
     pub n: f32,
     /// Current search radius; 0 until the pixel has had a visible point (or when unused).
     pub r: f32,
-    /// Accumulated flux tau (already rescaled to the current radius).
-    pub tau: Color,
+    /// Accumulated flux tau (already rescaled to the current radius); RGB in either mode.
+    pub tau: PackedColor,
 }
 
 impl Disc {
@@ -166,7 +166,7 @@ impl Disc {
         let m = m as f32;
         let n_new = self.n + alpha * m;
         let ratio = n_new / (self.n + m);
-        self.tau = (self.tau + phi) * ratio;
+        self.tau = ((self.tau.get() + phi) * ratio).into();
         self.r *= ratio.sqrt();
         self.n = n_new;
         ratio
@@ -182,8 +182,8 @@ impl Disc {
 /// What one pixel has gathered so far.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelStats {
-    /// Sum over iterations of emitted and direct light.
-    pub ld: Color,
+    /// Sum over iterations of emitted and direct light (RGB in either mode).
+    pub ld: PackedColor,
     /// The estimate within the pixel's radius: every photon with `indirect_reach` 1, focused
     /// photons only otherwise. (The wide disc's estimate is kept apart, in `State::wide`, so
     /// that the classic algorithm's memory stays as it was.)
@@ -194,9 +194,9 @@ impl PixelStats {
     /// Radiance after `iterations` iterations, with the pixel's wide disc if it has one.
     pub fn radiance(&self, wide: Option<&Disc>, iterations: u32) -> Color {
         let it = iterations.max(1) as f32;
-        let l = self.ld / it + self.near.radiance(self.near.tau, iterations);
+        let l = self.ld.get() / it + self.near.radiance(self.near.tau.get(), iterations);
         match wide {
-            Some(w) => l + w.radiance(w.tau, iterations),
+            Some(w) => l + w.radiance(w.tau.get(), iterations),
             None => l,
         }
     }
@@ -221,7 +221,8 @@ struct VisiblePoint {
     /// What the BSDF is made from (`Shading::hit`).
     at: Shading,
     wo: Vec3,
-    beta: Color,
+    /// The throughput as RGB (in spectral mode too: `CameraWalk::beta_rgb`).
+    beta: PackedColor,
     /// The layers of the light gathered there.
     layer: LayerPath,
     /// Most scattering events a photon gathered there may have had, so that whole paths keep
@@ -421,9 +422,9 @@ impl Sppm {
                 let mut dev = 0;
                 if sample.ld.is_finite() {
                     if done > 0 {
-                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld) / prior);
+                        dev = fixed_square(luminance(sample.ld) - luminance(px.ld.get()) / prior);
                     }
-                    px.ld += sample.ld;
+                    px.ld = (px.ld.get() + sample.ld).into();
                     if let Some(l) = layers {
                         for (a, b) in l.ld.iter_mut().zip(sample.ld_layers) {
                             *a += b;
@@ -496,7 +497,8 @@ impl Sppm {
                     let mut unused = Disc::default();
                     let wide = wide.unwrap_or(&mut unused);
                     let g = gather(scene, v, px.near.r, wide.r, grid, &hits);
-                    let (g_near, g_wide) = (v.beta * g.near, v.beta * g.wide);
+                    let beta = v.beta.get();
+                    let (g_near, g_wide) = (beta * g.near, beta * g.wide);
                     if !(g_near.is_finite() && g_wide.is_finite()) {
                         driver.record(&RayStats::default(), 1, 0);
                         return 0;
@@ -505,7 +507,7 @@ impl Sppm {
                     // discs of the current radii.
                     let dev = if done > 0 {
                         let now = px.near.radiance(g_near, 1) + wide.radiance(g_wide, 1);
-                        let mean = px.near.radiance(px.near.tau, 1) + wide.radiance(wide.tau, 1);
+                        let mean = px.near.radiance(px.near.tau.get(), 1) + wide.radiance(wide.tau.get(), 1);
                         fixed_square(luminance(now) - luminance(mean) / prior)
                     } else {
                         0
@@ -513,7 +515,7 @@ impl Sppm {
                     let ratio_near = px.near.update(g.m_near, g_near, config.alpha);
                     let ratio_wide = wide.update(g.m_wide, g_wide, config.alpha);
                     if let Some(l) = layers {
-                        let caustic = v.beta * g.near_caustic;
+                        let caustic = beta * g.near_caustic;
                         let mut parts = [Color::ZERO; 4];
                         parts[v.layer.caustic_photons()] += caustic;
                         parts[v.layer.other_photons()] += g_near - caustic;
@@ -609,7 +611,7 @@ impl Sppm {
                 VisiblePoint {
                     at: Shading::of(&v.hit),
                     wo: v.wo,
-                    beta: walk.beta_rgb() / q,
+                    beta: (walk.beta_rgb() / q).into(),
                     layer: walk.layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
                 },
@@ -672,12 +674,13 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
     }
     #[inline(always)]
     fn add(g: &mut Gathered, in_wide: bool, f: Color, ph: &PhotonHit) {
+        let flux = ph.flux.get();
         if in_wide {
-            g.wide += f * ph.flux;
+            g.wide += f * flux;
         } else {
-            g.near += f * ph.flux;
+            g.near += f * flux;
             if ph.flags & trace::CAUSTIC != 0 {
-                g.near_caustic += f * ph.flux;
+                g.near_caustic += f * flux;
             }
         }
     }
@@ -815,7 +818,7 @@ mod tests {
         VisiblePoint {
             at: Shading::of(&hit.unwrap()),
             wo: Vec3::Z,
-            beta: Color::ONE,
+            beta: Color::ONE.into(),
             layer: LayerPath::CAMERA,
             photon_depth: trace::MAX_PHOTON_DEPTH as u8,
         }
@@ -825,7 +828,7 @@ mod tests {
     fn every_photon_in_range_counts_in_m() {
         let scene = grey_quad();
         let v = centre_point(&scene);
-        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE, flags: 0, depth: 0, n: Vec3::Z };
+        let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE.into(), flags: 0, depth: 0, n: Vec3::Z };
         let hits = [
             hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
             hit(Vec3::new(0.0, -0.2, 0.0), Vec3::Z), // in range, from below: no light, counted
@@ -852,7 +855,7 @@ mod tests {
         let hit = |x: f32, flags: u8| PhotonHit {
             p: Vec3::new(x, 0.0, 0.0),
             dir: -Vec3::Z,
-            flux: Color::ONE,
+            flux: Color::ONE.into(),
             flags,
             depth: 1,
             n: Vec3::Z,
@@ -883,8 +886,8 @@ mod tests {
         // Each disc shrinks by its own photons: a pixel whose near disc is empty still has its
         // wide disc shrink as photons come into it (where one schedule for both would keep a
         // shadowed pixel's wide disc taking a bright neighbour's light for ever).
-        let mut p = PixelStats { ld: Color::ZERO, near: Disc { n: 0.0, r: 0.2, tau: Color::ZERO } };
-        let mut wide = Disc { n: 0.0, r: 0.6, tau: Color::ZERO };
+        let mut p = PixelStats { ld: PackedColor::ZERO, near: Disc { n: 0.0, r: 0.2, tau: PackedColor::ZERO } };
+        let mut wide = Disc { n: 0.0, r: 0.6, tau: PackedColor::ZERO };
         assert_eq!(p.near.update(0, Color::ZERO, 2.0 / 3.0), 1.0);
         let ratio = wide.update(3, Color::splat(3.0), 2.0 / 3.0);
         assert!((ratio - 2.0 / 3.0).abs() < 1e-6 && (wide.r * wide.r - 0.36 * 2.0 / 3.0).abs() < 1e-6);
@@ -950,18 +953,18 @@ mod tests {
     fn update_follows_hachisuka_formulas() {
         // N = 10, r = 1, tau = 5; M = 6 new photons with flux 3, alpha = 2/3:
         // N' = 10 + 4 = 14, r'^2 = r^2 N'/(N + M) = 14/16, tau' = (5 + 3) 14/16 = 7.
-        let mut d = Disc { n: 10.0, r: 1.0, tau: Color::splat(5.0) };
+        let mut d = Disc { n: 10.0, r: 1.0, tau: Color::splat(5.0).into() };
         d.update(6, Color::splat(3.0), 2.0 / 3.0);
         assert!((d.n - 14.0).abs() < 1e-6);
         assert!((d.r * d.r - 14.0 / 16.0).abs() < 1e-6);
-        assert!((d.tau.r() - 7.0).abs() < 1e-6);
+        assert!((d.tau.get().r() - 7.0).abs() < 1e-6);
         // No photons: nothing changes.
         let before = d;
         d.update(0, Color::ZERO, 2.0 / 3.0);
         assert_eq!((d.n, d.r, d.tau), (before.n, before.r, before.tau));
-        let mut p = PixelStats { ld: Color::ZERO, near: d };
+        let mut p = PixelStats { ld: PackedColor::ZERO, near: d };
         // The estimate: tau / (iterations pi r^2) plus the mean direct light.
-        p.ld = Color::splat(4.0);
+        p.ld = Color::splat(4.0).into();
         let l = p.radiance(None, 2);
         assert!((l.r() - (2.0 + 7.0 / (2.0 * PI * 14.0 / 16.0))).abs() < 1e-5);
     }
