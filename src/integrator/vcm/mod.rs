@@ -651,6 +651,12 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
     // The density estimate's kernel and the number of light paths.
     let norm = 1.0 / (std::f32::consts::PI * r2 * paths.ends.len().max(1) as f32);
     let mut sum = [Color::ZERO; 4];
+    // A Lambertian camera vertex samples its `wo` with one density from every direction above
+    // it (`Bsdf::pdf_reverse` does not read the other direction there): worked out at the first
+    // light vertex above it and kept, the same number `reverse_pdf` would give each.
+    let lambertian = x.bsdf.lambert_albedo().is_some();
+    let ng = x.bsdf.geometric_normal();
+    let mut rev_above: Option<f32> = None;
     paths.grid.for_each_within(p, r2, |slot| {
         let y = &paths.merges[slot];
         candidates += 1;
@@ -661,7 +667,9 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
         if f == Color::ZERO {
             return;
         }
-        let rev = strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance, ctx.wl.as_ref());
+        let reverse =
+            || strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance, ctx.wl.as_ref());
+        let rev = if lambertian && y.wo.dot(ng) > 0.0 { *rev_above.get_or_insert_with(reverse) } else { reverse() };
         let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, &ctx.factors);
         // Both paths past dispersive glass: the merged path takes the hero's factor once.
         sum[strategy::light_layer(y.bounces, y.delta_only, x.layer, 1)] +=
