@@ -289,6 +289,32 @@ impl SceneBuilder {
         self.spectrum_users.push((first.unwrap_or(usize::MAX), end, id));
     }
 
+    /// `set_emission_spectrum` for a spectrum read from a scene standing for colour `color`
+    /// (nothing when there is none, or the colour is black).
+    pub fn keep_emission_spectrum(
+        &mut self,
+        first: Option<usize>,
+        spectrum: Option<crate::spectrum::SampledSpectrum>,
+        color: crate::math::Color,
+    ) {
+        if let Some(s) = spectrum.and_then(|s| EmissionSpectrum::new(&s, color)) {
+            self.set_emission_spectrum(first, s);
+        }
+    }
+
+    /// `add_given_spectrum` for a spectrum read from a scene standing for colour `color`; none
+    /// when there is no spectrum or the colour is black (the colour is then lifted).
+    pub fn keep_given_spectrum(
+        &mut self,
+        spectrum: Option<&crate::spectrum::SampledSpectrum>,
+        color: crate::math::Color,
+    ) -> SpectrumId {
+        match spectrum.and_then(|s| GivenSpectrum::new(s, color)) {
+            Some(s) => self.add_given_spectrum(s),
+            None => SpectrumId::NONE,
+        }
+    }
+
     /// Keeps a reflectance-like spectrum for spectral mode; returns its index (none when the
     /// table is full: the colour it stands for is then lifted).
     pub fn add_given_spectrum(&mut self, spectrum: GivenSpectrum) -> SpectrumId {

@@ -105,14 +105,11 @@ impl<'de> Deserialize<'de> for Rgb {
         }
         let raw =
             Raw::deserialize(d).map_err(|_| D::Error::custom("expected a colour: [r, g, b] or a single number"))?;
-        let a = match raw {
+        checked_rgb(match raw {
             Raw::Grey(g) => [g; 3],
             Raw::Rgb(a) => a,
-        };
-        if let Some(bad) = a.iter().find(|v| !v.is_finite() || **v < 0.0 || v.abs() > f32::MAX as f64) {
-            return Err(D::Error::custom(format!("colour components must be finite and >= 0, found {bad}")));
-        }
-        Ok(Rgb(Color::new(a[0] as f32, a[1] as f32, a[2] as f32)))
+        })
+        .map(Rgb)
     }
 }
 
@@ -170,6 +167,25 @@ fn checked_rgb<E: Error>(a: [f64; 3]) -> Result<Color, E> {
     Ok(Color::new(a[0] as f32, a[1] as f32, a[2] as f32))
 }
 
+/// A colour or a spectrum as written, before it is checked.
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum RawColour {
+    Grey(f64),
+    Rgb([f64; 3]),
+    Table(SpectrumTable),
+}
+
+impl RawColour {
+    fn check<E: Error>(self) -> Result<ColorSpec, E> {
+        match self {
+            RawColour::Grey(g) => checked_rgb([g; 3]).map(ColorSpec::Rgb),
+            RawColour::Rgb(a) => checked_rgb(a).map(ColorSpec::Rgb),
+            RawColour::Table(t) => t.check().map(ColorSpec::Spectrum),
+        }
+    }
+}
+
 /// A colour or a spectrum (`SpectrumSpec`): what lights and emitting objects take.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ColorSpec {
@@ -178,23 +194,13 @@ pub enum ColorSpec {
 }
 impl<'de> Deserialize<'de> for ColorSpec {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        #[derive(serde::Deserialize)]
-        #[serde(untagged)]
-        enum Raw {
-            Grey(f64),
-            Rgb([f64; 3]),
-            Table(SpectrumTable),
-        }
-        let raw = Raw::deserialize(d).map_err(|_| {
-            D::Error::custom(format!(
-                "expected a colour ([r, g, b] or a single number) or a spectrum ({SPECTRUM_FORMS})"
-            ))
-        })?;
-        match raw {
-            Raw::Grey(g) => checked_rgb([g; 3]).map(ColorSpec::Rgb),
-            Raw::Rgb(a) => checked_rgb(a).map(ColorSpec::Rgb),
-            Raw::Table(t) => t.check().map(ColorSpec::Spectrum),
-        }
+        RawColour::deserialize(d)
+            .map_err(|_| {
+                D::Error::custom(format!(
+                    "expected a colour ([r, g, b] or a single number) or a spectrum ({SPECTRUM_FORMS})"
+                ))
+            })?
+            .check()
     }
 }
 
@@ -211,21 +217,20 @@ impl<'de> Deserialize<'de> for ColorOrTexture {
         #[serde(untagged)]
         enum Raw {
             Name(String),
-            Grey(f64),
-            Rgb([f64; 3]),
-            Table(SpectrumTable),
+            Value(RawColour),
         }
         let raw = Raw::deserialize(d).map_err(|_| {
             D::Error::custom(format!(
                 "expected a colour ([r, g, b] or a single number), a spectrum ({SPECTRUM_FORMS}) or a texture's name"
             ))
         })?;
-        match raw {
-            Raw::Name(n) => Ok(ColorOrTexture::Texture(n)),
-            Raw::Grey(g) => checked_rgb([g; 3]).map(ColorOrTexture::Color),
-            Raw::Rgb(a) => checked_rgb(a).map(ColorOrTexture::Color),
-            Raw::Table(t) => t.check().map(ColorOrTexture::Spectrum),
-        }
+        Ok(match raw {
+            Raw::Name(n) => ColorOrTexture::Texture(n),
+            Raw::Value(v) => match v.check()? {
+                ColorSpec::Rgb(c) => ColorOrTexture::Color(c),
+                ColorSpec::Spectrum(s) => ColorOrTexture::Spectrum(s),
+            },
+        })
     }
 }
 

@@ -40,7 +40,7 @@ impl<'a> Cx<'a> {
                     (None, None) => Vec3::ZERO,
                 };
                 b.geometry.add_light(Light::Point { position, intensity });
-                self.keep_spectrum(b, Some(first), spectrum, intensity);
+                b.geometry.keep_emission_spectrum(Some(first), spectrum, intensity);
             }
             "spot" => {
                 let (intensity, spectrum) = self.emission_color(&p, "intensity")?;
@@ -64,7 +64,7 @@ impl<'a> Cx<'a> {
                     beam,
                     texture,
                 )));
-                self.keep_spectrum(b, Some(first), spectrum, intensity);
+                b.geometry.keep_emission_spectrum(Some(first), spectrum, intensity);
             }
             "projector" => {
                 let x = self.transform(&p, "to_world")?.map_or(Transform::IDENTITY, |x| x.t);
@@ -138,13 +138,13 @@ impl<'a> Cx<'a> {
                     return Err(self.err(el, "directional light needs a non-zero direction"));
                 }
                 b.geometry.add_light(Light::Directional { direction, irradiance, disk: PhotonDisk::default() });
-                self.keep_spectrum(b, Some(first), spectrum, irradiance);
+                b.geometry.keep_emission_spectrum(Some(first), spectrum, irradiance);
             }
             "constant" => {
                 let (radiance, spectrum) = self.emission_color(&p, "radiance")?;
                 let radiance = radiance.unwrap_or(Color::ONE);
                 b.geometry.set_environment(Environment::constant(radiance)).map_err(|e| self.err(el, e))?;
-                self.keep_spectrum(b, None, spectrum, radiance);
+                b.geometry.keep_emission_spectrum(None, spectrum, radiance);
             }
             "envmap" => {
                 if self.prop(&p, "bitmap").is_some() {
@@ -181,20 +181,6 @@ impl<'a> Cx<'a> {
 
     /// The orthonormal frame of a light's `to_world`: z the direction it shines, x and y its
     /// image axes (Mitsuba's local frame, rotation only).
-    /// Keeps an emitter's spectrum, given as a spectrum, for the lights it added from `first`
-    /// on (the environment when `None`), whose emitted colour is `color` in RGB mode.
-    pub(super) fn keep_spectrum(
-        &self,
-        b: &mut Build,
-        first: Option<usize>,
-        spectrum: Option<crate::spectrum::SampledSpectrum>,
-        color: Color,
-    ) {
-        if let Some(s) = spectrum.and_then(|s| crate::spectrum::EmissionSpectrum::new(&s, color)) {
-            b.geometry.set_emission_spectrum(first, s);
-        }
-    }
-
     fn light_frame(&self, el: &'a El, x: &Transform) -> Result<Frame, SceneError> {
         let z = x.vector(Vec3::Z).normalize_or_zero();
         if z == Vec3::ZERO {

@@ -300,7 +300,7 @@ impl<'a> Cx<'a> {
                 if let Some(mesh) = &emitting_mesh {
                     b.geometry.add_mesh_area_lights(mesh, radiance, texture, None);
                 }
-                self.keep_spectrum(b, Some(first_light), spectrum, radiance);
+                b.geometry.keep_emission_spectrum(Some(first_light), spectrum, radiance);
             }
             return self.finish(&p);
         };
@@ -358,7 +358,7 @@ impl<'a> Cx<'a> {
                 let surface = b.geometry.add_mesh_area_lights(mesh, radiance, texture, reflects.then_some(m));
                 b.geometry.set_material_spectra(surface, spectra);
             }
-            self.keep_spectrum(b, Some(first_light), spectrum, radiance);
+            b.geometry.keep_emission_spectrum(Some(first_light), spectrum, radiance);
             return self.finish(&p);
         }
         if let Some((mesh, mesh_name)) = mesh_out {

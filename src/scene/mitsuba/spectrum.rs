@@ -6,7 +6,7 @@ use super::Build;
 use super::plugins::PluginKind;
 use super::props::Cx;
 use super::xml::El;
-use crate::material::{GivenSpectrum, SpectrumId};
+use crate::material::SpectrumId;
 use crate::math::Color;
 use crate::scene::{FileKind, SceneError};
 use crate::spectrum::{CIE_MAX, CIE_MIN, SampledSpectrum, SpectrumUse, equal_energy_white, parse_spd};
@@ -26,10 +26,8 @@ impl<'a> Cx<'a> {
     /// reflectance-like spectra for spectral mode (none when it was not given as a spectrum,
     /// or the colour is black).
     pub(super) fn given_id(&mut self, b: &mut Build, color: Color) -> SpectrumId {
-        match self.given_spectrum.take().and_then(|s| GivenSpectrum::new(&s, color)) {
-            Some(s) => b.geometry.add_given_spectrum(s),
-            None => SpectrumId::NONE,
-        }
+        let spectrum = self.given_spectrum.take();
+        b.geometry.keep_given_spectrum(spectrum.as_ref(), color)
     }
 
     /// The colour of an emitter's property `name` and, when it was given as a spectrum, that

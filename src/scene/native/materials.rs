@@ -17,7 +17,7 @@ use crate::scene::builder::SceneBuilder;
 use crate::scene::de::{ColorOrTexture, NumberOrTexture};
 use crate::scene::footprint::FileKind;
 use crate::spectrum::Dispersion;
-use crate::spectrum::SpectrumUse;
+use crate::spectrum::{SampledSpectrum, SpectrumUse};
 use crate::texture::image::{TexImage, load_image};
 use crate::texture::{Bitmap, Filter, Texture, Wrap};
 use glam::Affine2;
@@ -195,17 +195,26 @@ impl<'a> Cx<'a> {
         default: Color,
         textures: &TextureNames,
     ) -> Result<ColorParam, SceneError> {
-        match v {
-            None => Ok(Param::Const(default)),
-            Some(s) => match s.get_ref() {
-                ColorOrTexture::Color(c) => Ok(Param::Const(*c)),
-                // Its colour (a material keeps the spectrum itself: `reflectance_spectrum`).
-                ColorOrTexture::Spectrum(spec) => {
-                    Ok(Param::Const(self.spectrum(spec, SpectrumUse::Reflectance, s.span())?.0))
-                }
-                ColorOrTexture::Texture(n) => Ok(Param::Texture(self.texture_index(textures, n, s.span())?)),
-            },
-        }
+        Ok(self.color_param_given(v, default, textures)?.0)
+    }
+
+    /// `color_param`, with the spectrum the colour was written as (a reflectance) and that
+    /// colour, for spectral mode.
+    fn color_param_given(
+        &self,
+        v: &Option<Spanned<ColorOrTexture>>,
+        default: Color,
+        textures: &TextureNames,
+    ) -> Result<(ColorParam, Option<(SampledSpectrum, Color)>), SceneError> {
+        let Some(s) = v else { return Ok((Param::Const(default), None)) };
+        Ok(match s.get_ref() {
+            ColorOrTexture::Color(c) => (Param::Const(*c), None),
+            ColorOrTexture::Spectrum(spec) => {
+                let (c, spectrum) = self.spectrum(spec, SpectrumUse::Reflectance, s.span())?;
+                (Param::Const(c), Some((spectrum, c)))
+            }
+            ColorOrTexture::Texture(n) => (Param::Texture(self.texture_index(textures, n, s.span())?), None),
+        })
     }
 
     fn float_param(
@@ -305,7 +314,7 @@ impl<'a> Cx<'a> {
                     _ => ClassicKind::Dielectric,
                 };
                 let mut c = classic(d, kind);
-                if let Some(s) = self.reflectance_spectrum(d.color.as_ref())? {
+                if let (_, Some(s)) = self.color_param_given(&d.color, Color::ONE, textures)? {
                     c.color = s.1;
                     spectra[0] = Some(s);
                 }
@@ -332,8 +341,8 @@ impl<'a> Cx<'a> {
                     (Some(m), _, _) => return Err(self.at(m.span(), "give either `metal` or `eta` and `k`, not both")),
                     (None, eta, k) => ComplexIor::rgb(eta.map_or(Color::ZERO, |c| c.0), k.map_or(Color::ONE, |c| c.0)),
                 };
-                let specular = self.color_param(&d.specular, Color::ONE, textures)?;
-                spectra[0] = self.reflectance_spectrum(d.specular.as_ref())?;
+                let specular;
+                (specular, spectra[0]) = self.color_param_given(&d.specular, Color::ONE, textures)?;
                 if p.kind == "conductor" {
                     with_sides(Plain::Conductor { ior, specular })
                 } else {
@@ -355,10 +364,9 @@ impl<'a> Cx<'a> {
                 Material { dispersion, ..m }
             }
             "plastic" | "roughplastic" => {
-                let diffuse = self.color_param(&d.color, Color::splat(0.5), textures)?;
-                let specular = self.color_param(&d.specular, Color::ONE, textures)?;
-                *spectra =
-                    [self.reflectance_spectrum(d.color.as_ref())?, self.reflectance_spectrum(d.specular.as_ref())?];
+                let (diffuse, given_diffuse) = self.color_param_given(&d.color, Color::splat(0.5), textures)?;
+                let (specular, given_specular) = self.color_param_given(&d.specular, Color::ONE, textures)?;
+                *spectra = [given_diffuse, given_specular];
                 let eta = d.ior.map_or(1.49, |v| v.0);
                 let nonlinear = d.nonlinear.unwrap_or(false);
                 let tex = geometry.textures();

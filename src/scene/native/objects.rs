@@ -5,7 +5,6 @@ use super::Cx;
 use super::materials::{MaterialNames, TextureNames};
 use super::media::MediumNames;
 use super::schema::{self, LightDesc, ObjectDesc, TransformOp};
-use super::spectra::keep_emission;
 use crate::geometry::Transform;
 use crate::light::{Environment, Light, NO_TEXTURE, PhotonDisk, Spot};
 use crate::math::{Color, Vec3};
@@ -159,7 +158,7 @@ impl<'a> Cx<'a> {
                 geometry.add_area_light(emitter, power, None);
             }
         }
-        keep_emission(geometry, (kind != "constant").then_some(first), spectrum, color);
+        geometry.keep_emission_spectrum((kind != "constant").then_some(first), spectrum, color);
         Ok(())
     }
 
@@ -262,7 +261,7 @@ impl<'a> Cx<'a> {
         self.object(kind, &d, &transform, span, Surface { material, emission }, geometry)?;
         // (A textured emission is lifted texel by texel: its spectrum would stand for one colour.)
         if let Some((color, None)) = emission {
-            keep_emission(geometry, Some(first), spectrum, color);
+            geometry.keep_emission_spectrum(Some(first), spectrum, color);
         }
         Ok(())
     }

@@ -3,13 +3,13 @@
 //! Mitsuba's RGB variants make of the same spectrum).
 
 use super::Cx;
-use crate::material::{GivenSpectra, GivenSpectrum, SpectrumId};
+use crate::material::{GivenSpectra, SpectrumId};
 use crate::math::Color;
 use crate::scene::SceneError;
 use crate::scene::builder::SceneBuilder;
-use crate::scene::de::{ColorOrTexture, ColorSpec, SpectrumSpec};
+use crate::scene::de::{ColorSpec, SpectrumSpec};
 use crate::scene::footprint::FileKind;
-use crate::spectrum::{CIE_MAX, CIE_MIN, EmissionSpectrum, SampledSpectrum, SpectrumUse, parse_spd};
+use crate::spectrum::{CIE_MAX, CIE_MIN, SampledSpectrum, SpectrumUse, parse_spd};
 use std::ops::Range;
 use toml::Spanned;
 
@@ -65,41 +65,13 @@ impl Cx<'_> {
             }
         }
     }
-
-    /// The colour of a material's `color` or `specular` written as a spectrum (a reflectance),
-    /// and the spectrum; `None` for a colour, a texture or nothing.
-    pub(super) fn reflectance_spectrum(
-        &self,
-        v: Option<&Spanned<ColorOrTexture>>,
-    ) -> Result<Option<(SampledSpectrum, Color)>, SceneError> {
-        let Some(v) = v else { return Ok(None) };
-        let ColorOrTexture::Spectrum(spec) = v.get_ref() else { return Ok(None) };
-        let (c, s) = self.spectrum(spec, SpectrumUse::Reflectance, v.span())?;
-        Ok(Some((s, c)))
-    }
-}
-
-/// Spectral mode evaluates `spectrum` (standing for colour `color`) for the lights added from
-/// light `first` on, or for the environment (`None`).
-pub(super) fn keep_emission(
-    geometry: &mut SceneBuilder,
-    first: Option<usize>,
-    spectrum: Option<SampledSpectrum>,
-    color: Color,
-) {
-    if let Some(s) = spectrum.and_then(|s| EmissionSpectrum::new(&s, color)) {
-        geometry.set_emission_spectrum(first, s);
-    }
 }
 
 /// Spectral mode evaluates `spectra` for material `m`'s constant colours.
 pub(super) fn keep_material(geometry: &mut SceneBuilder, m: u32, spectra: MaterialSpectra) {
     let mut given = GivenSpectra::NONE;
     for (id, s) in given.colors.iter_mut().zip(spectra) {
-        *id = match s.and_then(|(s, c)| GivenSpectrum::new(&s, c)) {
-            Some(s) => geometry.add_given_spectrum(s),
-            None => SpectrumId::NONE,
-        };
+        *id = s.map_or(SpectrumId::NONE, |(s, c)| geometry.keep_given_spectrum(Some(&s), c));
     }
     geometry.set_material_spectra(m, given);
 }
