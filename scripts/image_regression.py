@@ -48,6 +48,9 @@ SETTINGS = {
     "path": ["--spp", "64"],
     "photon": ["--spp", "16", "--photons", "200000", "--caustic-photons", "50000", "--gather", "8"],
     "sppm": ["--iterations", "64"],
+    "light": ["--spp", "16"],
+    "bdpt": ["--spp", "16"],
+    "vcm": ["--spp", "16"],
 }
 # A reference takes this many times the samples (photon counts included), with another seed.
 REFERENCE_FACTOR = 8

@@ -61,6 +61,18 @@ impl LayerPath {
         self.in_medium = true;
     }
 
+    /// Whether the vertex the camera path reached is x or before it: every bounce so far was
+    /// delta (`bdpt::mis`'s direct paths end at x).
+    pub fn before_x(&self) -> bool {
+        !self.left_x
+    }
+
+    /// Whether the vertex the camera path reached came straight after x: a non-delta bounce
+    /// left x and nothing else since.
+    pub fn just_left_x(&self) -> bool {
+        self.left_x && self.after_x == 0
+    }
+
     /// Whether a camera path in this state has bounced off a mirror or glass before x.
     pub fn delta_prefix(&self) -> bool {
         self.delta_prefix

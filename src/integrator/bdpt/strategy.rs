@@ -334,26 +334,42 @@ fn sample_direct(scene: &Scene, light: &Light, p: Vec3, u: Vec2) -> Option<Direc
     }
 }
 
-/// The weight of a camera path (partial sums `mis`, before arriving) that leaves the scene
-/// along `d` from `from` and sees the environment light `env`.
-pub fn environment_weight(ctx: &Context, env: usize, from: Vec3, d: Vec3, mis: &SubpathMis) -> f64 {
+/// The weight of a camera path (partial sums `mis`, before arriving; layer state `layer`) that
+/// leaves the scene along `d` from `from` and sees the environment light `env`.
+pub fn environment_weight(ctx: &Context, env: usize, from: Vec3, d: Vec3, mis: &SubpathMis, layer: LayerPath) -> f64 {
     let scene = ctx.scene;
     let light = &scene.lights[env];
     let direct = light.pdf_li(from, from, d, d) as f64 * scene.direct_picker.prob(env) as f64;
+    if ctx.factors.direct_by_camera && layer.just_left_x() {
+        return mis::direct_emitter_weight(mis, direct);
+    }
     let emission = emission_pdf(light, &Ray::new(from, -d), -d) * scene.light_picker.prob(env) as f64;
     mis::emitter_weight(mis, direct, emission, &ctx.factors)
 }
 
-/// The weight of a camera path (partial sums `arrived`, after arriving) that left `from` along
-/// `d` and hit the area light of `hit`, `dist2` away.
-pub fn area_light_weight(ctx: &Context, hit: &Hit, from: Vec3, d: Vec3, dist2: f32, arrived: &SubpathMis) -> f64 {
+/// The weight of a camera path (partial sums `arrived`, after arriving; layer state `layer`)
+/// that left `from` along `d` and hit the area light of `hit`, `dist2` away.
+#[allow(clippy::too_many_arguments)]
+pub fn area_light_weight(
+    ctx: &Context,
+    hit: &Hit,
+    from: Vec3,
+    d: Vec3,
+    dist2: f32,
+    arrived: &SubpathMis,
+    layer: LayerPath,
+) -> f64 {
     let scene = ctx.scene;
     let i = hit.light as usize;
     let light = &scene.lights[i];
     let cos = hit.ng.dot(d).abs() as f64;
     let direct = light.pdf_li(from, hit.p, hit.ng, d) as f64 * cos / (dist2 as f64).max(f64::MIN_POSITIVE);
+    let pick_d = scene.direct_picker.prob(i) as f64;
+    if ctx.factors.direct_by_camera && layer.just_left_x() {
+        return mis::direct_emitter_weight(arrived, direct * pick_d);
+    }
     let emission = emission_pdf(light, &Ray::new(hit.p, -d), hit.ng);
-    let (pick_d, pick_e) = (scene.direct_picker.prob(i) as f64, scene.light_picker.prob(i) as f64);
+    let pick_e = scene.light_picker.prob(i) as f64;
     mis::emitter_weight(arrived, direct * pick_d, emission * pick_e, &ctx.factors)
 }
 
@@ -378,11 +394,16 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
     if !(visible > 0.0) {
         return Color::ZERO;
     }
+    let bsdf_pdf = if ds.delta { 0.0 } else { pdf as f64 };
+    if ctx.factors.direct_by_camera && x.layer.before_x() {
+        let w = mis::direct_light_sample_weight(bsdf_pdf, ds.mis_direct * pick_d as f64);
+        return contribution * (visible * w as f32);
+    }
     let rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, ds.wi, Transport::Importance, ctx.wl.as_ref());
     let pick_e = scene.light_picker.prob(li) as f64;
     let w = mis::light_sample_weight(
         &x.mis,
-        if ds.delta { 0.0 } else { pdf as f64 },
+        bsdf_pdf,
         rev as f64,
         ds.mis_direct * pick_d as f64,
         ds.emission * pick_e,
@@ -455,6 +476,10 @@ pub fn connect_to_camera(
     u: Vec2,
     stats: &mut RayStats,
 ) -> Option<(Vec2, Layers)> {
+    // Direct light is the camera-only techniques' (`MisFactors::direct_by_camera`).
+    if ctx.factors.direct_by_camera && y.depth == 1 {
+        return None;
+    }
     let scene = ctx.scene;
     let cw = scene.camera.sample_wi(y.hit.p, u)?;
     let f = bsdf.f(y.wo, cw.wi, Transport::Importance);

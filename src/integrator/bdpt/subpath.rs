@@ -181,7 +181,7 @@ pub fn trace_camera_path<'a>(
                     let w = if depth == 0 {
                         1.0
                     } else {
-                        strategy::environment_weight(ctx, env as usize, last_p, ray.d, &mis)
+                        strategy::environment_weight(ctx, env as usize, last_p, ray.d, &mis, layer)
                     };
                     let c = beta * le * w as f32;
                     layers[layer.emitted()] += c;
@@ -202,7 +202,7 @@ pub fn trace_camera_path<'a>(
                 let w = if depth == 1 {
                     1.0
                 } else {
-                    strategy::area_light_weight(ctx, &hit, last_p, ray.d, dist2, &arrived)
+                    strategy::area_light_weight(ctx, &hit, last_p, ray.d, dist2, &arrived, layer)
                 };
                 let c = beta * le * w as f32;
                 layers[layer.emitted()] += c;
