@@ -580,7 +580,7 @@ fn render_description(
                  working memory {:.1} MiB",
                 settings.pixels().div_ceil(u64::from(vcm.light_divisor().max(1))),
                 match (vcm.light_divisor(), vcm.config.light_divisor) {
-                    (m, None) => format!("one per {m} camera paths after the first two iterations, chosen"),
+                    (m, None) => format!("one per {m} camera paths after the pilot's four iterations, chosen"),
                     (m, Some(_)) => format!("one per {m} camera paths"),
                 },
                 n as f64 / stats.wall.as_secs_f64().max(1e-9),

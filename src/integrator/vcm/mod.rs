@@ -59,7 +59,6 @@ use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
 use crate::spectrum::{Wavelengths, joined};
 use grid::VertexGrid;
-use rayon::iter::Either;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -171,89 +170,82 @@ pub struct Vcm {
 
 /// How many camera paths share one light path (issue 26): tracing a light path per pixel is
 /// what VCM needs where light tracing and merging carry the image (caustics seen in glossy
-/// surfaces), and light it pays for and does not use on glossy scenes lit by area lights or the
-/// sky, whose light the camera-only techniques (emitters hit, next-event estimation) find.
+/// surfaces, under the sky through glass), and light it pays for and does not use where the
+/// camera-only techniques (emitters hit, next-event estimation) find most of it.
 ///
-/// With one light path per m camera paths (`MisFactors::with_light_fraction`), the variance of
-/// the techniques of light subpaths grows about m times and their cost falls m times, while the
-/// camera-only techniques keep both. A pilot of two iterations with one light path per pixel
-/// measures each part's variance per iteration from the two iterations' values per pixel (their
-/// squared differences, each capped at a high quantile against fireflies: V_c for the
-/// camera-only part, V_l for the rest, summed over pixels)
-/// and each part's cost in rays (C_c: camera paths and their light samples; C_l: light paths,
-/// their splats, the connections' shadow rays and the merges at `MERGE_COST` each); the error
-/// after a given time, (V_c + m V_l) (C_c + C_l / m), is least at m = sqrt(V_c C_l / (V_l C_c)),
-/// rounded and kept within 1..=`MAX_LIGHT_DIVISOR`.
+/// With one light path per m camera paths (`MisFactors::with_light_fraction`), the techniques of
+/// light subpaths get m times fewer samples and cost m times less, and the weights move light
+/// towards the camera-only techniques. How much error that trade costs depends on how well the
+/// camera-only techniques take over, which no model of the two parts' variances predicted: a
+/// model with the variance of light subpaths' techniques growing m times chose m = 1 on the
+/// caustic box, where m = 4 has 14% less error at equal time, and m = 8 on the sky-lit scene,
+/// where it has 18% more than m = 1. So the pilot measures instead: the render's iterations 0
+/// and 1 with one light path per pixel, 2 and 3 with one per `PROBE_DIVISOR` camera paths
+/// (`PILOT`). For each pair it takes the variance of one iteration (each pixel's squared
+/// difference between the two over 2, capped at the image's 99.9th percentile against fireflies,
+/// summed over pixels) times the pair's work (rays, and merges at `MERGE_COST` each); the
+/// smaller product, error times time, decides m (1 or `PROBE_DIVISOR`).
 ///
-/// The pilot is the render's iterations 0 and 1 (kept in the image when the render starts
-/// there), so every shard and every resumed run finds the same m, and an image is the same
-/// whatever the split.
+/// The pilot's iterations are kept in the image when the render starts at iteration 0; every
+/// shard and every resumed run renders them to find the same m, so an image is the same whatever
+/// the split.
 struct LightBudget;
 
 impl LightBudget {
-    /// The most camera paths per light path.
-    const MAX_DIVISOR: u32 = 16;
-    /// Where the pilot caps each pixel's difference between its two iterations (`divisor`).
+    /// The light paths' share the pilot tries against one light path per pixel.
+    const PROBE_DIVISOR: u32 = 4;
+    /// Where the pilot caps each pixel's difference between its two iterations.
     const CAP_QUANTILE: f64 = 0.999;
     /// What evaluating one light vertex within the merge radius costs, in rays (estimated: a
     /// BSDF evaluation, a reverse density and a weight, against a ray's traversal).
     const MERGE_COST: f64 = 0.25;
 
-    /// m from the pilot's two iterations: each pixel's camera-only part and whole value (any
-    /// measure of light, here luminance), and the costs of both iterations.
-    fn divisor(parts: [(&[f32], &[f32]); 2], camera_rays: u64, light_work: f64) -> u32 {
-        // Each pixel's variance from its two values, (a - b)^2 / 2, summed over the pixels, with
-        // every |a - b| capped at the 99.9th percentile of the image's: two samples per pixel
-        // let one firefly decide an uncapped sum (a small light's glossy reflection made a
-        // pilot read V_c 40,000 times larger than another seed's), and the earlier estimate,
-        // the mean absolute difference squared, took every pixel to be as noisy as the average
-        // one, which reads noise confined to a few pixels (caustics through glass under the sky)
-        // as many times smaller than it is: it chose one light path per 8 camera paths on the
-        // sky-lit scene, where one per pixel has 15% less error at equal time.
-        let (mut d_c, mut d_l) = (Vec::new(), Vec::new());
-        let [(c0, t0), (c1, t1)] = parts;
-        for k in 0..c0.len().min(c1.len()).min(t0.len()).min(t1.len()) {
-            let (a, b) = (f64::from(c0[k]), f64::from(c1[k]));
-            let (la, lb) = (f64::from(t0[k]) - a, f64::from(t1[k]) - b);
-            if a.is_finite() && b.is_finite() && la.is_finite() && lb.is_finite() {
-                d_c.push((a - b).abs());
-                d_l.push((la - lb).abs());
-            }
-        }
-        let variance = |d: Vec<f64>| {
-            let mut sorted = d.clone();
-            sorted.sort_by(f64::total_cmp);
-            let Some(&cap) = sorted.get(((sorted.len().saturating_sub(1)) as f64 * Self::CAP_QUANTILE) as usize) else {
-                return 0.0;
-            };
-            d.iter().map(|x| x.min(cap).powi(2) / 2.0).sum::<f64>()
+    /// The variance of one iteration summed over the pixels, from two iterations' values per
+    /// pixel (any measure of light, here luminance): (a - b)^2 / 2 with |a - b| capped at the
+    /// `CAP_QUANTILE` of the image's. Two samples per pixel let one firefly decide an uncapped
+    /// sum (a small light's glossy reflection made a pilot read 40,000 times another seed's).
+    fn variance(a: &[f32], b: &[f32]) -> f64 {
+        let d: Vec<f64> = a
+            .iter()
+            .zip(b)
+            .map(|(&x, &y)| f64::from(x) - f64::from(y))
+            .filter(|d| d.is_finite())
+            .map(f64::abs)
+            .collect();
+        let mut sorted = d.clone();
+        sorted.sort_by(f64::total_cmp);
+        let Some(&cap) = sorted.get((sorted.len().saturating_sub(1) as f64 * Self::CAP_QUANTILE) as usize) else {
+            return 0.0;
         };
-        let (v_c, v_l) = (variance(d_c), variance(d_l));
-        let c_c = camera_rays as f64;
-        if !(v_l > 0.0) || !(c_c > 0.0) {
-            return Self::MAX_DIVISOR;
-        }
-        let m = (v_c * light_work / (v_l * c_c)).sqrt();
-        if !m.is_finite() {
-            return 1;
-        }
-        (m.round() as u32).clamp(1, Self::MAX_DIVISOR)
+        d.iter().map(|x| x.min(cap).powi(2) / 2.0).sum()
+    }
+
+    /// m from the pilot: for one light path per pixel and for one per `PROBE_DIVISOR` camera
+    /// paths, the two iterations' values per pixel and their work.
+    fn divisor(one: (&[f32], &[f32], f64), fewer: (&[f32], &[f32], f64)) -> u32 {
+        let error_time = |(a, b, work): (&[f32], &[f32], f64)| Self::variance(a, b) * work;
+        let (e1, e4) = (error_time(one), error_time(fewer));
+        if e4 < e1 { Self::PROBE_DIVISOR } else { 1 }
     }
 }
 
-/// Iterations of the pilot that sets the light budget.
-const PILOT_ITERATIONS: u32 = 2;
+/// Camera paths per light path in each iteration of the pilot (`LightBudget`).
+const PILOT: [u32; 4] = [1, 1, LightBudget::PROBE_DIVISOR, LightBudget::PROBE_DIVISOR];
+const PILOT_ITERATIONS: u32 = PILOT.len() as u32;
 
 /// What a pilot iteration measures (`LightBudget`).
 #[derive(Default)]
 struct Probe {
-    /// Each pixel's camera-only light (luminance, filter weight included).
-    camera_only: Vec<f32>,
-    /// Rays of camera paths and their light samples.
-    camera_rays: u64,
-    /// Rays of light paths, splats and connections, and merge candidates.
-    light_rays: u64,
+    /// Rays of the iteration's light paths, camera paths, connections and splats.
+    rays: u64,
+    /// Light vertices within the merge radius of a camera vertex.
     merges: u64,
+}
+
+impl Probe {
+    fn work(&self) -> f64 {
+        self.rays as f64 + self.merges as f64 * LightBudget::MERGE_COST
+    }
 }
 
 /// Working memory of a VCM render of `pixels` pixels: the light vertices of one iteration (a few
@@ -338,13 +330,13 @@ impl Vcm {
         let mut pass = Film::new(film.width, film.height, film.has_layers());
         let mut done = 0;
         for it in range.clone() {
-            // The pilot's iterations are the render's first two (`LightBudget`).
+            // The pilot's iterations are the render's first (`LightBudget`).
             if (it as usize) < pilot.len() {
                 pass.add(&pilot[it as usize]);
                 done += 1;
                 continue;
             }
-            let divisor = if it < PILOT_ITERATIONS { 1 } else { m };
+            let divisor = PILOT.get(it as usize).copied().unwrap_or(m);
             if !self.iteration(scene, driver, splats, paths, &mut pass, it, divisor, None, true) {
                 splats.clear();
                 break;
@@ -361,9 +353,9 @@ impl Vcm {
         if done < range.len() as u32 { PassOutcome::Interrupted { taken: done } } else { PassOutcome::Complete }
     }
 
-    /// The light budget (`LightBudget`) from iterations 0 and 1 rendered with one light path per
-    /// pixel, with those iterations' films when `keep` (the render starts there; otherwise
-    /// they only measure, and do not count in the progress). `None` when cancelled.
+    /// The light budget (`LightBudget`) from the pilot's iterations (`PILOT`), with their films
+    /// when `keep` (the render starts there; otherwise they only measure, and do not count in
+    /// the progress). `None` when cancelled.
     fn pilot(
         &self,
         scene: &Scene,
@@ -375,17 +367,17 @@ impl Vcm {
         let settings = driver.settings;
         let mut films = Vec::new();
         let mut probes = Vec::new();
-        for it in 0..PILOT_ITERATIONS {
+        for (it, &m) in PILOT.iter().enumerate() {
             let mut film = Film::new(settings.width, settings.height, settings.layers);
             let mut probe = Probe::default();
-            if !self.iteration(scene, driver, splats, paths, &mut film, it, 1, Some(&mut probe), keep) {
+            if !self.iteration(scene, driver, splats, paths, &mut film, it as u32, m, Some(&mut probe), keep) {
                 splats.clear();
                 return None;
             }
             films.push(film);
             probes.push(probe);
         }
-        let totals: Vec<Vec<f32>> = films
+        let values: Vec<Vec<f32>> = films
             .iter()
             .map(|f| {
                 let mut f = f.clone();
@@ -395,13 +387,9 @@ impl Vcm {
                 f.image().pixels.iter().map(|&c| luminance(c)).collect()
             })
             .collect();
-        let camera_rays = probes.iter().map(|p| p.camera_rays).sum();
-        let light_work =
-            probes.iter().map(|p| p.light_rays as f64 + p.merges as f64 * LightBudget::MERGE_COST).sum::<f64>();
         let m = LightBudget::divisor(
-            [(&probes[0].camera_only, &totals[0]), (&probes[1].camera_only, &totals[1])],
-            camera_rays,
-            light_work,
+            (&values[0], &values[1], probes[0].work() + probes[1].work()),
+            (&values[2], &values[3], probes[2].work() + probes[3].work()),
         );
         Some((m, if keep { films } else { Vec::new() }))
     }
@@ -443,7 +431,7 @@ impl Vcm {
             return false;
         };
         if let Some(p) = probe.as_deref_mut() {
-            p.light_rays += light_rays;
+            p.rays += light_rays;
         }
         paths.positions.clear();
         paths.positions.extend(paths.vertices.iter().map(|v| v.hit.p));
@@ -554,18 +542,9 @@ impl Vcm {
         let settings = driver.settings;
         let pixels = settings.pixels();
         let interrupted = AtomicBool::new(false);
-        // With a probe, each chunk's pixels' camera-only light and its counts.
         let probing = probe.is_some();
-        let mut camera_only = if probing { vec![0.0f32; pixels as usize] } else { Vec::new() };
-        let chunks = camera_only.par_chunks_mut(CHUNK as usize).map(Some);
-        let chunks = if probing {
-            Either::Left(chunks)
-        } else {
-            Either::Right((0..pixels.div_ceil(CHUNK) as usize).into_par_iter().map(|_| None::<&mut [f32]>))
-        };
-        let counts = chunks.enumerate().map(|(c, mut out)| {
-            let c = c as u64;
-            let mut tally = (0u64, 0u64, 0u64);
+        let counts = (0..pixels.div_ceil(CHUNK)).into_par_iter().map(|c| {
+            let mut tally = (0u64, 0u64);
             if driver.cancelled() {
                 interrupted.store(true, Ordering::Relaxed);
                 return tally;
@@ -603,22 +582,17 @@ impl Vcm {
                 if !splats.add_pixel(x, y, &layers) {
                     bad += 1;
                 }
-                if let Some(out) = out.as_deref_mut() {
-                    out[(k - from) as usize] = luminance(found.camera_only * weight);
-                    tally.0 += stats.total() - before - found.connection_rays;
-                    tally.1 += found.connection_rays;
-                    tally.2 += merges;
+                if probing {
+                    tally.0 += stats.total() - before;
+                    tally.1 += merges;
                 }
             }
             driver.record(&stats, bad, if count { to - from } else { 0 });
             tally
         });
-        let (camera_rays, connection_rays, merges) =
-            counts.reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        let (rays, merges) = counts.reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         if let Some(p) = probe {
-            p.camera_only = camera_only;
-            p.camera_rays += camera_rays;
-            p.light_rays += connection_rays;
+            p.rays += rays;
             p.merges += merges;
         }
         !interrupted.load(Ordering::Relaxed)
@@ -705,5 +679,46 @@ impl Vcm {
     /// Made for `scene` rendered with `settings` from the description `desc`.
     pub fn new(desc: &IntegratorDesc, scene: &Scene, settings: &RenderSettings) -> Self {
         Vcm { config: VcmConfig::new(desc, scene, settings), divisor: AtomicU32::new(0) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LightBudget;
+    use crate::sampling::Rng32;
+
+    /// Two iterations' values per pixel: a flat image plus noise of standard deviation `sigma`.
+    fn pair(rng: &mut Rng32, n: usize, sigma: f32) -> (Vec<f32>, Vec<f32>) {
+        let mut noisy =
+            || (0..n).map(|_| 1.0 + sigma * (rng.uniform() + rng.uniform() + rng.uniform() - 1.5) * 2.0).collect();
+        (noisy(), noisy())
+    }
+
+    #[test]
+    fn the_variance_of_an_iteration_is_read_from_two() {
+        // The noise, 2 sigma (u1 + u2 + u3 - 1.5), has variance sigma^2 per pixel: summed over
+        // the pixels, n sigma^2.
+        let mut rng = Rng32::new(3);
+        let (a, b) = pair(&mut rng, 40_000, 0.1);
+        let v = LightBudget::variance(&a, &b) / 40_000.0;
+        assert!((v - 0.01).abs() < 0.0006, "{v}");
+        // One firefly does not decide it.
+        let mut b = b;
+        b[17] = 1e6;
+        let w = LightBudget::variance(&a, &b) / 40_000.0;
+        assert!((w / v - 1.0).abs() < 0.01, "{w} vs {v}");
+    }
+
+    #[test]
+    fn fewer_light_paths_are_chosen_when_their_error_times_work_is_smaller() {
+        let mut rng = Rng32::new(5);
+        let n = 10_000;
+        let (a1, b1) = pair(&mut rng, n, 0.1);
+        // 1.35 times the variance at half the work: less error x time.
+        let (a4, b4) = pair(&mut rng, n, 0.1 * 1.35f32.sqrt());
+        assert_eq!(LightBudget::divisor((&a1, &b1, 100.0), (&a4, &b4, 50.0)), LightBudget::PROBE_DIVISOR);
+        // Twice the variance at 0.6 of the work: more; one light path per pixel stays.
+        let (a4, b4) = pair(&mut rng, n, 0.1 * 2f32.sqrt());
+        assert_eq!(LightBudget::divisor((&a1, &b1, 100.0), (&a4, &b4, 60.0)), 1);
     }
 }
