@@ -27,13 +27,16 @@ import tomllib
 
 import numpy as np
 
+# The EXR reader's bindings load before pyluxcore: pyluxcore brings TBB's malloc proxy, and
+# OpenEXR (or Mitsuba's bitmap reader) loaded after it aborted the script (free(): invalid
+# pointer).
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rmse import read_rgb  # noqa: E402
+
 
 def read_exr(path):
-    """Linear RGB of an EXR written by caustic, through Mitsuba's bitmap reader."""
-    import mitsuba as mi
-
-    mi.set_variant("scalar_rgb")
-    return np.array(mi.Bitmap(str(path)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32), dtype=np.float64)
+    """Linear RGB of an EXR written by caustic (`scripts/rmse.py`'s reader, imported above)."""
+    return read_rgb(str(path))
 
 
 def quad_mesh(corner, e1, e2):
