@@ -5,10 +5,13 @@
 //! dVCM, dVC and dVM (`bdpt::mis`, Georgiev's technical report; SmallVCM's `VertexCM`).
 //!
 //! Each iteration (one sample index) runs two passes:
-//! 1. `light_pass`: one light subpath per pixel of the image; each vertex with a non-delta part
-//!    is connected to the camera (splatted) and stored, in path order;
+//! 1. `light_pass`: one light subpath per pixel of the image, or per m pixels as the light
+//!    budget's pilot chose (`LightBudget`); each vertex with a non-delta part is connected to
+//!    the camera (splatted; not the first hit, whose direct light is next-event estimation's,
+//!    `bdpt::mis`) and stored, in path order;
 //! 2. `camera_pass`: each pixel's camera subpath takes every technique of bidirectional path
-//!    tracing with the light subpath of its own index (SmallVCM's pairing) and, at each vertex
+//!    tracing with the light subpath of its own index (SmallVCM's pairing; with one light path
+//!    per m pixels, in one iteration of m) and, at each vertex
 //!    with a non-delta part, merges with every stored vertex within the iteration's radius
 //!    (`grid`, a hashed grid of cells twice the radius), each merge weighted against the
 //!    connections that make the same path.
