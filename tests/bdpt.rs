@@ -39,58 +39,13 @@ fn furnace_has_radiance_one_with_all_bounces_and_one_half_direct() {
 
 #[test]
 fn a_diffuse_plane_under_a_point_light_has_the_radiance_of_the_formula() {
-    // As the light tracer's test: a Lambertian floor of albedo rho under a point light of
-    // intensity I at height hl, direct light only (light samples and light tracing, weighted),
-    // radiance rho / pi I cos / d^2 averaged over 8 x 8 points of each pixel.
-    let (rho, intensity, hl) = (0.5f64, 8.0f64, 2.0f64);
-    let text = format!(
-        r#"
-[render]
-width = 12
-height = 12
-max_depth = 1
-[camera]
-eye = [0, 6, 0]
-look_at = [0, 0, 0]
-up = [0, 0, -1]
-fov = 50
-[materials.floor]
-type = "diffuse"
-color = [{rho}, {rho}, {rho}]
-kd = 1
-[[objects]]
-type = "quad"
-corner = [-50, 0, 50]
-edge1 = [100, 0, 0]
-edge2 = [0, 0, -100]
-material = "floor"
-[[lights]]
-type = "point"
-position = [0, {hl}, 0]
-intensity = {intensity}
-"#
-    );
-    let s = bdpt(&text, 256, 3);
+    // As the light tracer's test (`common::PointLitFloor`): direct light only (light samples
+    // and light tracing, weighted), the image's mean against the formula averaged over 8 x 8
+    // points of each pixel.
+    let floor = common::PointLitFloor::DEFAULT;
+    let s = bdpt(&floor.text("bdpt"), 256, 3);
     let img = render(&s, 2).image;
-    let cam = &s.scene.camera;
-    let mut expected = 0.0;
-    for py in 0..12 {
-        for px in 0..12 {
-            for k in 0..64 {
-                let raster = caustic::math::Vec2::new(
-                    px as f32 + (k % 8) as f32 / 8.0 + 1.0 / 16.0,
-                    py as f32 + (k / 8) as f32 / 8.0 + 1.0 / 16.0,
-                );
-                let ray = cam.generate_ray(raster, caustic::math::Vec2::splat(0.5));
-                let t = -ray.o.y as f64 / ray.d.y as f64;
-                let p = ray.o.as_dvec3() + ray.d.as_dvec3() * t;
-                let to_light = glam::DVec3::new(0.0, hl, 0.0) - p;
-                let d2 = to_light.length_squared();
-                expected += rho / std::f64::consts::PI * intensity * (to_light.y / d2.sqrt()) / d2;
-            }
-        }
-    }
-    expected /= 144.0 * 64.0;
+    let expected = floor.image_mean(&s.scene.camera, 8);
     let mean = img.pixels.iter().map(|c| c.g() as f64).sum::<f64>() / img.pixels.len() as f64;
     assert!((mean - expected).abs() < 0.005 * expected, "{mean} vs the formula's {expected}");
 }

@@ -9,7 +9,6 @@ mod common;
 use caustic::film::Image;
 use caustic::options::{IntegratorKind, Options};
 use common::mitsuba_refs::References;
-use std::f64::consts::PI;
 
 #[test]
 fn every_kind_of_emitter_matches_mitsubas_particle_tracer() {
@@ -126,64 +125,12 @@ fn a_crop_holds_the_whole_images_pixels() {
 
 #[test]
 fn a_diffuse_plane_under_a_point_light_has_the_radiance_of_the_formula() {
-    // A Lambertian floor of albedo rho under a point light of intensity I at height hl, direct
-    // light only (max_depth 1): a floor point at distance d from the light, seen at cos theta
-    // from its normal, has radiance rho / pi * I cos / d^2. The camera looks down at the floor;
-    // each pixel's expected value averages the formula over 8 x 8 points of the pixel.
-    let (rho, intensity, hl) = (0.5f64, 8.0f64, 2.0f64);
-    let text = format!(
-        r#"
-[render]
-width = 12
-height = 12
-max_depth = 1
-integrator = "light"
-
-[camera]
-eye = [0, 6, 0]
-look_at = [0, 0, 0]
-up = [0, 0, -1]
-fov = 50
-
-[materials.floor]
-type = "diffuse"
-color = [{rho}, {rho}, {rho}]
-kd = 1
-
-[[objects]]
-type = "quad"
-corner = [-50, 0, 50]
-edge1 = [100, 0, 0]
-edge2 = [0, 0, -100]
-material = "floor"
-
-[[lights]]
-type = "point"
-position = [0, {hl}, 0]
-intensity = {intensity}
-"#
-    );
+    // `common::PointLitFloor`: the image's mean against the formula averaged over 8 x 8 points
+    // of each pixel.
+    let floor = common::PointLitFloor::DEFAULT;
+    let text = floor.text("light");
     let img = render(&text, 2048, 2);
-    let s = common::scene(&text);
-    let cam = &s.scene.camera;
-    let mut expected = 0.0;
-    for py in 0..12 {
-        for px in 0..12 {
-            for k in 0..64 {
-                let raster = caustic::math::Vec2::new(
-                    px as f32 + (k % 8) as f32 / 8.0 + 1.0 / 16.0,
-                    py as f32 + (k / 8) as f32 / 8.0 + 1.0 / 16.0,
-                );
-                let ray = cam.generate_ray(raster, caustic::math::Vec2::splat(0.5));
-                let t = -ray.o.y as f64 / ray.d.y as f64;
-                let p = ray.o.as_dvec3() + ray.d.as_dvec3() * t;
-                let to_light = glam::DVec3::new(0.0, hl, 0.0) - p;
-                let d2 = to_light.length_squared();
-                expected += rho / PI * intensity * (to_light.y / d2.sqrt()) / d2;
-            }
-        }
-    }
-    expected /= 144.0 * 64.0;
+    let expected = floor.image_mean(&common::scene(&text).scene.camera, 8);
     let mean = img.pixels.iter().map(|c| c.g() as f64).sum::<f64>() / img.pixels.len() as f64;
     eprintln!("light-traced floor under a point light: {mean} vs the formula's {expected}");
     assert!((mean - expected).abs() < 0.01 * expected, "{mean} vs {expected}");

@@ -217,61 +217,21 @@ fn fewer_light_paths_than_camera_paths_leave_the_image_unbiased() {
 
 /// Direct light is the camera-only techniques' (`bdpt::mis`, `MisFactors::direct_by_camera`):
 /// under a point light, next-event estimation has no noise but the pixel's own, so every pixel
-/// of a diffuse floor lit directly (max_depth 1) is the formula's radiance rho / pi I cos / d^2
-/// averaged over the pixel, within 3% at 16 samples per pixel. When light tracing and merges
+/// of a diffuse floor lit directly (`common::PointLitFloor`) is the formula's radiance averaged
+/// over the pixel, within 3% at 16 samples per pixel. When light tracing and merges
 /// took their power-heuristic share of it, pixels were 10-48% off (VCM) and 10-29% off (BDPT)
 /// at this sample count.
 #[test]
 fn direct_light_of_a_point_light_has_only_the_pixels_noise() {
-    let (rho, intensity, hl, n) = (0.5f64, 8.0f64, 2.0f64, 12usize);
-    let text = format!(
-        r#"
-[render]
-width = {n}
-height = {n}
-max_depth = 1
-[camera]
-eye = [0, 6, 0]
-look_at = [0, 0, 0]
-up = [0, 0, -1]
-fov = 50
-[materials.floor]
-type = "diffuse"
-color = [{rho}, {rho}, {rho}]
-kd = 1
-[[objects]]
-type = "quad"
-corner = [-50, 0, 50]
-edge1 = [100, 0, 0]
-edge2 = [0, 0, -100]
-material = "floor"
-[[lights]]
-type = "point"
-position = [0, {hl}, 0]
-intensity = {intensity}
-"#
-    );
+    let floor = common::PointLitFloor::DEFAULT;
+    let n = floor.size;
     for kind in [IntegratorKind::Vcm, IntegratorKind::Bdpt] {
-        let s = scene(&text, kind, 16, 3);
+        let s = scene(&floor.text(kind.name()), kind, 16, 3);
         let img = render(&s, 2).image;
-        let cam = &s.scene.camera;
         let mut worst = 0.0f64;
         for py in 0..n {
             for px in 0..n {
-                // The formula averaged over 16 x 16 points of the pixel.
-                let mut expected = 0.0;
-                for k in 0..256 {
-                    let raster = caustic::math::Vec2::new(
-                        px as f32 + ((k % 16) as f32 + 0.5) / 16.0,
-                        py as f32 + ((k / 16) as f32 + 0.5) / 16.0,
-                    );
-                    let ray = cam.generate_ray(raster, caustic::math::Vec2::splat(0.5));
-                    let t = -ray.o.y as f64 / ray.d.y as f64;
-                    let p = ray.o.as_dvec3() + ray.d.as_dvec3() * t;
-                    let to_light = glam::DVec3::new(0.0, hl, 0.0) - p;
-                    let d2 = to_light.length_squared();
-                    expected += rho / std::f64::consts::PI * intensity * (to_light.y / d2.sqrt()) / d2 / 256.0;
-                }
+                let expected = floor.pixel(&s.scene.camera, px, py, 16);
                 let got = img.pixels[py * n + px].g() as f64;
                 worst = worst.max((got / expected - 1.0).abs());
             }

@@ -86,3 +86,74 @@ material = "grey"
 "#
     )
 }
+
+/// A Lambertian floor of albedo `rho` under a point light of `intensity` at height `height`,
+/// seen from above on a `size` x `size` film, direct light only (max_depth 1): a floor point at
+/// distance d from the light, lit at cos theta, has radiance rho / pi I cos / d^2.
+pub struct PointLitFloor {
+    pub rho: f64,
+    pub intensity: f64,
+    pub height: f64,
+    pub size: usize,
+}
+
+impl PointLitFloor {
+    pub const DEFAULT: PointLitFloor = PointLitFloor { rho: 0.5, intensity: 8.0, height: 2.0, size: 12 };
+
+    /// The scene, rendered by `integrator`.
+    pub fn text(&self, integrator: &str) -> String {
+        let PointLitFloor { rho, intensity, height, size } = self;
+        format!(
+            r#"
+[render]
+width = {size}
+height = {size}
+max_depth = 1
+integrator = "{integrator}"
+[camera]
+eye = [0, 6, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+fov = 50
+[materials.floor]
+type = "diffuse"
+color = [{rho}, {rho}, {rho}]
+kd = 1
+[[objects]]
+type = "quad"
+corner = [-50, 0, 50]
+edge1 = [100, 0, 0]
+edge2 = [0, 0, -100]
+material = "floor"
+[[lights]]
+type = "point"
+position = [0, {height}, 0]
+intensity = {intensity}
+"#
+        )
+    }
+
+    /// The formula's radiance averaged over `n` x `n` points of pixel (`px`, `py`) of `camera`.
+    pub fn pixel(&self, camera: &caustic::camera::Camera, px: usize, py: usize, n: usize) -> f64 {
+        let mut sum = 0.0;
+        for k in 0..n * n {
+            let raster = caustic::math::Vec2::new(
+                px as f32 + ((k % n) as f32 + 0.5) / n as f32,
+                py as f32 + ((k / n) as f32 + 0.5) / n as f32,
+            );
+            let ray = camera.generate_ray(raster, caustic::math::Vec2::splat(0.5));
+            let t = -ray.o.y as f64 / ray.d.y as f64;
+            let p = ray.o.as_dvec3() + ray.d.as_dvec3() * t;
+            let to_light = glam::DVec3::new(0.0, self.height, 0.0) - p;
+            let d2 = to_light.length_squared();
+            sum += self.rho / std::f64::consts::PI * self.intensity * (to_light.y / d2.sqrt()) / d2;
+        }
+        sum / (n * n) as f64
+    }
+
+    /// `pixel` averaged over the whole film.
+    pub fn image_mean(&self, camera: &caustic::camera::Camera, n: usize) -> f64 {
+        let s = self.size;
+        (0..s * s).map(|k| self.pixel(camera, k % s, k / s, n)).sum::<f64>() / (s * s) as f64
+    }
+}

@@ -200,16 +200,8 @@ impl Bdpt {
             buffer.vertices.push(*v);
             buffer.bsdfs.push(*bsdf);
         });
-        let mut layers = subpath::trace_camera_path(
-            ctx,
-            &mut sampler,
-            ray,
-            &buffer.vertices,
-            &buffer.bsdfs,
-            stats,
-            &mut subpath::CameraTally::default(),
-            |_, _, _| {},
-        );
+        let mut layers =
+            subpath::trace_camera_path(ctx, &mut sampler, ray, &buffer.vertices, &buffer.bsdfs, stats, |_, _, _| {});
         if weight != 1.0 {
             layers = layers.map(|c| c * weight);
         }

@@ -349,7 +349,6 @@ pub fn environment_weight(ctx: &Context, env: usize, from: Vec3, d: Vec3, mis: &
 
 /// The weight of a camera path (partial sums `arrived`, after arriving; layer state `layer`)
 /// that left `from` along `d` and hit the area light of `hit`, `dist2` away.
-#[allow(clippy::too_many_arguments)]
 pub fn area_light_weight(
     ctx: &Context,
     hit: &Hit,

@@ -133,20 +133,11 @@ pub fn trace_light_path<'a>(
     }
 }
 
-/// What a camera subpath's techniques found apart, for VCM's light budget (`vcm::LightBudget`).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CameraTally {
-    /// Light of the camera-only techniques: emitters hit and light samples (all layers).
-    pub camera_only: Color,
-    /// Rays traced by connections to the light subpath.
-    pub connection_rays: u64,
-}
-
 /// Traces the camera subpath of `ray` (its numbers from `sampler`, which made the ray) and
 /// returns the light its techniques gather, by layer: emitters it hits, a light sample at each
 /// vertex, connections to `light_path` (vertices of one light subpath with their BSDFs in
 /// `light_bsdfs`) and what `merge` adds at each vertex with a non-delta part. In spectral mode
-/// the light (and the tally's) is gathered in the lanes and returned as linear sRGB.
+/// the light is gathered in the lanes and returned as linear sRGB.
 #[allow(clippy::too_many_arguments)]
 pub fn trace_camera_path<'a>(
     ctx: &Context<'a>,
@@ -155,7 +146,6 @@ pub fn trace_camera_path<'a>(
     light_path: &[LightVertex],
     light_bsdfs: &[Bsdf<'a>],
     stats: &mut RayStats,
-    tally: &mut CameraTally,
     mut merge: impl FnMut(&CameraVertex<'a, '_>, &mut Layers, &mut RayStats),
 ) -> Layers {
     let scene = ctx.scene;
@@ -166,8 +156,6 @@ pub fn trace_camera_path<'a>(
     let mut ray = ray;
     let mut beta = Color::ONE;
     let mut wl = ctx.wl;
-    // The camera-only techniques' light, for the tally.
-    let mut camera_only = Color::ZERO;
     let mut layer = LayerPath::CAMERA;
     let mut last_p = ray.o;
     let mut first = true;
@@ -185,7 +173,6 @@ pub fn trace_camera_path<'a>(
                     };
                     let c = beta * le * w as f32;
                     layers[layer.emitted()] += c;
-                    camera_only += c;
                 }
             }
             break;
@@ -206,7 +193,6 @@ pub fn trace_camera_path<'a>(
                 };
                 let c = beta * le * w as f32;
                 layers[layer.emitted()] += c;
-                camera_only += c;
             }
         }
         if depth > ctx.max_depth {
@@ -219,8 +205,6 @@ pub fn trace_camera_path<'a>(
             let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
             let c = strategy::light_sample(ctx, &x, u_pick, u, stats);
             layers[layer.direct()] += c;
-            camera_only += c;
-            let before = stats.total();
             for (y, y_bsdf) in light_path.iter().zip(light_bsdfs) {
                 // Light vertices come in order of depth: the rest are deeper still.
                 if y.depth + depth > ctx.max_depth {
@@ -230,7 +214,6 @@ pub fn trace_camera_path<'a>(
                     layers[k] += c * ctx.connection_scale;
                 }
             }
-            tally.connection_rays += stats.total() - before;
             merge(&x, &mut layers, stats);
         }
         let (uc, u) = (sampler.next_1d(), sampler.next_2d());
@@ -270,9 +253,5 @@ pub fn trace_camera_path<'a>(
         crossings = 0;
         ray = hit.spawn(s.wi, ctx.ray_bias);
     }
-    tally.camera_only += match &ctx.wl {
-        Some(wl) => wl.to_srgb(camera_only),
-        None => camera_only,
-    };
     ctx.to_film(layers)
 }

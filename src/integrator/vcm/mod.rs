@@ -566,7 +566,6 @@ impl Vcm {
                     own.vertices.extend_from_slice(paths.path((k / u64::from(m)) as usize));
                 }
                 own.bsdfs.extend(own.vertices.iter().map(|v| ctx.light_bsdf(v)));
-                let mut found = subpath::CameraTally::default();
                 let mut merges = 0u64;
                 let before = stats.total();
                 let mut layers = subpath::trace_camera_path(
@@ -576,7 +575,6 @@ impl Vcm {
                     &own.vertices,
                     &own.bsdfs,
                     &mut stats,
-                    &mut found,
                     |x, layers, _| merges += u64::from(merge(ctx, x, paths, radius, layers)),
                 );
                 if weight != 1.0 {
