@@ -34,6 +34,37 @@ pub struct BsdfSample {
     pub flags: LobeFlags,
 }
 
+/// A BSDF of one Lambertian lobe at one point (`Bsdf::one_lambert`).
+#[derive(Clone, Copy, Debug)]
+pub struct OneLambert {
+    /// Shading and geometric normals on the viewer's side.
+    n: Vec3,
+    ng: Vec3,
+    /// The value above the surface, opacity included.
+    f: Color,
+    opacity: f32,
+}
+
+impl OneLambert {
+    /// `Bsdf::eval(wo, wi, mode)` of the BSDF it was made from, for any `wo` and `mode`.
+    #[inline(always)]
+    pub fn eval(&self, wi: Vec3) -> (Color, f32) {
+        if self.above(wi) { (self.f, self.pdf(wi)) } else { (Color::ZERO, 0.0) }
+    }
+
+    /// `Bsdf::pdf(wo, wi, mode)`.
+    #[inline(always)]
+    pub fn pdf(&self, wi: Vec3) -> f32 {
+        if self.above(wi) { wi.dot(self.n) * std::f32::consts::FRAC_1_PI * self.opacity } else { 0.0 }
+    }
+
+    /// `wi` is above both normals (reflection, and the lobe's upper hemisphere).
+    #[inline(always)]
+    fn above(&self, wi: Vec3) -> bool {
+        wi.dot(self.ng) > 0.0 && wi.dot(self.n) > 0.0
+    }
+}
+
 /// The lobes of a material at a hit, with their sampling weights: what a material evaluates to
 /// before it is placed in a shading frame. Materials without textures give the same lobes at
 /// every hit, so the scene makes them once per material and side.
@@ -58,6 +89,8 @@ pub struct Lobes {
     isotropic: bool,
     /// Some lobe's choice depends on the viewing direction (`Bxdf::selection`).
     directional: bool,
+    /// The lobes are one Lambertian lobe with a positive, finite weight (`Bsdf::one_lambert`).
+    one_lambert: bool,
 }
 
 impl Default for Lobes {
@@ -75,6 +108,7 @@ impl Default for Lobes {
             spectra: [NO_LOBE_SPECTRA; MAX_LOBES],
             isotropic: true,
             directional: false,
+            one_lambert: false,
         }
     }
 }
@@ -105,6 +139,11 @@ impl Lobes {
         self.flags |= self.lobe_flags[i];
         self.isotropic &= lobe.is_isotropic();
         self.directional |= lobe.directional_selection();
+        self.one_lambert = self.count == 1
+            && matches!(self.lobes[0], Bxdf::Lambert(_))
+            && !self.directional
+            && self.total > 0.0
+            && self.total.is_finite();
     }
 
     /// The lobes in spectral mode (`Lobe::lifted`): colours as spectra at `wl` (the spectra
@@ -345,6 +384,15 @@ impl<'a> Bsdf<'a> {
     /// gives (reflection when `wi` is on the viewer's side of the surface).
     #[inline]
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
+        match self.one_lambert() {
+            Some(one) => one.eval(wi).0,
+            None => self.f_lobes(wo, wi, mode),
+        }
+    }
+
+    /// `f` lobe by lobe.
+    #[inline]
+    fn f_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Color {
         let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let mut f = Color::ZERO;
@@ -361,6 +409,15 @@ impl<'a> Bsdf<'a> {
     /// importance sampling and mixture sampling both need.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Color, f32) {
+        match self.one_lambert() {
+            Some(one) => one.eval(wi),
+            None => self.eval_lobes(wo, wi, mode),
+        }
+    }
+
+    /// `eval` lobe by lobe.
+    #[inline]
+    fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Color, f32) {
         let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
@@ -399,6 +456,15 @@ impl<'a> Bsdf<'a> {
     /// Density with which `sample` picks `wi` through its non-delta lobes.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
+        match self.one_lambert() {
+            Some(one) => one.pdf(wi),
+            None => self.pdf_lobes(wo, wi, mode),
+        }
+    }
+
+    /// `pdf` lobe by lobe.
+    #[inline]
+    fn pdf_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> f32 {
         let kind = self.kind(wi);
         let (wo_l, wi_l) = (self.frame.to_local(wo), self.frame.to_local(wi));
         let (weights, total) = self.selection_weights(&self.lobes.weights, self.lobes.total, wo_l);
@@ -584,6 +650,21 @@ impl<'a> Bsdf<'a> {
         }
         let weight = self.f(wo, s.wi, mode) * (s.wi.dot(self.frame.z).abs() / pdf);
         Some(BsdfSample { wi: s.wi, weight, pdf, flags: s.flags })
+    }
+
+    /// The BSDF as one Lambertian lobe, when it is one (unperturbed, lobe weights that do not
+    /// depend on `wo`): `eval`, `f` and `pdf` without their loop over lobes and dispatch, the
+    /// same numbers bit for bit. The usual diffuse surface takes this path in `eval`, `f` and
+    /// `pdf`, and VCM's merges keep it for every light vertex within the radius.
+    #[inline(always)]
+    pub fn one_lambert(&self) -> Option<OneLambert> {
+        let lobes: &Lobes = &self.lobes;
+        let (true, None, Bxdf::Lambert(lobe)) = (lobes.one_lambert, self.perturbed, &lobes.lobes[0]) else {
+            return None;
+        };
+        // `eval` with its one lobe: f = (0 + f_lobe) (opacity x 1), pdf = (0 + (w / w) pdf_lobe) opacity.
+        let f = lobe.r * std::f32::consts::FRAC_1_PI * (self.opacity * 1.0);
+        Some(OneLambert { n: self.frame.z, ng: self.ng, f, opacity: self.opacity })
     }
 
     /// The albedo of a BSDF made only of Lambertian lobes (its value is that over pi in every

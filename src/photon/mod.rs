@@ -1,5 +1,6 @@
 //! Photon maps (Jensen 2001): photon records, the kd-tree they are stored in, and photon tracing.
 
+pub mod grid;
 pub mod map;
 pub mod trace;
 

@@ -13,7 +13,7 @@
 //!    tracing with the light subpath of its own index (SmallVCM's pairing; with one light path
 //!    per m pixels, in one iteration of m) and, at each vertex
 //!    with a non-delta part, merges with every stored vertex within the iteration's radius
-//!    (`grid`, a hashed grid of cells twice the radius), each merge weighted against the
+//!    (`photon::grid`, a hashed grid of cells twice the radius), each merge weighted against the
 //!    connections that make the same path.
 //!
 //! The merge radius shrinks as progressive photon mapping's does (Knaus and Zwicker 2011;
@@ -47,8 +47,6 @@
 //! as one path's. Paths through dispersive glass keep the hero alone (`bdpt::strategy`), and
 //! light enters the film as linear sRGB; the light budget's pilot measures the sRGB luminance.
 
-mod grid;
-
 use super::bdpt::strategy::{self, Context, LightVertex};
 use super::bdpt::{LightPathBuffer, mis, subpath};
 use crate::film::splat::{DRAIN_PATHS, SplatFilm};
@@ -56,12 +54,12 @@ use crate::film::{Film, Layers};
 use crate::material::bxdf::Transport;
 use crate::math::luminance;
 use crate::math::{Color, Vec2, Vec3};
+use crate::photon::grid::HashGrid;
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::{Rng32, hash_seed};
 use crate::scene::Scene;
 use crate::scene::desc::IntegratorDesc;
 use crate::spectrum::{Wavelengths, joined};
-use grid::VertexGrid;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -254,10 +252,9 @@ impl Probe {
 /// Working memory of a VCM render of `pixels` pixels: the light vertices of one iteration (a few
 /// per light path) with their grid, the splat film and the film a pass accumulates into.
 pub fn estimated_bytes(pixels: u64, layers: bool) -> u64 {
-    // About three stored vertices per path, each with its position, its grid entry (position
-    // and index), up to two bucket starts (buckets are a power of two at least the count) and
-    // its merge record.
-    let per_vertex = std::mem::size_of::<LightVertex>() + 12 + 16 + 8 + std::mem::size_of::<MergeVertex>();
+    // About three stored vertices per path, each with its grid entry (position and index), up
+    // to two bucket starts (buckets are a power of two at least the count) and its merge record.
+    let per_vertex = std::mem::size_of::<LightVertex>() + 16 + 8 + std::mem::size_of::<MergeVertex>();
     let per_path = 3 * per_vertex as u64 + 8;
     super::light::estimated_bytes(pixels, layers) + pixels * per_path
 }
@@ -268,8 +265,7 @@ struct LightPaths {
     vertices: Vec<LightVertex>,
     /// Path k's vertices are `vertices[ends[k - 1]..ends[k]]` (from 0 for the first).
     ends: Vec<u32>,
-    positions: Vec<Vec3>,
-    grid: VertexGrid,
+    grid: HashGrid,
     /// What a merge reads of each vertex, by grid slot.
     merges: Vec<MergeVertex>,
     peak_bytes: usize,
@@ -436,13 +432,14 @@ impl Vcm {
         if let Some(p) = probe.as_deref_mut() {
             p.rays += light_rays;
         }
-        paths.positions.clear();
-        paths.positions.extend(paths.vertices.iter().map(|v| v.hit.p));
-        paths.grid.rebuild(&paths.positions, radius, scene.bounds().min.min(Vec3::ZERO));
+        // Cells twice the radius wide: a query overlaps at most 2 x 2 x 2 of them.
+        let vertices = &paths.vertices;
+        let origin = scene.bounds().min.min(Vec3::ZERO);
+        paths.grid.rebuild(vertices.len(), |i| (vertices[i].hit.p, i as u32), 2.0 * radius, origin);
         paths.merges.clear();
-        paths.merges.extend(paths.grid.slots().map(|i| MergeVertex::of(&paths.vertices[i as usize])));
+        paths.merges.extend(paths.grid.ids().iter().map(|&i| MergeVertex::of(&vertices[i as usize])));
         let bytes = paths.vertices.capacity() * std::mem::size_of::<LightVertex>()
-            + (paths.ends.capacity() + 3 * paths.positions.capacity()) * 4
+            + paths.ends.capacity() * 4
             + paths.grid.memory_bytes()
             + paths.merges.capacity() * std::mem::size_of::<MergeVertex>();
         paths.peak_bytes = paths.peak_bytes.max(bytes);
@@ -642,18 +639,23 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
     // it (`Bsdf::pdf_reverse` does not read the other direction there): worked out at the first
     // light vertex above it and kept, the same number `reverse_pdf` would give each.
     let lambertian = x.bsdf.lambert_albedo().is_some();
+    // The usual camera vertex, one Lambertian lobe, evaluated without `eval`'s dispatch.
+    let one = x.bsdf.one_lambert();
     let ng = x.bsdf.geometric_normal();
     let mut rev_above: Option<f32> = None;
     // Direct light is the camera-only techniques' (`MisFactors::direct_by_camera`): no merge
     // with a light vertex of depth 1 at the camera path's first non-delta vertex.
     let skip_direct = ctx.factors.direct_by_camera && x.layer.before_x();
-    paths.grid.for_each_within(p, r2, |slot| {
-        let y = &paths.merges[slot];
+    paths.grid.for_each_within(p, radius, |found| {
+        let y = &paths.merges[found.slot as usize];
         candidates += 1;
         if y.depth + x.depth > ctx.max_depth + 1 || (skip_direct && y.depth == 1) {
             return;
         }
-        let (f, pdf) = x.bsdf.eval(x.wo, y.wo, Transport::Radiance);
+        let (f, pdf) = match &one {
+            Some(one) => one.eval(y.wo),
+            None => x.bsdf.eval(x.wo, y.wo, Transport::Radiance),
+        };
         if f == Color::ZERO {
             return;
         }

@@ -392,3 +392,34 @@ fn perturbed_normals_give_the_adjoint_in_importance_transport() {
         }
     }
 }
+
+#[test]
+fn one_lambert_evaluates_as_the_lobes_bit_for_bit() {
+    let mut rng = Rng32::new(11);
+    for trial in 0..200 {
+        // Tilted shading frames (a shading normal off the geometric one), both sides, opacity.
+        let ns = (Vec3::Z + 0.4 * uniform_sphere(rng.uniform2())).normalize();
+        let wo = uniform_sphere(rng.uniform2());
+        let mut lobes = Lobes::default();
+        lobes.add(Bxdf::Lambert(Lambert { r: Color::new(0.8, 0.5 * rng.uniform(), 0.2) }));
+        let mut b = Bsdf::new(Frame::from_z(ns), Vec3::Z, front_side(wo, Vec3::Z), lobes);
+        if trial % 2 == 1 {
+            b = b.with_opacity(rng.uniform());
+        }
+        let one = b.one_lambert().expect("one Lambertian lobe");
+        for _ in 0..50 {
+            let wi = uniform_sphere(rng.uniform2());
+            for mode in [Transport::Radiance, Transport::Importance] {
+                let bits = |(f, pdf): (Color, f32)| (f.to_array().map(f32::to_bits), pdf.to_bits());
+                let lobes = b.eval_lobes(wo, wi, mode);
+                assert_eq!(bits(lobes), bits(one.eval(wi)), "wo {wo} wi {wi}");
+                assert_eq!(bits(lobes), bits(b.eval(wo, wi, mode)));
+                assert_eq!(bits((b.f_lobes(wo, wi, mode), b.pdf_lobes(wo, wi, mode))), bits(lobes));
+                assert_eq!(bits((b.f(wo, wi, mode), b.pdf(wo, wi, mode))), bits(lobes));
+            }
+        }
+    }
+    // Anything else is not one Lambertian lobe.
+    assert!(classic(ClassicKind::Diffuse, 0.6, 0.3, 0.0, 0.0, Vec3::Z).one_lambert().is_none());
+    assert!(single(Bxdf::Mirror(Mirror { r: Color::ONE }), Vec3::Z).one_lambert().is_none());
+}

@@ -1,0 +1,294 @@
+//! Points in a hashed uniform grid, for queries of about one radius: SPPM's photons and VCM's
+//! light vertices (Teschner et al. 2003's spatial hashing, as SmallVCM's `HashGrid` uses it).
+//! Cells are hashed into as many buckets as there are points (a power of two), and a counting
+//! sort puts each bucket's points together in point order, so a query visits its points in a
+//! fixed order whatever the thread count.
+//!
+//! With cells twice the query radius a query overlaps at most 2 x 2 x 2 cells. Points are kept
+//! one coordinate per array beside an id: a query tests four points' distances at once and its
+//! caller reads a point's own data (scattered, tens of bytes) only when it is within range;
+//! most candidates are not (a surface crosses 2 x 2 x 2 cells of width 2r, about ten times the
+//! disc of radius r).
+
+use crate::math::Vec3;
+use glam::Vec4;
+
+/// Point ids by the hash of their cell (see the module header).
+#[derive(Default)]
+pub struct HashGrid {
+    cell: f32,
+    origin: Vec3,
+    mask: u64,
+    /// Bucket b holds slots `starts[b]..starts[b + 1]` (one more than the buckets; also the
+    /// sort's write cursors while it runs).
+    starts: Vec<u32>,
+    /// Each slot's point, a coordinate per array, and the id it was given.
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    ids: Vec<u32>,
+}
+
+/// A point a query found: its slot (its place in the grid's order: data kept in `ids()` order
+/// is read from consecutive addresses), its id and its squared distance from the query point.
+#[derive(Clone, Copy, Debug)]
+pub struct Found {
+    pub slot: u32,
+    pub id: u32,
+    pub d2: f32,
+}
+
+#[inline]
+fn cell_key(c: [i32; 3]) -> u64 {
+    // Distinct cells get distinct keys for coordinates within +-2^20.
+    let m = |v: i32| (v as i64 + (1 << 20)) as u64 & 0x1f_ffff;
+    m(c[0]) | m(c[1]) << 21 | m(c[2]) << 42
+}
+
+/// `v.clamp(-1e6, 1e6).floor() as i32` without a call to the library's `floorf` (the build's
+/// target has no rounding instruction): the same integer for every value, NaN included (0).
+#[inline(always)]
+fn floor_clamped(v: f32) -> i32 {
+    let v = v.clamp(-1e6, 1e6);
+    let t = v as i32;
+    t - i32::from((t as f32) > v)
+}
+
+/// Inserts `b` into the sorted first `n` entries of `list`, keeping them sorted.
+#[inline(always)]
+fn insert_sorted(list: &mut [u32; 8], n: usize, b: u32) {
+    let mut k = n;
+    while k > 0 && list[k - 1] > b {
+        list[k] = list[k - 1];
+        k -= 1;
+    }
+    list[k] = b;
+}
+
+impl HashGrid {
+    /// Sorts `n` points into the grid again, reusing its buffers (an iteration allocates no new
+    /// grid): `point(i)` is the i-th point's position and id. Cells are `cell` wide from `origin`.
+    pub fn rebuild(&mut self, n: usize, point: impl Fn(usize) -> (Vec3, u32), cell: f32, origin: Vec3) {
+        let size = n.next_power_of_two().max(1);
+        let mask = size as u64 - 1;
+        // Buckets are worked out twice (to count, then to place) rather than kept: a buffer of
+        // them was a tenth of SPPM's memory.
+        let bucket = |p: Vec3| (crate::sampling::mix64(cell_key(Self::coords(p, origin, cell))) & mask) as usize;
+        self.starts.clear();
+        self.starts.resize(size + 1, 0);
+        for i in 0..n {
+            self.starts[bucket(point(i).0) + 1] += 1;
+        }
+        for b in 0..size {
+            self.starts[b + 1] += self.starts[b];
+        }
+        for v in [&mut self.xs, &mut self.ys, &mut self.zs] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+        self.ids.clear();
+        self.ids.resize(n, 0);
+        // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
+        // starts are then one bucket behind, and shifting them back restores them.
+        for i in 0..n {
+            let (p, id) = point(i);
+            let b = bucket(p);
+            let k = self.starts[b] as usize;
+            (self.xs[k], self.ys[k], self.zs[k]) = (p.x, p.y, p.z);
+            self.ids[k] = id;
+            self.starts[b] += 1;
+        }
+        self.starts.copy_within(0..size, 1);
+        self.starts[0] = 0;
+        (self.cell, self.origin, self.mask) = (cell, origin, mask);
+    }
+
+    /// The points' ids in slot order.
+    pub fn ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        (self.xs.capacity() + self.ys.capacity() + self.zs.capacity() + self.ids.capacity() + self.starts.capacity())
+            * 4
+    }
+
+    #[inline]
+    fn coords(p: Vec3, origin: Vec3, cell: f32) -> [i32; 3] {
+        let c = (p - origin) / cell;
+        [floor_clamped(c.x), floor_clamped(c.y), floor_clamped(c.z)]
+    }
+
+    /// Calls `f` for every point within distance `r` of `p` (at most `r`), each once, in a
+    /// fixed order. A cell's bucket holds points of other cells too, which the distance test
+    /// leaves out; each bucket is read once (in increasing order, each in point order), so a
+    /// point in range is met once however many of the query's cells share its bucket. A query
+    /// of more than `MAX_BUCKETS` cells (a radius far above the cells' size) reads the cells in
+    /// turn instead and counts a point when its own cell is read.
+    #[inline]
+    pub fn for_each_within(&self, p: Vec3, r: f32, mut f: impl FnMut(Found)) {
+        const MAX_BUCKETS: usize = 64;
+        if self.ids.is_empty() {
+            return;
+        }
+        let lo = Self::coords(p - Vec3::splat(r), self.origin, self.cell);
+        let hi = Self::coords(p + Vec3::splat(r), self.origin, self.cell);
+        let r2 = r * r;
+        let span = |a: usize| (i64::from(hi[a]) - i64::from(lo[a]) + 1) as usize;
+        let bucket = |c: [i32; 3]| (crate::sampling::mix64(cell_key(c)) & self.mask) as usize;
+        let cells = span(0) * span(1) * span(2);
+        if cells <= 8 {
+            // The usual query (cells twice the radius): at most two cells a side, their
+            // buckets sorted by insertion into a small array that needs no clearing.
+            let mut buckets = [0u32; 8];
+            let mut n = 0;
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        insert_sorted(&mut buckets, n, bucket([x, y, z]) as u32);
+                        n += 1;
+                    }
+                }
+            }
+            self.scan_buckets(&buckets[..n], p, r2, &mut f);
+            return;
+        }
+        if cells <= MAX_BUCKETS {
+            let mut buckets = [0u32; MAX_BUCKETS];
+            let mut n = 0;
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets[n] = bucket([x, y, z]) as u32;
+                        n += 1;
+                    }
+                }
+            }
+            let buckets = &mut buckets[..n];
+            buckets.sort_unstable();
+            self.scan_buckets(buckets, p, r2, &mut f);
+            return;
+        }
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    self.scan(bucket([x, y, z]), p, r2, |q, found| {
+                        if Self::coords(q, self.origin, self.cell) == [x, y, z] {
+                            f(found);
+                        }
+                    });
+                }
+            }
+        }
+    }
+
+    /// Scans the buckets of a sorted list (repeats once).
+    #[inline(always)]
+    fn scan_buckets(&self, buckets: &[u32], p: Vec3, r2: f32, f: &mut impl FnMut(Found)) {
+        let mut last = u32::MAX;
+        for &b in buckets {
+            if b != last {
+                self.scan(b as usize, p, r2, |_, found| f(found));
+                last = b;
+            }
+        }
+    }
+
+    /// Calls `f(position, found)` for the points of bucket `b` within squared distance `r2` of
+    /// `p`.
+    #[inline(always)]
+    fn scan(&self, b: usize, p: Vec3, r2: f32, mut f: impl FnMut(Vec3, Found)) {
+        let (start, end) = (self.starts[b] as usize, self.starts[b + 1] as usize);
+        let (xs, ys, zs, ids) =
+            (&self.xs[start..end], &self.ys[start..end], &self.zs[start..end], &self.ids[start..end]);
+        let found = |k: usize, d2: f32| Found { slot: (start + k) as u32, id: ids[k], d2 };
+        // Four points at a time: each lane computes (q - p) . (q - p) with the scalar
+        // `length_squared`'s operations in its order, so the distances are the same bit for bit.
+        let (px, py, pz, r2s) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(r2));
+        let load = |c: &[f32]| Vec4::from(<[f32; 4]>::try_from(c).unwrap_or_default());
+        let quads = xs.len() / 4;
+        let chunks = xs.chunks_exact(4).zip(ys.chunks_exact(4)).zip(zs.chunks_exact(4));
+        for (quad, ((cx, cy), cz)) in chunks.enumerate() {
+            let (dx, dy, dz) = (load(cx) - px, load(cy) - py, load(cz) - pz);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let mut hits = d2.cmple(r2s).bitmask();
+            if hits == 0 {
+                continue;
+            }
+            let d2 = d2.to_array();
+            while hits != 0 {
+                let lane = hits.trailing_zeros() as usize & 3;
+                hits &= hits - 1;
+                f(Vec3::new(cx[lane], cy[lane], cz[lane]), found(4 * quad + lane, d2[lane]));
+            }
+        }
+        for i in 4 * quads..xs.len() {
+            let q = Vec3::new(xs[i], ys[i], zs[i]);
+            let d2 = (q - p).length_squared();
+            if d2 <= r2 {
+                f(q, found(i, d2));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floor_clamped_is_the_library_floor() {
+        let floor = |v: f32| v.floor().clamp(-1e6, 1e6) as i32;
+        let mut rng = crate::sampling::Rng32::new(7);
+        let special = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1e6, -1e6, 1e6 + 64.0, -1e6 - 64.0, 3e9, -3e9];
+        let more = [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, f32::MIN_POSITIVE, -f32::MIN_POSITIVE];
+        let random = (0..100_000).map(|k| (rng.uniform() - 0.5) * 10f32.powi(k % 8));
+        for v in special.into_iter().chain(more).chain(random) {
+            assert_eq!(floor_clamped(v), floor(v), "{v}");
+        }
+        // Just below an integer and at it.
+        for k in -1000..1000 {
+            let v = k as f32;
+            assert_eq!(floor_clamped(v), k);
+            assert_eq!(floor_clamped(v - v.abs().max(1.0) * f32::EPSILON), k - 1);
+        }
+    }
+
+    #[test]
+    fn every_point_within_the_radius_is_found_exactly_once() {
+        let mut rng = crate::sampling::Rng32::new(1);
+        // Uniform points and a dense cluster (a caustic), some exactly on cell boundaries.
+        let mut points: Vec<Vec3> =
+            (0..5000).map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0).collect();
+        points.extend((0..2000).map(|_| Vec3::new(rng.uniform(), rng.uniform(), 0.0) * 0.05));
+        points.extend((0..50).map(|k| Vec3::new(k as f32 * 0.3 - 2.0, 0.6, 0.0)));
+        // Cells of twice the radius and of the radius (buckets read once each), and cells far
+        // smaller than the radius (cells read in turn).
+        for (cell, r) in [(0.6, 0.3), (0.3, 0.3), (0.05, 0.3)] {
+            let mut grid = HashGrid::default();
+            // Ids other than the index, to tell them from slots.
+            grid.rebuild(points.len(), |i| (points[i], 3 * i as u32 + 1), cell, Vec3::splat(-2.0));
+            for q in 0..300 {
+                let p = if q % 2 == 0 {
+                    Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0
+                } else {
+                    Vec3::new(rng.uniform(), rng.uniform(), 0.0) * 0.08
+                };
+                let mut found = Vec::new();
+                grid.for_each_within(p, r, |f| {
+                    let i = (f.id - 1) as usize / 3;
+                    assert_eq!(f.d2, (points[i] - p).length_squared());
+                    assert_eq!(grid.ids()[f.slot as usize], f.id);
+                    found.push(i)
+                });
+                let mut brute: Vec<usize> =
+                    (0..points.len()).filter(|&i| (points[i] - p).length_squared() <= r * r).collect();
+                // Each once: sorted, the lists are equal only without repeats.
+                found.sort();
+                brute.sort();
+                assert_eq!(found, brute, "cell {cell}, radius {r}");
+            }
+        }
+    }
+}
