@@ -13,6 +13,10 @@
 use crate::math::Vec3;
 use glam::Vec4;
 
+/// Entries past the points in each coordinate array, so that a bucket's last four-wide load
+/// stays within it.
+const PAD: usize = 3;
+
 /// Point ids by the hash of their cell (see the module header).
 #[derive(Default)]
 pub struct HashGrid {
@@ -84,7 +88,7 @@ impl HashGrid {
         }
         for v in [&mut self.xs, &mut self.ys, &mut self.zs] {
             v.clear();
-            v.resize(n, 0.0);
+            v.resize(n + PAD, 0.0);
         }
         self.ids.clear();
         self.ids.resize(n, 0);
@@ -200,35 +204,33 @@ impl HashGrid {
     #[inline(always)]
     fn scan(&self, b: usize, p: Vec3, r2: f32, mut f: impl FnMut(Vec3, Found)) {
         let (start, end) = (self.starts[b] as usize, self.starts[b + 1] as usize);
-        let (xs, ys, zs, ids) =
-            (&self.xs[start..end], &self.ys[start..end], &self.zs[start..end], &self.ids[start..end]);
-        let found = |k: usize, d2: f32| Found { slot: (start + k) as u32, id: ids[k], d2 };
-        // Four points at a time: each lane computes (q - p) . (q - p) with the scalar
-        // `length_squared`'s operations in its order, so the distances are the same bit for bit.
+        // Four points at a time, the last four of a bucket too: the coordinate arrays have
+        // `PAD` more entries, and lanes past the bucket's end are masked off (buckets hold a few
+        // points, and a scalar tail was half of a query's work). Each lane computes
+        // (q - p) . (q - p) with the scalar `length_squared`'s operations in its order, so the
+        // distances are the same bit for bit.
         let (px, py, pz, r2s) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(r2));
-        let load = |c: &[f32]| Vec4::from(<[f32; 4]>::try_from(c).unwrap_or_default());
-        let quads = xs.len() / 4;
-        let chunks = xs.chunks_exact(4).zip(ys.chunks_exact(4)).zip(zs.chunks_exact(4));
-        for (quad, ((cx, cy), cz)) in chunks.enumerate() {
-            let (dx, dy, dz) = (load(cx) - px, load(cy) - py, load(cz) - pz);
+        let load = |c: &[f32], i: usize| Vec4::from(<[f32; 4]>::try_from(&c[i..i + 4]).unwrap_or_default());
+        let mut i = start;
+        while i < end {
+            let (x, y, z) = (load(&self.xs, i), load(&self.ys, i), load(&self.zs, i));
+            let (dx, dy, dz) = (x - px, y - py, z - pz);
             let d2 = dx * dx + dy * dy + dz * dz;
-            let mut hits = d2.cmple(r2s).bitmask();
-            if hits == 0 {
-                continue;
+            let live = (1u32 << (end - i).min(4)) - 1;
+            let mut hits = d2.cmple(r2s).bitmask() & live;
+            if hits != 0 {
+                let (x, y, z, d2) = (x.to_array(), y.to_array(), z.to_array(), d2.to_array());
+                while hits != 0 {
+                    let lane = hits.trailing_zeros() as usize & 3;
+                    hits &= hits - 1;
+                    let slot = i + lane;
+                    f(
+                        Vec3::new(x[lane], y[lane], z[lane]),
+                        Found { slot: slot as u32, id: self.ids[slot], d2: d2[lane] },
+                    );
+                }
             }
-            let d2 = d2.to_array();
-            while hits != 0 {
-                let lane = hits.trailing_zeros() as usize & 3;
-                hits &= hits - 1;
-                f(Vec3::new(cx[lane], cy[lane], cz[lane]), found(4 * quad + lane, d2[lane]));
-            }
-        }
-        for i in 4 * quads..xs.len() {
-            let q = Vec3::new(xs[i], ys[i], zs[i]);
-            let d2 = (q - p).length_squared();
-            if d2 <= r2 {
-                f(q, found(i, d2));
-            }
+            i += 4;
         }
     }
 }

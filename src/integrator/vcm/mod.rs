@@ -48,7 +48,7 @@
 //! light enters the film as linear sRGB; the light budget's pilot measures the sRGB luminance.
 
 use super::bdpt::strategy::{self, Context, LightVertex};
-use super::bdpt::{LightPathBuffer, mis, subpath};
+use super::bdpt::{mis, subpath};
 use crate::film::splat::{DRAIN_PATHS, SplatFilm};
 use crate::film::{Film, Layers};
 use crate::material::bxdf::Transport;
@@ -480,7 +480,13 @@ impl Vcm {
             let traced: Vec<(Vec<LightVertex>, Vec<u32>, RayStats, u64)> = (0..chunks)
                 .into_par_iter()
                 .map(|c| {
-                    let mut out = (Vec::new(), Vec::new(), RayStats::default(), 0u64);
+                    // Sized for a few vertices per path: grown vectors were copied again and again.
+                    let mut out = (
+                        Vec::with_capacity(4 * CHUNK as usize),
+                        Vec::with_capacity(CHUNK as usize),
+                        RayStats::default(),
+                        0u64,
+                    );
                     if driver.cancelled() {
                         interrupted.store(true, Ordering::Relaxed);
                         return out;
@@ -550,30 +556,28 @@ impl Vcm {
                 return tally;
             }
             let mut stats = RayStats::default();
-            let mut own = LightPathBuffer::default();
+            // The BSDFs of the pixel's light path (its vertices are read where they are stored).
+            let mut own_bsdfs = Vec::new();
             let mut bad = 0;
             let from = c * CHUNK;
             let to = (from + CHUNK).min(pixels);
             for k in from..to {
                 let (x, y) = ((k % settings.width as u64) as u32, (k / settings.width as u64) as u32);
                 let (mut sampler, ray, weight) = settings.camera_sample(ctx.scene, x, y, it);
-                // The BSDFs of this pixel's light path, for connections, if it has one.
-                own.clear();
-                if (k + u64::from(it)).is_multiple_of(u64::from(m)) {
-                    own.vertices.extend_from_slice(paths.path((k / u64::from(m)) as usize));
-                }
-                own.bsdfs.extend(own.vertices.iter().map(|v| ctx.light_bsdf(v)));
+                // This pixel's light path, for connections, if it has one in this iteration.
+                let own: &[LightVertex] = if (k + u64::from(it)).is_multiple_of(u64::from(m)) {
+                    paths.path((k / u64::from(m)) as usize)
+                } else {
+                    &[]
+                };
+                own_bsdfs.clear();
+                own_bsdfs.extend(own.iter().map(|v| ctx.light_bsdf(v)));
                 let mut merges = 0u64;
                 let before = stats.total();
-                let mut layers = subpath::trace_camera_path(
-                    ctx,
-                    &mut sampler,
-                    ray,
-                    &own.vertices,
-                    &own.bsdfs,
-                    &mut stats,
-                    |x, layers, _| merges += u64::from(merge(ctx, x, paths, radius, layers)),
-                );
+                let mut layers =
+                    subpath::trace_camera_path(ctx, &mut sampler, ray, own, &own_bsdfs, &mut stats, |x, layers, _| {
+                        merges += u64::from(merge(ctx, x, paths, radius, layers))
+                    });
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);
                 }
