@@ -40,7 +40,8 @@ pub struct OneLambert {
     /// Shading and geometric normals on the viewer's side.
     n: Vec3,
     ng: Vec3,
-    /// The value above the surface, opacity included.
+    /// The albedo, and the value above the surface, opacity included.
+    r: Color,
     f: Color,
     opacity: f32,
 }
@@ -664,7 +665,7 @@ impl<'a> Bsdf<'a> {
         };
         // `eval` with its one lobe: f = (0 + f_lobe) (opacity x 1), pdf = (0 + (w / w) pdf_lobe) opacity.
         let f = lobe.r * std::f32::consts::FRAC_1_PI * (self.opacity * 1.0);
-        Some(OneLambert { n: self.frame.z, ng: self.ng, f, opacity: self.opacity })
+        Some(OneLambert { n: self.frame.z, ng: self.ng, r: lobe.r, f, opacity: self.opacity })
     }
 
     /// The albedo of a BSDF made only of Lambertian lobes (its value is that over pi in every
@@ -685,6 +686,32 @@ impl<'a> Bsdf<'a> {
     /// by its lobe over the probability of having picked it.
     #[inline]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        match self.one_lambert() {
+            Some(one) if self.opacity >= 1.0 => self.sample_one_lambert(&one, wo, u),
+            _ => self.sample_lobes(wo, uc, u, mode),
+        }
+    }
+
+    /// `sample_lobes` of a BSDF that is one opaque Lambertian lobe, the same numbers bit for
+    /// bit: the cosine-weighted direction in the shading frame, dropped when `wo` is below the
+    /// shading normal or the direction below the geometric one.
+    #[inline(always)]
+    fn sample_one_lambert(&self, one: &OneLambert, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+        if wo.dot(self.frame.z) <= 0.0 {
+            return None;
+        }
+        let wi_l = crate::sampling::warp::cosine_hemisphere(u);
+        let pdf = wi_l.z * std::f32::consts::FRAC_1_PI;
+        if !(pdf > 0.0) {
+            return None;
+        }
+        let wi = self.frame.to_world(wi_l);
+        (wi.dot(self.ng) > 0.0).then_some(BsdfSample { wi, weight: one.r, pdf, flags: LobeFlags::DIFFUSE_REFLECTION })
+    }
+
+    /// `sample` lobe by lobe.
+    #[inline]
+    fn sample_lobes(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
         let uc = match self.pass_through(wo, uc) {
             Ok(uc) => uc,
             Err(null) => return Some(null),
@@ -716,6 +743,21 @@ impl<'a> Bsdf<'a> {
     /// glossy lobe overlapping a diffuse one sends.
     #[inline]
     pub fn sample_lobe(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        match self.one_lambert() {
+            Some(one) if self.opacity >= 1.0 => {
+                // The lobe loop's numbers: its one lobe is picked with probability 1.
+                let s = self.sample_one_lambert(&one, wo, u)?;
+                let adjoint =
+                    if mode == Transport::Importance { self.shading_normal_correction(wo, s.wi) } else { 1.0 };
+                Some(BsdfSample { weight: s.weight * adjoint, ..s })
+            }
+            _ => self.sample_lobe_lobes(wo, uc, u, mode),
+        }
+    }
+
+    /// `sample_lobe` lobe by lobe.
+    #[inline]
+    fn sample_lobe_lobes(&self, wo: Vec3, uc: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
         let uc = match self.pass_through(wo, uc) {
             Ok(uc) => uc,
             Err(null) => return Some(null),

@@ -419,6 +419,28 @@ fn one_lambert_evaluates_as_the_lobes_bit_for_bit() {
             }
         }
     }
+    // Sampling, opaque: the same samples as the lobe loop.
+    for _ in 0..200 {
+        let ns = (Vec3::Z + 0.4 * uniform_sphere(rng.uniform2())).normalize();
+        let wo = uniform_sphere(rng.uniform2());
+        let mut lobes = Lobes::default();
+        lobes.add(Bxdf::Lambert(Lambert { r: Color::new(0.8, 0.5, 0.2) }));
+        let b = Bsdf::new(Frame::from_z(ns), Vec3::Z, front_side(wo, Vec3::Z), lobes);
+        for _ in 0..50 {
+            let (uc, u) = (rng.uniform(), rng.uniform2());
+            let bits = |s: Option<BsdfSample>| {
+                s.map(|s| {
+                    (s.wi.to_array().map(f32::to_bits), s.weight.to_array().map(f32::to_bits), s.pdf.to_bits(), s.flags)
+                })
+            };
+            for mode in [Transport::Radiance, Transport::Importance] {
+                let lobes = b.sample_lobes(wo, uc, u, mode);
+                assert_eq!(bits(b.sample(wo, uc, u, mode)), bits(lobes), "wo {wo} u {u}");
+                let lobes = b.sample_lobe_lobes(wo, uc, u, mode);
+                assert_eq!(bits(b.sample_lobe(wo, uc, u, mode)), bits(lobes), "photon: wo {wo} u {u}");
+            }
+        }
+    }
     // Anything else is not one Lambertian lobe.
     assert!(classic(ClassicKind::Diffuse, 0.6, 0.3, 0.0, 0.0, Vec3::Z).one_lambert().is_none());
     assert!(single(Bxdf::Mirror(Mirror { r: Color::ONE }), Vec3::Z).one_lambert().is_none());
