@@ -10,6 +10,8 @@
 #   INTEGRATORS="bdpt vcm" scripts/equal_time.sh 10     (a subset; INTEGRATORS= only makes the references)
 #   CPU=1 scripts/equal_time.sh 10     (equal CPU time on one thread each: for a machine that is
 #                                       not quiet, where wall time measures the load)
+#   SEEDS="1 2 3" scripts/equal_time.sh 10   (wall time only: one render per seed, and the RMSE
+#                                       column the root mean square of theirs; default seed 0)
 #
 # References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
 # the path tracer cannot find; bidirectional path tracing, unbiased, for the glossy caustics of a
@@ -53,20 +55,31 @@ for entry in "${scenes[@]}"; do
       used=$(cpu_seconds "$BIN" render "$scene" $size --integrator "$integrator" --threads 1 --spp "$n" -q \
         -o "$OUT/$name-$integrator.exr")
       samples="$n in $used CPU-s"
+      images=("$OUT/$name-$integrator.exr")
     else
-      # shellcheck disable=SC2086
-      "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" -o "$OUT/$name-$integrator.exr" \
-        2>"$OUT/$name-$integrator.log" >/dev/null
-      samples=$(grep -oE '([0-9]+ samples per pixel|took [0-9]+ iterations)' "$OUT/$name-$integrator.log" | tail -1 || true)
+      images=()
+      samples=""
+      for seed in ${SEEDS:-0}; do
+        image="$OUT/$name-$integrator-$seed.exr"
+        # shellcheck disable=SC2086
+        "$BIN" render "$scene" $size --integrator "$integrator" --spp 100000 --time "$T" --seed "$seed" -o "$image" \
+          2>"$OUT/$name-$integrator.log" >/dev/null
+        samples+="$(grep -oE '([0-9]+ samples per pixel|took [0-9]+ iterations)' "$OUT/$name-$integrator.log" | tail -1 | grep -oE '[0-9]+' || true) "
+        images+=("$image")
+      done
+      samples="$samples(${SEEDS:+seeds $SEEDS; }samples per pixel or iterations)"
     fi
-    python3 - "$OUT/$name-$integrator.exr" "$OUT/$name-ref.exr" "$name" "$integrator" "$samples" <<'PY'
+    python3 - "$OUT/$name-ref.exr" "$name" "$integrator" "$samples" "${images[@]:-$OUT/$name-$integrator.exr}" <<'PY'
 import sys
 sys.path.insert(0, "scripts")
 from rmse import read_rgb
 import numpy as np
-a, r = read_rgb(sys.argv[1]), read_rgb(sys.argv[2])
+r = read_rgb(sys.argv[1])
 lum = lambda x: (x * [0.2126, 0.7152, 0.0722]).sum(-1).mean()
-print(f"| {sys.argv[3]} | {sys.argv[4]} | {sys.argv[5]} | {np.sqrt(((a - r) ** 2).mean()):.4f} | {lum(a) / lum(r):.3f} |")
+mse = [((read_rgb(f) - r) ** 2).mean() for f in sys.argv[5:]]
+means = [lum(read_rgb(f)) / lum(r) for f in sys.argv[5:]]
+each = " (" + ", ".join(f"{np.sqrt(m):.4f}" for m in mse) + ")" if len(mse) > 1 else ""
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {sys.argv[4]} | {np.sqrt(np.mean(mse)):.4f}{each} | {np.mean(means):.3f} |")
 PY
   done
 done
