@@ -6,6 +6,7 @@ use super::reflect_about;
 use crate::material::fresnel::{fresnel_dielectric, refract};
 use crate::material::microfacet::{Distribution, Microfacet};
 use crate::math::{Vec2, Vec3};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -36,30 +37,40 @@ impl CoatingTable {
     /// the coating, 128 x 128 looking out of it, where total internal reflection makes the
     /// integrand rough).
     pub fn compute(mf: Microfacet, eta: f32) -> CoatingTable {
+        let (coarse, fine) = (gauss_legendre(32), gauss_legendre(128));
+        // The rows are independent and made in parallel (a rough plastic's table, about a
+        // million sampled normals, was most of a scene's load time); their sums are taken in
+        // row order, so the table is the same on any thread count.
+        let rows: Vec<(f32, f64)> = (0..TABLE_SIZE)
+            .into_par_iter()
+            .map(|j| {
+                let mu = (j as f32 / (TABLE_SIZE - 1) as f32).max(1e-6);
+                let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+                // Into the coating: (1 - F) G1 of the refracted direction, where it goes through.
+                let t = expectation(&coarse, &mf, wi, |m| {
+                    let cos = wi.dot(m);
+                    let Some(wt) = refract(-wi, m, eta) else { return 0.0 };
+                    if wt.z >= 0.0 {
+                        return 0.0;
+                    }
+                    (1.0 - fresnel_dielectric(cos, eta)) * mf.g1(wt, m)
+                }) as f32;
+                // Out of it, seen from inside: F G1 of the reflected direction.
+                let r = expectation(&fine, &mf, wi, |m| {
+                    let wr = reflect_about(wi, m);
+                    if wr.z <= 0.0 {
+                        return 0.0;
+                    }
+                    fresnel_dielectric(wi.dot(m), 1.0 / eta) * mf.g1(wr, m)
+                });
+                (t, r * mu as f64)
+            })
+            .collect();
         let mut transmittance = [0.0; TABLE_SIZE];
         let mut reflect_sum = 0.0f64;
-        let (coarse, fine) = (gauss_legendre(32), gauss_legendre(128));
-        for (j, t) in transmittance.iter_mut().enumerate() {
-            let mu = (j as f32 / (TABLE_SIZE - 1) as f32).max(1e-6);
-            let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-            // Into the coating: (1 - F) G1 of the refracted direction, where it goes through.
-            *t = expectation(&coarse, &mf, wi, |m| {
-                let cos = wi.dot(m);
-                let Some(wt) = refract(-wi, m, eta) else { return 0.0 };
-                if wt.z >= 0.0 {
-                    return 0.0;
-                }
-                (1.0 - fresnel_dielectric(cos, eta)) * mf.g1(wt, m)
-            }) as f32;
-            // Out of it, seen from inside: F G1 of the reflected direction.
-            let r = expectation(&fine, &mf, wi, |m| {
-                let wr = reflect_about(wi, m);
-                if wr.z <= 0.0 {
-                    return 0.0;
-                }
-                fresnel_dielectric(wi.dot(m), 1.0 / eta) * mf.g1(wr, m)
-            });
-            reflect_sum += r * mu as f64;
+        for ((t, r), out) in rows.into_iter().zip(&mut transmittance) {
+            *out = t;
+            reflect_sum += r;
         }
         let internal_reflectance = (2.0 * reflect_sum / TABLE_SIZE as f64) as f32;
         CoatingTable { transmittance, internal_reflectance }
@@ -72,8 +83,15 @@ impl CoatingTable {
         static TABLES: OnceLock<Mutex<HashMap<Key, &'static CoatingTable>>> = OnceLock::new();
         let key = (mf.distribution == Distribution::Ggx, mf.alpha_u.to_bits(), mf.alpha_v.to_bits(), eta.to_bits());
         let tables = TABLES.get_or_init(Default::default);
-        let mut tables = tables.lock().unwrap_or_else(|e| e.into_inner());
-        tables.entry(key).or_insert_with(|| Box::leak(Box::new(CoatingTable::compute(mf, eta))))
+        let lock = || tables.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(&table) = lock().get(&key) {
+            return table;
+        }
+        // Made without holding the lock: `compute` runs on the thread pool, whose workers may be
+        // waiting for the lock in other tasks. Two threads making the same table at once keep
+        // the first (the same numbers), the other's copy is left unused.
+        let table: &'static CoatingTable = Box::leak(Box::new(CoatingTable::compute(mf, eta)));
+        lock().entry(key).or_insert(table)
     }
 }
 
