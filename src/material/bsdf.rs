@@ -654,9 +654,10 @@ impl<'a> Bsdf<'a> {
     }
 
     /// The BSDF as one Lambertian lobe, when it is one (unperturbed, lobe weights that do not
-    /// depend on `wo`): `eval`, `f` and `pdf` without their loop over lobes and dispatch, the
-    /// same numbers bit for bit. The usual diffuse surface takes this path in `eval`, `f` and
-    /// `pdf`, and VCM's merges keep it for every light vertex within the radius.
+    /// depend on `wo`): `eval`, `f`, `pdf`, and for an opaque one `sample` and `sample_lobe`,
+    /// without their loop over lobes, frame change and dispatch, the same numbers bit for bit
+    /// (`bsdf::tests`). The usual diffuse surface takes this path, and VCM's merges keep it for
+    /// every light vertex within the radius.
     #[inline(always)]
     pub fn one_lambert(&self) -> Option<OneLambert> {
         let lobes: &Lobes = &self.lobes;
