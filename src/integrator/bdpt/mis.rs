@@ -45,6 +45,15 @@
 //!   partial sums there are the s = 1 and s = 0 terms) and, inverted, where a camera-only
 //!   technique weighs the others.
 
+//! - Merges may be left to the camera path's first non-delta vertex alone
+//!   (`MisFactors::merge_first_only`, as SPPM gathers only there): a merge at a later camera
+//!   vertex then is no technique, the partial sums leave its terms out (`SubpathMis::scatter`'s
+//!   `merges_here`; a light subpath's vertices before its last are never that vertex, and the
+//!   last is only for light tracing) and the other techniques share its paths. On the bundled
+//!   caustic box the later merges held about half the indirect light with six times the
+//!   variance of the first vertex's (BENCHMARKS.md, 12-04): their randomness is the camera's
+//!   choice of direction, which more photons do not reduce.
+
 /// The power heuristic's exponent 2.
 #[inline(always)]
 pub fn mis(p: f64) -> f64 {
@@ -81,19 +90,28 @@ pub struct MisFactors {
     pub camera_only: f64,
     /// Direct light is the camera-only techniques' alone (see the module header).
     pub direct_by_camera: bool,
+    /// Merges only at the camera path's first non-delta vertex (see the module header).
+    pub merge_first_only: bool,
 }
 
 impl MisFactors {
     /// Bidirectional path tracing: connections only.
     pub fn connections_only(camera_scale: f64) -> Self {
-        MisFactors { vm: 0.0, vc: 0.0, camera_scale, camera_only: 1.0, direct_by_camera: true }
+        MisFactors { vm: 0.0, vc: 0.0, camera_scale, camera_only: 1.0, direct_by_camera: true, merge_first_only: false }
     }
 
     /// Vertex connection and merging with merge radius `radius` and `light_paths` light paths
     /// per iteration (the report's eq. 20 with one connection and `light_paths` merges).
     pub fn with_merging(radius: f64, light_paths: f64, camera_scale: f64) -> Self {
         let eta = std::f64::consts::PI * radius * radius * light_paths;
-        MisFactors { vm: mis(eta), vc: mis(1.0 / eta), camera_scale, camera_only: 1.0, direct_by_camera: true }
+        MisFactors {
+            vm: mis(eta),
+            vc: mis(1.0 / eta),
+            camera_scale,
+            camera_only: 1.0,
+            direct_by_camera: true,
+            merge_first_only: false,
+        }
     }
 
     /// The same when only a fraction `rho` in (0, 1] of the camera paths connect to a light
@@ -102,6 +120,20 @@ impl MisFactors {
     /// they weigh techniques of light subpaths against each other, whose counts all scale alike.
     pub fn with_light_fraction(self, rho: f64) -> Self {
         MisFactors { camera_only: mis(1.0 / rho), ..self }
+    }
+
+    /// Whether a merge at a vertex is a technique: every non-delta vertex, or under
+    /// `merge_first_only` the camera path's first non-delta one (`first`; a light subpath's
+    /// vertices before its last never are).
+    #[inline]
+    pub fn merges_at(&self, first: bool) -> bool {
+        !self.merge_first_only || first
+    }
+
+    /// `vm` for a merge at a vertex, 0 where merging is no technique (`merges_at`).
+    #[inline]
+    fn vm_at(&self, first: bool) -> f64 {
+        if self.merges_at(first) { self.vm } else { 0.0 }
     }
 }
 
@@ -152,9 +184,10 @@ impl SubpathMis {
     /// Scattering at the current vertex towards a direction at cosine `cos_out` to its
     /// geometric normal, sampled with density `pdf` (solid angle); `pdf_rev` is the density of
     /// the opposite sampling (the arriving direction sampled from the new one). A delta bounce
-    /// ignores both densities (see the module header). Eq. 34-36 and 53-55.
+    /// ignores both densities (see the module header). Eq. 34-36 and 53-55. `merges_here` says
+    /// whether a merge at the current vertex is a technique (`MisFactors::merges_at`).
     #[inline]
-    pub fn scatter(self, cos_out: f64, pdf: f64, pdf_rev: f64, delta: bool, f: &MisFactors) -> Self {
+    pub fn scatter(self, cos_out: f64, pdf: f64, pdf_rev: f64, delta: bool, f: &MisFactors, merges_here: bool) -> Self {
         let cos_out = cos_out.abs();
         if delta {
             let c = mis(cos_out);
@@ -165,10 +198,12 @@ impl SubpathMis {
         }
         let g = mis(cos_out / pdf);
         let rev = mis(pdf_rev);
+        // The merge at this vertex: vm relative to a connection, 1 relative to a merge.
+        let (vm, merge) = if merges_here { (f.vm, 1.0) } else { (0.0, 0.0) };
         SubpathMis {
             d_vcm: mis(1.0 / pdf),
-            d_vc: g * (self.d_vc * rev + self.d_vcm + f.vm),
-            d_vm: g * (self.d_vm * rev + self.d_vcm * f.vc + 1.0),
+            d_vc: g * (self.d_vc * rev + self.d_vcm + vm),
+            d_vm: g * (self.d_vm * rev + self.d_vcm * f.vc + merge),
         }
     }
 }
@@ -209,10 +244,11 @@ pub fn direct_light_sample_weight(bsdf_pdf: f64, direct_pdf: f64) -> f64 {
 /// distance, for a directional light 1, SmallVCM's conventions), `emission_pdf` the density
 /// of the light emitting towards the vertex (times its choice probability), `cos_camera` and
 /// `cos_light` the cosines at the vertex (geometric normal) and at the light (1 for lights
-/// without a surface).
+/// without a surface); `first` whether the vertex is the camera path's first non-delta one.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn light_sample_weight(
+    first: bool,
     cam: &SubpathMis,
     bsdf_pdf: f64,
     bsdf_rev_pdf: f64,
@@ -227,16 +263,19 @@ pub fn light_sample_weight(
     }
     let w_light = mis(bsdf_pdf / direct_pdf);
     let ratio = emission_pdf * cos_camera.abs() / (direct_pdf * cos_light.abs().max(MIN_COS));
-    let w_camera = mis(ratio) * (f.vm + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
+    let w_camera = mis(ratio) * (f.vm_at(first) + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
     1.0 / (w_light + 1.0 + w_camera)
 }
 
 /// Weight of connecting a camera vertex to a light vertex (eq. 40-41). `camera_pdf` is the
 /// camera vertex's BSDF density of the connection converted to area at the light vertex,
 /// `camera_rev_pdf` (solid angle) its density of the camera path's direction given the
-/// connection; `light_pdf` and `light_rev_pdf` the same at the light vertex.
+/// connection; `light_pdf` and `light_rev_pdf` the same at the light vertex. `first`: the
+/// camera vertex is the camera path's first non-delta one (the light vertex, behind it, is not).
+#[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn connection_weight(
+    first: bool,
     cam: &SubpathMis,
     light: &SubpathMis,
     camera_pdf: f64,
@@ -245,8 +284,8 @@ pub fn connection_weight(
     light_rev_pdf: f64,
     f: &MisFactors,
 ) -> f64 {
-    let w_light = mis(camera_pdf) * (f.vm + light.d_vcm + light.d_vc * mis(light_rev_pdf));
-    let w_camera = mis(light_pdf) * (f.vm + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf));
+    let w_light = mis(camera_pdf) * (f.vm_at(false) + light.d_vcm + light.d_vc * mis(light_rev_pdf));
+    let w_camera = mis(light_pdf) * (f.vm_at(first) + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf));
     1.0 / (w_light + 1.0 + w_camera)
 }
 
@@ -319,6 +358,8 @@ mod tests {
         rho: f64,
         /// `MisFactors::direct_by_camera`.
         direct_by_camera: bool,
+        /// `MisFactors::merge_first_only`.
+        merge_first_only: bool,
     }
 
     impl Path {
@@ -343,6 +384,7 @@ mod tests {
                 eta,
                 rho: 1.0,
                 direct_by_camera: false,
+                merge_first_only: false,
             };
             for i in 0..=n {
                 p.cos_prev[i] = r(0.05, 1.0);
@@ -369,10 +411,12 @@ mod tests {
                     camera_scale: 1.0,
                     camera_only: 1.0,
                     direct_by_camera: true,
+                    merge_first_only: true,
                 },
                 None => MisFactors::connections_only(1.0),
             };
-            let f = MisFactors { direct_by_camera: self.direct_by_camera, ..f };
+            let merge_first_only = self.merge_first_only && self.eta.is_some();
+            let f = MisFactors { direct_by_camera: self.direct_by_camera, merge_first_only, ..f };
             f.with_light_fraction(self.rho)
         }
 
@@ -457,10 +501,21 @@ mod tests {
             Some(if s >= 2 { p * self.rho } else { p })
         }
 
+        /// The path's first non-delta vertex seen from the camera (v_(n-1) is the first the
+        /// camera path reaches).
+        fn first_from_camera(&self) -> Option<usize> {
+            (1..self.n).rev().find(|&i| !self.delta[i])
+        }
+
+        /// Whether a merge at v_i is a technique (`MisFactors::merges_at`).
+        fn merges_at(&self, i: usize) -> bool {
+            !self.merge_first_only || self.first_from_camera() == Some(i)
+        }
+
         /// The density of merging at surface vertex i (light path to v_i, camera path to v_i).
         fn merge(&self, i: usize) -> Option<f64> {
             let eta = self.eta?;
-            if self.delta[i] {
+            if self.delta[i] || !self.merges_at(i) {
                 return None;
             }
             let mut p = eta * self.rho;
@@ -492,7 +547,14 @@ mod tests {
             );
             m = m.arrive(self.finite_light().then_some(self.d2[0]), self.cos_prev[1]);
             for i in 1..s - 1 {
-                m = m.scatter(self.cos_next[i], self.to_next[i], self.to_prev[i], self.delta[i], &f);
+                m = m.scatter(
+                    self.cos_next[i],
+                    self.to_next[i],
+                    self.to_prev[i],
+                    self.delta[i],
+                    &f,
+                    f.merges_at(false),
+                );
                 m = m.arrive(Some(self.d2[i]), self.cos_prev[i + 1]);
             }
             m
@@ -506,7 +568,7 @@ mod tests {
             let first = if self.orthographic { None } else { Some(self.d2[n - 1]) };
             m = m.arrive(first, self.cos_next[n - 1]);
             for j in (i + 1..n).rev() {
-                m = m.scatter(self.cos_prev[j], self.to_prev[j], self.to_next[j], self.delta[j], &f);
+                m = m.scatter(self.cos_prev[j], self.to_prev[j], self.to_next[j], self.delta[j], &f, self.merges_at(j));
                 if j - 1 > i || arrive {
                     m = m.arrive(Some(self.d2[j - 1]), self.cos_next[j - 1]);
                 }
@@ -567,6 +629,7 @@ mod tests {
                     };
                     let bsdf = if self.delta_light() { 0.0 } else { self.to_prev[1] };
                     light_sample_weight(
+                        self.first_from_camera() == Some(1),
                         &cam,
                         bsdf,
                         self.to_next[1],
@@ -585,6 +648,7 @@ mod tests {
                     let light = self.light_subpath(s);
                     let cam = self.camera_subpath(x, true);
                     connection_weight(
+                        self.first_from_camera() == Some(x),
                         &cam,
                         &light,
                         self.to_prev[x] * self.cos_next[y] / self.d2[y],
@@ -624,6 +688,9 @@ mod tests {
             // Direct light left to the camera-only techniques in the odd trials (every light kind
             // and path length meets both).
             path.direct_by_camera = trial % 2 == 1;
+            // Merges at the camera path's first non-delta vertex only, in half the trials with
+            // merging (trials of both parities of the rule above).
+            path.merge_first_only = trial % 7 < 4;
             let t = path.techniques();
             let expected = path.expected_weights(&t);
             let sum: f64 = t.iter().map(|(_, _, w)| w).sum();

@@ -401,6 +401,7 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
     let rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, ds.wi, Transport::Importance, ctx.wl.as_ref());
     let pick_e = scene.light_picker.prob(li) as f64;
     let w = mis::light_sample_weight(
+        x.layer.before_x(),
         &x.mis,
         bsdf_pdf,
         rev as f64,
@@ -454,6 +455,7 @@ pub fn connect(
     let x_rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, d, Transport::Importance, wl) as f64;
     let y_rev = reverse_pdf(scene, &y.hit, y_bsdf, y.wo, -d, Transport::Radiance, wl) as f64;
     let w = mis::connection_weight(
+        x.layer.before_x(),
         &x.mis,
         &y.mis,
         pdf_x as f64 * gy / d2,

@@ -112,7 +112,7 @@ pub fn trace_light_path<'a>(
         } else {
             strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Radiance, ctx.wl.as_ref())
         };
-        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
+        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f, f.merges_at(false));
         beta *= s.weight * bsdf.shading_normal_correction(wo, s.wi);
         delta_only &= delta;
         if depth >= ROULETTE_DEPTH {
@@ -235,7 +235,8 @@ pub fn trace_camera_path<'a>(
         } else {
             strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Importance, ctx.wl.as_ref())
         };
-        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f);
+        mis =
+            arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f, f.merges_at(layer.before_x()));
         beta *= s.weight;
         layer.bounce(delta);
         if depth >= ROULETTE_DEPTH {

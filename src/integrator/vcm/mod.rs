@@ -94,6 +94,11 @@ pub struct VcmConfig {
     pub light_divisor: Option<u32>,
     /// Spectral mode (`crate::spectrum::lanes`; the module header); RGB otherwise.
     pub spectral: bool,
+    /// Merge only at each camera path's first non-delta vertex (`MisFactors::merge_first_only`).
+    /// Off: measured on 12-04 (BENCHMARKS.md), it lowered the caustic box's error 0.0085 ->
+    /// 0.0077 and the materials scene's 0.0106 -> 0.0097 but raised the sky-lit scene's 0.0214
+    /// -> 0.0256, so it waits for a per-scene choice.
+    pub merge_first_only: bool,
 }
 
 impl VcmConfig {
@@ -106,6 +111,7 @@ impl VcmConfig {
             alpha: DEFAULT_ALPHA,
             light_divisor: None,
             spectral: desc.spectral,
+            merge_first_only: false,
         }
     }
 
@@ -420,6 +426,7 @@ impl Vcm {
         let light_paths = pixels.div_ceil(u64::from(m));
         let factors = mis::MisFactors::with_merging(radius as f64, pixels as f64, full / pixels.max(1) as f64)
             .with_light_fraction(1.0 / f64::from(m));
+        let factors = mis::MisFactors { merge_first_only: self.config.merge_first_only, ..factors };
         let mut ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
         ctx.light_scale = (full / light_paths.max(1) as f64) as f32;
         ctx.connection_scale = m as f32;
@@ -633,6 +640,10 @@ impl MergeVertex {
 /// each merge weighted against the connections and other merges that make the same path),
 /// adding the estimate by layer to `layers`.
 fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: f32, layers: &mut Layers) -> u32 {
+    // Merges only at the camera path's first non-delta vertex (`MisFactors::merge_first_only`).
+    if !ctx.factors.merges_at(x.layer.before_x()) {
+        return 0;
+    }
     let r2 = radius * radius;
     let mut candidates = 0;
     let p = x.hit.p;
