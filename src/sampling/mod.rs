@@ -14,7 +14,7 @@ pub use sampler::{PixelSampler, Sampler, SamplerKind};
 
 /// A fast, well-mixed 64-bit hash step (the splitmix64 / murmur3 finaliser).
 #[inline]
-pub fn mix64(mut x: u64) -> u64 {
+pub const fn mix64(mut x: u64) -> u64 {
     x ^= x >> 30;
     x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
     x ^= x >> 27;
@@ -43,7 +43,14 @@ impl SeedPrefix {
     /// The prefix followed by `parts`.
     #[inline]
     pub fn then(self, parts: &[u64]) -> Self {
-        SeedPrefix(parts.iter().fold(self.0, |h, &p| mix64(h ^ mix64(p.wrapping_add(0x632b_e59b_d9b4_e019)))))
+        parts.iter().fold(self, |h, &p| h.then_mixed(part_mix(p)))
+    }
+
+    /// The prefix followed by a part already put through `part_mix` (a caller that appends the
+    /// same part to many prefixes mixes it once).
+    #[inline(always)]
+    pub const fn then_mixed(self, mixed: u64) -> Self {
+        SeedPrefix(mix64(self.0 ^ mixed))
     }
 
     /// `hash_seed` of the prefix's parts followed by `parts`.
@@ -51,6 +58,12 @@ impl SeedPrefix {
     pub fn hash(self, parts: &[u64]) -> u64 {
         self.then(parts).0
     }
+}
+
+/// A part of a seed list as `SeedPrefix::then` mixes it before joining it to the prefix.
+#[inline(always)]
+pub const fn part_mix(p: u64) -> u64 {
+    mix64(p.wrapping_add(0x632b_e59b_d9b4_e019))
 }
 
 /// PCG32's multiplier (O'Neill 2014), also that of the seeding generator below.

@@ -7,7 +7,7 @@
 //! how samples are split into passes.
 
 use super::sobol::sobol_pair;
-use super::{Rng32, SeedPrefix, hash_seed, permutation_element};
+use super::{Rng32, SeedPrefix, hash_seed, part_mix, permutation_element};
 use glam::Vec2;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
@@ -44,6 +44,8 @@ pub struct Sampler {
     /// The scramble of the pixel pair (`scramble(0)`), which a `PixelSampler` keeps from one
     /// sample of the pixel to the next.
     pixel_scramble: u32,
+    /// `part_mix` of the sample's group (`group_of`), for `scramble_mixed`.
+    group_mix: u64,
 }
 
 /// Sobol dimensions available per seed; sample indices beyond 2^16 move on to a fresh seed.
@@ -60,12 +62,15 @@ pub struct PixelSampler {
     /// The set (jittered) or block (Sobol) whose pixel-pair scramble is `scramble`.
     group: Option<u32>,
     scramble: u32,
+    /// `part_mix` of the group (`scramble_mixed`).
+    group_mix: u64,
 }
 
 impl PixelSampler {
     #[inline]
     pub fn new(kind: SamplerKind, pixel_seed: u64, strata: u32) -> Self {
-        PixelSampler { kind, pixel: SeedPrefix::new(&[pixel_seed]), strata: strata.max(1), group: None, scramble: 0 }
+        let pixel = SeedPrefix::new(&[pixel_seed]);
+        PixelSampler { kind, pixel, strata: strata.max(1), group: None, scramble: 0, group_mix: 0 }
     }
 
     /// The sampler of sample `index` of this pixel.
@@ -75,8 +80,9 @@ impl PixelSampler {
         if self.group != Some(group) {
             self.group = Some(group);
             self.scramble = scramble(self.pixel, 0, group);
+            self.group_mix = part_mix(group as u64);
         }
-        Sampler::with_scramble(self.kind, self.pixel, index, self.strata, self.scramble)
+        Sampler::with_scramble(self.kind, self.pixel, index, self.strata, self.scramble, self.group_mix)
     }
 }
 
@@ -100,6 +106,26 @@ fn scramble(pixel: SeedPrefix, pair: u32, group: u32) -> u32 {
     (pixel.hash(&[pair as u64, group as u64]) >> 32) as u32
 }
 
+/// `scramble` with the group's part mixed already (`part_mix(group)`, kept by the sampler) and
+/// the pair's read from `PAIR_MIX` when it is there: two of its four mixing rounds, each a chain
+/// of dependent multiplies, leave the path of every pair.
+#[inline(always)]
+fn scramble_mixed(pixel: SeedPrefix, pair: u32, group_mix: u64) -> u32 {
+    let pair_mix = PAIR_MIX.get(pair as usize).copied().unwrap_or_else(|| part_mix(pair as u64));
+    (pixel.then_mixed(pair_mix).then_mixed(group_mix).0 >> 32) as u32
+}
+
+/// `part_mix` of the pair numbers a path uses (beyond them it is computed).
+static PAIR_MIX: [u64; 64] = {
+    let mut t = [0u64; 64];
+    let mut p = 0;
+    while p < 64 {
+        t[p] = part_mix(p as u64);
+        p += 1;
+    }
+    t
+};
+
 impl Sampler {
     /// The sampler for sample `index` of pixel (x, y). `strata` is N for N x N jittered strata;
     /// indices k N^2 .. (k+1) N^2 - 1 form the k-th stratified set.
@@ -115,8 +141,16 @@ impl Sampler {
     }
 
     #[inline]
-    fn with_scramble(kind: SamplerKind, pixel: SeedPrefix, index: u32, strata: u32, pixel_scramble: u32) -> Self {
-        Sampler { kind, rng: Rng32::new(pixel.hash(&[index as u64])), pixel, index, strata, pair: 0, pixel_scramble }
+    fn with_scramble(
+        kind: SamplerKind,
+        pixel: SeedPrefix,
+        index: u32,
+        strata: u32,
+        pixel_scramble: u32,
+        group_mix: u64,
+    ) -> Self {
+        let rng = Rng32::new(pixel.hash(&[index as u64]));
+        Sampler { kind, rng, pixel, index, strata, pair: 0, pixel_scramble, group_mix }
     }
 
     /// Position within the pixel, in [0,1)^2.
@@ -179,11 +213,7 @@ impl Sampler {
         if self.kind == SamplerKind::Jittered && !stratified_pair {
             return self.rng.uniform2();
         }
-        let scramble = if pair == 0 {
-            self.pixel_scramble
-        } else {
-            scramble(self.pixel, pair, group_of(self.kind, self.index, self.strata))
-        };
+        let scramble = if pair == 0 { self.pixel_scramble } else { scramble_mixed(self.pixel, pair, self.group_mix) };
         match self.kind {
             SamplerKind::Jittered => {
                 // Samples come in sets of N^2, one per stratum. Within a set, each pair visits
@@ -220,6 +250,19 @@ const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The scramble with premixed parts is the scramble, inside the table of pair parts and
+    /// beyond it.
+    #[test]
+    fn premixed_scrambles_are_the_scrambles() {
+        let pixel = SeedPrefix::new(&[Sampler::pixel_seed(9, 3, 4)]);
+        for group in [0u32, 1, 7, 1 << 20] {
+            for pair in (0..200).chain([u32::MAX]) {
+                let mixed = scramble_mixed(pixel, pair, part_mix(group as u64));
+                assert_eq!(mixed, scramble(pixel, pair, group), "pair {pair} group {group}");
+            }
+        }
+    }
 
     /// Skipping the lens sample leaves every later sample as drawing it does.
     #[test]
