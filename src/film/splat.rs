@@ -16,6 +16,7 @@ use super::filter::FilterTable;
 use super::fixed::{FixedRgb, add_rgb, to_fixed};
 use super::{Film, Layers};
 use crate::math::{Color, Vec2};
+use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Most splats a pixel may receive between drains.
@@ -53,10 +54,14 @@ impl ExactSum {
         }
     }
 
-    /// The sum so far, and zero for the next.
+    /// The sum so far, and zero for the next. Only digits read as nonzero are swapped: most
+    /// are zero (the negative ones, and the top ones), and a swap is a locked instruction where
+    /// a load is a plain one. A digit added to while this runs keeps the addition for the next
+    /// take either way; callers take when no splats arrive.
     fn take(&self) -> i128 {
+        let take = |d: &AtomicU64| if d.load(Ordering::Relaxed) == 0 { 0 } else { d.swap(0, Ordering::Relaxed) };
         let value = |digits: &[AtomicU64; 3]| -> i128 {
-            digits.iter().enumerate().map(|(k, d)| (d.swap(0, Ordering::Relaxed) as i128) << (32 * k)).sum()
+            digits.iter().enumerate().map(|(k, d)| (take(d) as i128) << (32 * k)).sum()
         };
         value(&self.pos) - value(&self.neg)
     }
@@ -168,7 +173,9 @@ impl SplatFilm {
     /// Moves the splats into `film`'s exact sums (the total and, when kept, each layer), leaving
     /// this film empty. `film` is the image's film (same size and layers).
     pub fn drain_into(&self, film: &mut Film) {
-        for tile in &mut film.tiles {
+        // Tiles on the thread pool: each takes its own pixels' sums (an image's worth of locked
+        // swaps ran on one thread between every two passes of VCM).
+        film.tiles.par_iter_mut().for_each(|tile| {
             for j in 0..tile.height {
                 for i in 0..tile.width {
                     let (x, y) = (tile.x0 + i, tile.y0 + j);
@@ -187,7 +194,7 @@ impl SplatFilm {
                     }
                 }
             }
-        }
+        });
     }
 
     /// Forgets every splat since the last drain (an interrupted pass).
