@@ -459,7 +459,8 @@ impl Vcm {
     }
 
     /// Traces the light subpaths of iteration `it`, splatting their connections to the camera
-    /// (drained into `sums`) and keeping their vertices in `paths`.
+    /// (drained into `sums`, all but the last batch's, which the drain after the camera pass
+    /// takes) and keeping their vertices in `paths`.
     #[allow(clippy::too_many_arguments)]
     fn light_pass<'a>(
         &self,
@@ -531,7 +532,12 @@ impl Vcm {
                 paths.vertices.extend(vertices);
                 driver.record(&stats, bad, 0);
             }
-            splats.drain_into(sums);
+            // The last batch's splats wait for the camera pass's drain (`iteration`): one drain
+            // of the image per iteration instead of two. A pixel then receives at most
+            // `DRAIN_PATHS` light paths' splats and one camera path's value between drains.
+            if batch_end < pixels {
+                splats.drain_into(sums);
+            }
             batch = batch_end;
         }
         Some(rays)
