@@ -41,7 +41,7 @@ pub struct Sampler {
     strata: u32,
     /// Which 2-D pair is next (0 = pixel, 1 = lens, ...).
     pair: u32,
-    /// The scramble of the pixel pair (`scramble(0)`), which a `PixelSampler` keeps from one
+    /// The scramble of the pixel pair (`scramble_mixed` of pair 0), which a `PixelSampler` keeps from one
     /// sample of the pixel to the next.
     pixel_scramble: u32,
     /// `part_mix` of the sample's group (`group_of`), for `scramble_mixed`.
@@ -79,8 +79,8 @@ impl PixelSampler {
         let group = group_of(self.kind, index, self.strata);
         if self.group != Some(group) {
             self.group = Some(group);
-            self.scramble = scramble(self.pixel, 0, group);
             self.group_mix = part_mix(group as u64);
+            self.scramble = scramble_mixed(self.pixel, 0, self.group_mix);
         }
         Sampler::with_scramble(self.kind, self.pixel, index, self.strata, self.scramble, self.group_mix)
     }
@@ -100,15 +100,11 @@ fn group_of(kind: SamplerKind, index: u32, strata: u32) -> u32 {
     }
 }
 
-/// The seed of pair `pair`'s stratum permutation (jittered) or Sobol scramble in `group`.
-#[inline]
-fn scramble(pixel: SeedPrefix, pair: u32, group: u32) -> u32 {
-    (pixel.hash(&[pair as u64, group as u64]) >> 32) as u32
-}
-
-/// `scramble` with the group's part mixed already (`part_mix(group)`, kept by the sampler) and
-/// the pair's read from `PAIR_MIX` when it is there: two of its four mixing rounds, each a chain
-/// of dependent multiplies, leave the path of every pair.
+/// The seed of pair `pair`'s stratum permutation (jittered) or Sobol scramble in its group:
+/// `hash(pixel, pair, group)` (the tests' `scramble`), with the group's part mixed already
+/// (`part_mix(group)`, kept by the sampler) and the pair's read from `PAIR_MIX` when it is
+/// there: two of the hash's four mixing rounds, each a chain of dependent multiplies, leave the
+/// path of every pair.
 #[inline(always)]
 fn scramble_mixed(pixel: SeedPrefix, pair: u32, group_mix: u64) -> u32 {
     let pair_mix = PAIR_MIX.get(pair as usize).copied().unwrap_or_else(|| part_mix(pair as u64));
@@ -250,6 +246,12 @@ const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The definition `scramble_mixed` computes faster: the pixel's seed list followed by the
+    /// pair and the group, hashed.
+    fn scramble(pixel: SeedPrefix, pair: u32, group: u32) -> u32 {
+        (pixel.hash(&[pair as u64, group as u64]) >> 32) as u32
+    }
 
     /// The scramble with premixed parts is the scramble, inside the table of pair parts and
     /// beyond it.
