@@ -254,3 +254,46 @@ fn bump_maps_normal_maps_and_masks_agree_with_the_path_tracer() {
     // Light through the veil's transparent part, which light paths and shadow rays pass alike.
     agrees_with(IntegratorKind::Path, "mask", &WRAPPED.replace("VEIL", veil), (1024, 256), 0.02);
 }
+
+/// An orthographic camera looks at a glass plane at 45 degrees, whose reflection is a large area
+/// light of radiance 5 and whose refraction leads into an empty, dark scene.
+const GLASS_MIRROR: &str = r#"
+[render]
+width = 12
+height = 12
+max_depth = 4
+[camera]
+projection = "orthographic"
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+view_height = 2
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[[objects]]
+type = "quad"
+corner = [-3, -3, 3]
+edge1 = [6, 0, 0]
+edge2 = [0, 6, -6]
+material = "glass"
+[[lights]]
+type = "area"
+corner = [-10, 3, -10]
+edge1 = [20, 0, 0]
+edge2 = [0, 0, 20]
+intensity = 5
+"#;
+
+#[test]
+fn a_light_reflected_in_glass_is_seen_by_every_camera_sample() {
+    // Every camera path splits at the glass (`bdpt::subpath::GLASS_SPLITS`): each pixel is
+    // F(45 degrees) x 5 with one sample, where picking reflection by chance would give 0 or 5.
+    let expected = caustic::material::fresnel::fresnel_dielectric(std::f32::consts::FRAC_1_SQRT_2, 1.5) * 5.0;
+    for integrator in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
+        let o = Options { integrator: Some(integrator), spp: Some(1), seed: Some(3), ..Default::default() };
+        let img = render(&common::scene_with(GLASS_MIRROR, &o), 2).image;
+        for c in &img.pixels {
+            assert!((c.g() - expected).abs() < 1e-4 * expected, "{integrator:?}: {} vs F L = {expected}", c.g());
+        }
+    }
+}

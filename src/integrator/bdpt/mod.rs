@@ -14,6 +14,9 @@
 //! need it weigh nothing beyond (the camera paths and light samples carry that light alone).
 //! Caustics of point lights seen directly come from light tracing; seen through a mirror or glass
 //! (L S+ D S+ E) no technique of bidirectional path tracing can make them (vertex merging can).
+//! Paths that only the camera can sample, such as a small light's highlight on glass, are made
+//! less noisy by splitting camera paths at glass: both the reflection and the refraction are
+//! traced at the first few glass vertices (`subpath::GLASS_SPLITS`), as in VCM.
 //!
 //! Determinism and splats: sample index i of image pixel k traces its camera path with the
 //! pixel's sampler (the same camera rays as the path tracer) and its light path with a stream

@@ -229,6 +229,55 @@ fn dielectric_reflects_and_transmits_by_fresnel() {
     assert!((s.unwrap().weight.r() - 1.0 / 2.25).abs() < 1e-4);
 }
 
+#[test]
+fn a_dielectric_splits_into_its_fresnel_weighted_directions() {
+    for wo in wos() {
+        for eta in [1.5f32, 1.0 / 1.5, 1.33] {
+            let glass = Dielectric { eta, r: Color::new(0.9, 0.8, 0.7), t: Color::new(0.6, 0.7, 0.8) };
+            let b = single(Bxdf::Dielectric(glass), wo);
+            for mode in [Transport::Radiance, Transport::Importance] {
+                let [a, t] = b.dielectric_split(wo, mode).expect("one dielectric lobe splits");
+                let f = fresnel_dielectric(wo.z, eta);
+                let scale = if mode == Transport::Radiance { 1.0 / (eta * eta) } else { 1.0 };
+                if f >= 1.0 {
+                    // Total internal reflection: reflection alone, with the whole weight.
+                    let a = a.expect("reflection");
+                    assert!(t.is_none() && a.weight.abs_diff_eq(glass.r, 1e-6));
+                    continue;
+                }
+                let (a, t) = (a.expect("reflection"), t.expect("refraction"));
+                assert!(a.wi.abs_diff_eq(Vec3::new(-wo.x, -wo.y, wo.z), 1e-6) && !a.flags.is_transmission());
+                assert!(a.weight.abs_diff_eq(glass.r * f, 1e-6), "{} vs F r {}", a.weight, glass.r * f);
+                assert!(t.flags.is_transmission() && t.wi.z * wo.z < 0.0);
+                assert!(t.weight.abs_diff_eq(glass.t * ((1.0 - f) * scale), 1e-6), "{}", t.weight);
+                // Snell: the tangential parts scale by 1 / eta.
+                let tangential = |v: Vec3| (v.x * v.x + v.y * v.y).sqrt();
+                assert!((tangential(t.wi) - tangential(wo) / eta).abs() < 1e-5);
+                // The split is the mean of the one-sample choice.
+                let mut rng = Rng32::new(3);
+                let n = 200_000;
+                let mut mean = Color::ZERO;
+                for _ in 0..n {
+                    mean += b.sample(wo, rng.uniform(), rng.uniform2(), mode).map_or(Color::ZERO, |s| s.weight);
+                }
+                mean /= n as f32;
+                let split = a.weight + t.weight;
+                assert!((mean - split).abs().max_element() < 3e-3, "{mean} vs {split}");
+            }
+        }
+        // Grazing from inside dense glass: total internal reflection.
+        let inside = Vec3::new(0.95, 0.0, (1.0f32 - 0.95 * 0.95).sqrt());
+        let b = single(Bxdf::Dielectric(Dielectric::clear(1.0 / 1.5)), inside);
+        let [a, t] = b.dielectric_split(inside, Transport::Radiance).unwrap();
+        assert!(t.is_none() && a.is_some_and(|a| a.weight.abs_diff_eq(Color::ONE, 1e-6)));
+        // Anything but one dielectric lobe does not split.
+        let mirror = single(Bxdf::Mirror(Mirror { r: Color::ONE }), wo);
+        assert!(mirror.dielectric_split(wo, Transport::Radiance).is_none());
+        let transparent = classic(ClassicKind::Transparent, 0.0, 0.0, 0.3, 0.6, wo);
+        assert!(transparent.dielectric_split(wo, Transport::Radiance).is_none());
+    }
+}
+
 fn classic_material(m: &Classic, wo: Vec3) -> Bsdf<'static> {
     let hit = crate::geometry::Hit {
         t: 1.0,
