@@ -284,16 +284,123 @@ edge2 = [0, 0, 20]
 intensity = 5
 "#;
 
+/// `GLASS_MIRROR` with the light behind the glass instead, facing the refracted rays, and nothing
+/// in the reflection.
+const GLASS_WINDOW: &str = r#"
+[render]
+width = 12
+height = 12
+max_depth = 4
+[camera]
+projection = "orthographic"
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+view_height = 2
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[[objects]]
+type = "quad"
+corner = [-3, -3, 3]
+edge1 = [6, 0, 0]
+edge2 = [0, 6, -6]
+material = "glass"
+[[lights]]
+type = "area"
+corner = [-20, -20, -4]
+edge1 = [40, 0, 0]
+edge2 = [0, 40, 0]
+intensity = 5
+"#;
+
 #[test]
-fn a_light_reflected_in_glass_is_seen_by_every_camera_sample() {
+fn a_light_reflected_in_glass_or_seen_through_it_is_met_by_every_camera_sample() {
     // Every camera path splits at the glass (`bdpt::subpath::GLASS_SPLITS`): each pixel is
-    // F(45 degrees) x 5 with one sample, where picking reflection by chance would give 0 or 5.
-    let expected = caustic::material::fresnel::fresnel_dielectric(std::f32::consts::FRAC_1_SQRT_2, 1.5) * 5.0;
+    // F(45 degrees) x 5 in the mirror case with one sample, where picking reflection by chance
+    // would give 0 or 5; through the glass it is (1 - F) x 5 / 1.5^2 (radiance entering glass),
+    // from the branch that waits for the reflection's to end.
+    let f = caustic::material::fresnel::fresnel_dielectric(std::f32::consts::FRAC_1_SQRT_2, 1.5);
+    for (name, text, expected) in [("mirror", GLASS_MIRROR, f * 5.0), ("window", GLASS_WINDOW, (1.0 - f) * 5.0 / 2.25)]
+    {
+        for integrator in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
+            let o = Options { integrator: Some(integrator), spp: Some(1), seed: Some(3), ..Default::default() };
+            let img = render(&common::scene_with(text, &o), 2).image;
+            for c in &img.pixels {
+                let g = c.g();
+                assert!((g - expected).abs() < 1e-4 * expected, "{name}, {integrator:?}: {g} vs {expected}");
+            }
+        }
+    }
+}
+
+/// An orthographic camera's rays meet two mirrors that turn them back along -z, then a glass
+/// plane at 45 degrees whose reflection is a large area light of radiance 5: the light's
+/// reflection in the glass is the camera path's third bounce, where Russian roulette begins.
+const PERISCOPE: &str = r#"
+[render]
+width = 12
+height = 12
+max_depth = 6
+[camera]
+projection = "orthographic"
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+view_height = 2
+[materials.mirror]
+type = "reflective"
+color = [1, 1, 1]
+kd = 0
+ka = 0
+kr = 1
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[[objects]]
+type = "quad"
+corner = [-3, -1.5, 1.5]
+edge1 = [6, 0, 0]
+edge2 = [0, 3, -3]
+material = "mirror"
+[[objects]]
+type = "quad"
+corner = [-3, 1.5, 1.5]
+edge1 = [0, 3, -3]
+edge2 = [6, 0, 0]
+material = "mirror"
+[[objects]]
+type = "quad"
+corner = [-3, 1.5, -4.5]
+edge1 = [6, 0, 0]
+edge2 = [0, 3, -3]
+material = "glass"
+[[lights]]
+type = "area"
+corner = [-20, 10, -20]
+edge1 = [40, 0, 0]
+edge2 = [0, 0, 40]
+intensity = 5
+"#;
+
+#[test]
+fn a_split_branch_is_not_ended_by_roulette_for_its_small_weight() {
+    // The reflection branch weighs F = 0.05 after the split. Roulette from the third bounce on
+    // reads the throughput over the split's factor, as if the branch had been picked by chance,
+    // so it survives with probability 0.95 (the cap) and is worth F x 5 / 0.95; read from the
+    // weight alone it would survive 5% of the time and be 20 times brighter.
+    let f = caustic::material::fresnel::fresnel_dielectric(std::f32::consts::FRAC_1_SQRT_2, 1.5);
+    let survivor = f * 5.0 / 0.95;
     for integrator in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
         let o = Options { integrator: Some(integrator), spp: Some(1), seed: Some(3), ..Default::default() };
-        let img = render(&common::scene_with(GLASS_MIRROR, &o), 2).image;
+        let img = render(&common::scene_with(PERISCOPE, &o), 2).image;
+        let mut survived = 0;
         for c in &img.pixels {
-            assert!((c.g() - expected).abs() < 1e-4 * expected, "{integrator:?}: {} vs F L = {expected}", c.g());
+            let g = c.g();
+            if g != 0.0 {
+                assert!((g - survivor).abs() < 1e-4 * survivor, "{integrator:?}: {g} vs {survivor}");
+                survived += 1;
+            }
         }
+        // 95% of 144 pixels expected (binomial standard deviation 2.6 pixels).
+        assert!(survived >= 122, "{integrator:?}: {survived} of {} camera paths survived", img.pixels.len());
     }
 }

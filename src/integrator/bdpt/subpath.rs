@@ -139,9 +139,11 @@ pub fn trace_light_path<'a>(
 /// inside it (E S S S L, three splits), is then met by every camera sample that reaches the
 /// glass, not by the few that happen to pick reflection; no light subpath can find these paths.
 /// Later glass is crossed by the usual choice, so one camera sample costs at most
-/// `GLASS_SPLITS + 1` walks. Measured on `scenes/16-glossy-caustics.toml` (VCM, 10 s, six
-/// seeds; BENCHMARKS.md): RMSE 0.112 without splits, 0.103 with one, 0.101 with two, 0.034 with
-/// three, 0.033 with six.
+/// `GLASS_SPLITS + 1` walks. The walks run depth first, the reflection before the refraction;
+/// Russian roulette reads a branch's throughput without the split's factor while it stays on
+/// mirrors and glass (`Walk::roulette_scale`). Measured on `scenes/16-glossy-caustics.toml`
+/// (VCM, 10 s, six seeds; BENCHMARKS.md): RMSE 0.112 without splits, 0.103 with one, 0.101
+/// with two, 0.034 with three, 0.033 with six.
 pub const GLASS_SPLITS: usize = 3;
 
 /// Where a camera subpath's walk stands between two vertices: what a split at glass keeps of
@@ -156,6 +158,13 @@ struct Walk {
     last_p: crate::math::Vec3,
     first: bool,
     depth: u32,
+    /// What Russian roulette multiplies the throughput by before reading it: the inverse of the
+    /// split factors (F or 1 - F, and the refraction's 1 / eta^2) the walk took since its last
+    /// diffuse or glossy bounce, so that a branch on mirrors and glass is ended as often as
+    /// the single walk that picked it by chance would be, not as often as its small weight
+    /// says (a branch of weight F = 0.04 would otherwise end 96% of the time from the third
+    /// bounce on, and the highlight behind it be a coin toss again).
+    roulette_scale: f32,
 }
 
 /// Traces the camera subpath of `ray` (its numbers from `sampler`, which made the ray) and
@@ -188,13 +197,24 @@ pub fn trace_camera_path<'a>(
         last_p: ray.o,
         first: true,
         depth: 0,
+        roulette_scale: 1.0,
     };
     // Branches waiting for their turn (each split leaves one), taken last first.
     let mut splits = 0;
     let mut pending: [Option<Walk>; GLASS_SPLITS] = [None; GLASS_SPLITS];
     let mut waiting = 0;
     loop {
-        let Walk { mut ray, mut beta, mut mis, mut wl, mut layer, mut last_p, mut first, mut depth } = walk;
+        let Walk {
+            mut ray,
+            mut beta,
+            mut mis,
+            mut wl,
+            mut layer,
+            mut last_p,
+            mut first,
+            mut depth,
+            mut roulette_scale,
+        } = walk;
         let mut crossings = 0usize;
         loop {
             stats.rays += 1;
@@ -270,10 +290,14 @@ pub fn trace_camera_path<'a>(
                             last_p: hit.p,
                             first: false,
                             depth,
+                            roulette_scale: roulette_scale / b.weight.max_element(),
                         });
                         waiting += 1;
                     }
                     splits += 1;
+                    if let Some(w) = a.map(|a| a.weight.max_element()).filter(|w| *w > 0.0) {
+                        roulette_scale /= w;
+                    }
                     a
                 }
                 None => bsdf.sample(wo, uc, u, Transport::Radiance),
@@ -306,8 +330,13 @@ pub fn trace_camera_path<'a>(
             );
             beta *= s.weight;
             layer.bounce(delta);
+            if !delta {
+                // Past mirrors and glass the walk is ended by its own throughput again: a split
+                // branch that reached a diffuse or glossy surface carries little light on.
+                roulette_scale = 1.0;
+            }
             if depth >= ROULETTE_DEPTH {
-                let survive = beta.max_element().min(0.95);
+                let survive = (beta.max_element() * roulette_scale).min(0.95);
                 if sampler.rng().uniform() >= survive {
                     break;
                 }
