@@ -255,27 +255,27 @@ fn bump_maps_normal_maps_and_masks_agree_with_the_path_tracer() {
     agrees_with(IntegratorKind::Path, "mask", &WRAPPED.replace("VEIL", veil), (1024, 256), 0.02);
 }
 
-/// An orthographic camera looks at a glass plane at 45 degrees, whose reflection is a large area
-/// light of radiance 5 and whose refraction leads into an empty, dark scene.
-const GLASS_MIRROR: &str = r#"
-[render]
-width = 12
-height = 12
-max_depth = 4
-[camera]
-projection = "orthographic"
-eye = [0, 0, 5]
-look_at = [0, 0, 0]
-view_height = 2
-[materials.glass]
-type = "dielectric"
-ior = 1.5
+/// A 12 x 12 image by an orthographic camera looking down -z from z = 5, two units high, and
+/// clear glass; `parts` adds the objects and lights.
+fn orthographic_glass(parts: &str) -> String {
+    let header = "[render]\nwidth = 12\nheight = 12\nmax_depth = 6\n[camera]\nprojection = \"orthographic\"\n\
+                  eye = [0, 0, 5]\nlook_at = [0, 0, 0]\nview_height = 2\n[materials.glass]\ntype = \"dielectric\"\nior = 1.5\n";
+    format!("{header}{parts}")
+}
+
+/// A glass plane at 45 degrees to the view (its normal (0, 1, 1) / sqrt 2), reflecting the rays
+/// to +y and refracting them on into the empty, dark scene.
+const GLASS_PLANE: &str = r#"
 [[objects]]
 type = "quad"
 corner = [-3, -3, 3]
 edge1 = [6, 0, 0]
 edge2 = [0, 6, -6]
 material = "glass"
+"#;
+
+/// A large area light of radiance 5 above the glass plane, facing down: its reflection.
+const LIGHT_ABOVE: &str = r#"
 [[lights]]
 type = "area"
 corner = [-10, 3, -10]
@@ -284,27 +284,8 @@ edge2 = [0, 0, 20]
 intensity = 5
 "#;
 
-/// `GLASS_MIRROR` with the light behind the glass instead, facing the refracted rays, and nothing
-/// in the reflection.
-const GLASS_WINDOW: &str = r#"
-[render]
-width = 12
-height = 12
-max_depth = 4
-[camera]
-projection = "orthographic"
-eye = [0, 0, 5]
-look_at = [0, 0, 0]
-view_height = 2
-[materials.glass]
-type = "dielectric"
-ior = 1.5
-[[objects]]
-type = "quad"
-corner = [-3, -3, 3]
-edge1 = [6, 0, 0]
-edge2 = [0, 6, -6]
-material = "glass"
+/// A large area light of radiance 5 behind the glass plane, facing the refracted rays.
+const LIGHT_BEHIND: &str = r#"
 [[lights]]
 type = "area"
 corner = [-20, -20, -4]
@@ -320,8 +301,9 @@ fn a_light_reflected_in_glass_or_seen_through_it_is_met_by_every_camera_sample()
     // would give 0 or 5; through the glass it is (1 - F) x 5 / 1.5^2 (radiance entering glass),
     // from the branch that waits for the reflection's to end.
     let f = caustic::material::fresnel::fresnel_dielectric(std::f32::consts::FRAC_1_SQRT_2, 1.5);
-    for (name, text, expected) in [("mirror", GLASS_MIRROR, f * 5.0), ("window", GLASS_WINDOW, (1.0 - f) * 5.0 / 2.25)]
-    {
+    let mirror = orthographic_glass(&format!("{GLASS_PLANE}{LIGHT_ABOVE}"));
+    let window = orthographic_glass(&format!("{GLASS_PLANE}{LIGHT_BEHIND}"));
+    for (name, text, expected) in [("mirror", &mirror, f * 5.0), ("window", &window, (1.0 - f) * 5.0 / 2.25)] {
         for integrator in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
             let o = Options { integrator: Some(integrator), spp: Some(1), seed: Some(3), ..Default::default() };
             let img = render(&common::scene_with(text, &o), 2).image;
@@ -333,28 +315,16 @@ fn a_light_reflected_in_glass_or_seen_through_it_is_met_by_every_camera_sample()
     }
 }
 
-/// An orthographic camera's rays meet two mirrors that turn them back along -z, then a glass
+/// The orthographic camera's rays meet two mirrors that turn them back along -z, then a glass
 /// plane at 45 degrees whose reflection is a large area light of radiance 5: the light's
 /// reflection in the glass is the camera path's third bounce, where Russian roulette begins.
 const PERISCOPE: &str = r#"
-[render]
-width = 12
-height = 12
-max_depth = 6
-[camera]
-projection = "orthographic"
-eye = [0, 0, 5]
-look_at = [0, 0, 0]
-view_height = 2
 [materials.mirror]
 type = "reflective"
 color = [1, 1, 1]
 kd = 0
 ka = 0
 kr = 1
-[materials.glass]
-type = "dielectric"
-ior = 1.5
 [[objects]]
 type = "quad"
 corner = [-3, -1.5, 1.5]
@@ -391,7 +361,7 @@ fn a_split_branch_is_not_ended_by_roulette_for_its_small_weight() {
     let survivor = f * 5.0 / 0.95;
     for integrator in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
         let o = Options { integrator: Some(integrator), spp: Some(1), seed: Some(3), ..Default::default() };
-        let img = render(&common::scene_with(PERISCOPE, &o), 2).image;
+        let img = render(&common::scene_with(&orthographic_glass(PERISCOPE), &o), 2).image;
         let mut survived = 0;
         for c in &img.pixels {
             let g = c.g();

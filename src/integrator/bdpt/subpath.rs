@@ -16,12 +16,12 @@ use super::mis::SubpathMis;
 use super::strategy::{self, CameraVertex, Context, LightVertex};
 use crate::camera::Projection;
 use crate::film::Layers;
-use crate::geometry::Ray;
+use crate::geometry::{Hit, Ray};
 use crate::integrator::layers::LayerPath;
 use crate::integrator::lighting::MAX_CROSSINGS;
-use crate::material::bsdf::Bsdf;
+use crate::material::bsdf::{Bsdf, BsdfSample};
 use crate::material::bxdf::Transport;
-use crate::math::Color;
+use crate::math::{Color, Vec3};
 use crate::render::RayStats;
 use crate::sampling::{Rng32, Sampler};
 
@@ -107,12 +107,7 @@ pub fn trace_light_path<'a>(
             continue;
         }
         let delta = s.flags.is_specular();
-        let rev = if delta {
-            0.0
-        } else {
-            strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Radiance, ctx.wl.as_ref())
-        };
-        mis = arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, f, f.merges_at(false));
+        mis = scattered(ctx, &arrived, &hit, &bsdf, wo, &s, Transport::Radiance, f.merges_at(false));
         beta *= s.weight * bsdf.shading_normal_correction(wo, s.wi);
         delta_only &= delta;
         if depth >= ROULETTE_DEPTH {
@@ -131,6 +126,25 @@ pub fn trace_light_path<'a>(
         crossings = 0;
         ray = hit.spawn(s.wi, ctx.ray_bias);
     }
+}
+
+/// The partial sums of MIS after a walk that `arrived` at `hit` scattered into `s`: the reverse
+/// density is that of the other walk's transport (`reverse`), and a delta bounce has none.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn scattered(
+    ctx: &Context,
+    arrived: &SubpathMis,
+    hit: &Hit,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    s: &BsdfSample,
+    reverse: Transport,
+    merges_here: bool,
+) -> SubpathMis {
+    let delta = s.flags.is_specular();
+    let rev = if delta { 0.0 } else { strategy::reverse_pdf(ctx.scene, hit, bsdf, wo, s.wi, reverse, ctx.wl.as_ref()) };
+    arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, &ctx.factors, merges_here)
 }
 
 /// Most times a camera subpath splits at glass (`Bsdf::dielectric_split`): a split traces the
@@ -315,19 +329,7 @@ pub fn trace_camera_path<'a>(
                 continue;
             }
             let delta = s.flags.is_specular();
-            let rev = if delta {
-                0.0
-            } else {
-                strategy::reverse_pdf(scene, &hit, &bsdf, wo, s.wi, Transport::Importance, ctx.wl.as_ref())
-            };
-            mis = arrived.scatter(
-                s.wi.dot(hit.ng) as f64,
-                s.pdf as f64,
-                rev as f64,
-                delta,
-                f,
-                f.merges_at(layer.before_x()),
-            );
+            mis = scattered(ctx, &arrived, &hit, &bsdf, wo, &s, Transport::Importance, f.merges_at(layer.before_x()));
             beta *= s.weight;
             layer.bounce(delta);
             if !delta {
