@@ -169,7 +169,7 @@ struct Walk {
     mis: SubpathMis,
     wl: Option<crate::spectrum::Wavelengths>,
     layer: LayerPath,
-    last_p: crate::math::Vec3,
+    last_p: Vec3,
     first: bool,
     depth: u32,
     /// What Russian roulette multiplies the throughput by before reading it: the inverse of the
