@@ -14,6 +14,10 @@ all pixels and channels divided by the reference's mean, so that the two rendere
 light units do not enter) and the relative MSE (`rel_mse`), which a few very bright pixels do
 not dominate. References are cached in the output folder (`--ref-time` seconds each).
 
+Both renderers use the scene's pixel filter (caustic's default, the one-pixel box; LuxCore's own
+default would be a Blackman-Harris of radius 2), and the references take another seed (7) than
+the timed runs (run k takes seed k), so that no run shares its reference's samples.
+
     scripts/luxcore_compare.py scenes/13-cornell-caustics.toml [--time 10] [--ref-time 300] [--runs N]
         [--threads 2] [--caustic target/release/caustic] [--out /tmp/luxcore-compare] [--refs-only]
 """
@@ -106,7 +110,19 @@ def luxcore_material(name, m):
     sys.exit(f"luxcore_compare: material type {kind!r} is not translated")
 
 
-def luxcore_scene(desc, threads, seconds):
+def luxcore_filter(render):
+    """The scene's pixel filter in LuxCore's terms. LuxCore's own default is a Blackman-Harris
+    filter of radius 2 pixels, which averages each pixel with its neighbours: left in place, it
+    halves LuxCore's per-pixel noise against caustic's one-pixel box and blurs the sub-pixel
+    highlights that dominate the RMSE, so the comparison would measure the filters."""
+    name = render.get("filter", "box")
+    if name != "box":
+        sys.exit(f"luxcore_compare: filter {name!r} is not translated (only caustic's default box)")
+    # LuxCore's NONE adds each sample to the pixel it falls in: the one-pixel box.
+    return ['film.filter.type = "NONE"']
+
+
+def luxcore_scene(desc, threads, seconds, seed):
     import pyluxcore
 
     r = desc.get("render", {})
@@ -162,8 +178,9 @@ def luxcore_scene(desc, threads, seconds):
     sp.SetFromString("\n".join(props))
     scene.Parse(sp)
     cfg = pyluxcore.Properties()
-    cfg.SetFromString("\n".join([
+    cfg.SetFromString("\n".join(luxcore_filter(r) + [
         'renderengine.type = "BIDIRVMCPU"',
+        f"renderengine.seed = {seed}",
         'sampler.type = "RANDOM"',
         f"native.threads.count = {threads}",
         f"film.width = {width}",
@@ -177,10 +194,10 @@ def luxcore_scene(desc, threads, seconds):
     return pyluxcore.RenderConfig(cfg, scene), width, height
 
 
-def luxcore_render(desc, threads, seconds):
+def luxcore_render(desc, threads, seconds, seed):
     import pyluxcore
 
-    config, width, height = luxcore_scene(desc, threads, seconds)
+    config, width, height = luxcore_scene(desc, threads, seconds, seed)
     session = pyluxcore.RenderSession(config)
     t0 = time.time()
     session.Start()
@@ -196,11 +213,16 @@ def luxcore_render(desc, threads, seconds):
     return np.flipud(buf.reshape(height, width, 3)).astype(np.float64), wall
 
 
-def caustic_render(binary, scene, threads, seconds, out):
+def caustic_render(binary, scene, threads, seconds, out, seed):
     t0 = time.time()
     subprocess.run([binary, "render", scene, "--integrator", "vcm", "--time", str(seconds), "--spp", "1000000",
-                    "--threads", str(threads), "-q", "-o", out], check=True)
+                    "--threads", str(threads), "--seed", str(seed), "-q", "-o", out], check=True)
     return read_exr(out), time.time() - t0
+
+
+# The references take another seed than the timed runs (seeds 1, 2, ...): a run that repeats the
+# first samples of its own reference would share its noise and read too low an error.
+REF_SEED = 7
 
 
 def rel_rmse(img, ref):
@@ -235,21 +257,21 @@ def main():
     with open(args.scene, "rb") as f:
         desc = tomllib.load(f)
     stem = os.path.splitext(os.path.basename(args.scene))[0]
-    lux_ref_path = os.path.join(args.out, f"{stem}-luxcore-ref-{args.ref_time:g}s.npy")
+    lux_ref_path = os.path.join(args.out, f"{stem}-luxcore-ref-box-seed{REF_SEED}-{args.ref_time:g}s.npy")
     if not os.path.exists(lux_ref_path):
-        ref, _ = luxcore_render(desc, args.threads, args.ref_time)
+        ref, _ = luxcore_render(desc, args.threads, args.ref_time, REF_SEED)
         np.save(lux_ref_path, ref)
     lux_ref = np.load(lux_ref_path)
-    caustic_ref_path = os.path.join(args.out, f"{stem}-caustic-ref-{args.ref_time:g}s.exr")
+    caustic_ref_path = os.path.join(args.out, f"{stem}-caustic-ref-seed{REF_SEED}-{args.ref_time:g}s.exr")
     if not os.path.exists(caustic_ref_path):
-        caustic_render(args.caustic, args.scene, args.threads, args.ref_time, caustic_ref_path)
+        caustic_render(args.caustic, args.scene, args.threads, args.ref_time, caustic_ref_path, REF_SEED)
     caustic_ref = read_exr(caustic_ref_path)
     if args.refs_only:
         return
     load_before = open("/proc/loadavg").read().split()[:3]
     for run in range(args.runs):
-        lux, lux_wall = luxcore_render(desc, args.threads, args.time)
-        ours, our_wall = caustic_render(args.caustic, args.scene, args.threads, args.time, os.path.join(args.out, f"{stem}-vcm.exr"))
+        lux, lux_wall = luxcore_render(desc, args.threads, args.time, run + 1)
+        ours, our_wall = caustic_render(args.caustic, args.scene, args.threads, args.time, os.path.join(args.out, f"{stem}-vcm.exr"), run + 1)
         print(f"{stem} run {run + 1}: LuxCore BIDIRVMCPU {rel_rmse(lux, lux_ref):.4f} / {rel_mse(lux, lux_ref):.5f} "
               f"({lux_wall:.1f} s), caustic vcm {rel_rmse(ours, caustic_ref):.4f} / {rel_mse(ours, caustic_ref):.5f} "
               f"({our_wall:.1f} s)  [relative RMSE / relative MSE against each one's {args.ref_time:g}-s render]")
