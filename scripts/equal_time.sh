@@ -13,10 +13,13 @@
 #   SEEDS="1 2 3" scripts/equal_time.sh 10   (wall time only: one render per seed, and the RMSE
 #                                       column the root mean square of theirs; default seed 0)
 #
-# References are long renders made once into OUT_DIR (SPPM for the point-light caustics, which
-# the path tracer cannot find; bidirectional path tracing, unbiased, for the glossy caustics of a
-# small area light, at most REF_TIME seconds, default 3600; the path tracer elsewhere), with
-# another seed than the renders. Needs the OpenEXR Python bindings.
+# References are long renders made once into OUT_DIR, with another seed than the renders:
+# - SPPM for the point-light caustics, which the path tracer cannot find, at 20,000 iterations
+#   (about 9 minutes; at 1,000 its noise and bias were as large as the 10-s errors it scored);
+# - bidirectional path tracing, unbiased, for the glossy caustics of a small area light, at most
+#   REF_TIME seconds, default 3600;
+# - the path tracer elsewhere.
+# Needs the OpenEXR Python bindings.
 set -euo pipefail
 T=${1:-10}
 OUT=${2:-/tmp/caustic-equal-time}
@@ -24,7 +27,7 @@ BIN=${BIN:-target/release/caustic}
 mkdir -p "$OUT"
 # name | scene | size | reference integrator and options
 scenes=(
-  "caustic|scenes/13-cornell-caustics.toml|--width 128 --height 128|--integrator sppm --spp 1000 --photons-per-iter 100000"
+  "caustic|scenes/13-cornell-caustics.toml|--width 128 --height 128|--integrator sppm --spp 20000 --photons-per-iter 100000"
   "glossy|scenes/15-materials.toml|--width 160 --height 120|--integrator path --spp 4096"
   "sky|benches/scenes/sky-lit.toml|--width 160 --height 120|--integrator path --spp 8192"
   "glossy-caustics|scenes/16-glossy-caustics.toml|--width 160 --height 120|--integrator bdpt --spp 16384 --time ${REF_TIME:-3600}"
