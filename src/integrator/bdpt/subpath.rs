@@ -98,9 +98,7 @@ pub fn trace_light_path<'a>(
         bounces += 1;
         if s.flags.is_null() {
             // Straight through a mask: no vertex (see the module header).
-            depth -= 1;
-            crossings += 1;
-            if crossings > MAX_CROSSINGS {
+            if !cross_mask(&mut depth, &mut crossings) {
                 break;
             }
             ray = hit.spawn(ray.d, ctx.ray_bias);
@@ -154,6 +152,15 @@ fn scattered(
 /// glass, not by the few that happen to pick reflection; no light subpath can find these paths.
 /// Later glass is crossed by the usual choice, so one camera sample costs at most
 /// `GLASS_SPLITS + 1` walks. The walks run depth first, the reflection before the refraction;
+/// A walk straight through a mask's transparent part: the crossing makes no vertex, so it gives
+/// back the depth its intersection counted; false (end the walk) once more than `MAX_CROSSINGS`
+/// crossings follow one another.
+fn cross_mask(depth: &mut u32, crossings: &mut usize) -> bool {
+    *depth -= 1;
+    *crossings += 1;
+    *crossings <= MAX_CROSSINGS
+}
+
 /// Russian roulette reads a branch's throughput without the split's factor while it stays on
 /// mirrors and glass (`Walk::roulette_scale`). Measured on `scenes/16-glossy-caustics.toml`
 /// (VCM, 10 s, six seeds; BENCHMARKS.md): RMSE 0.112 without splits, 0.103 with one, 0.101
@@ -320,9 +327,7 @@ pub fn trace_camera_path<'a>(
             if s.flags.is_null() {
                 // Straight through a mask: no vertex, a delta bounce for the layers.
                 layer.bounce(true);
-                depth -= 1;
-                crossings += 1;
-                if crossings > MAX_CROSSINGS {
+                if !cross_mask(&mut depth, &mut crossings) {
                     break;
                 }
                 ray = hit.spawn(ray.d, ctx.ray_bias);
