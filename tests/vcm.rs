@@ -44,8 +44,12 @@ fn furnace_has_radiance_one_with_all_bounces_and_one_half_direct() {
     assert!((direct_only - 0.5).abs() < 0.015, "max_depth 1: {direct_only}");
 }
 
+/// The merge radii: by default the narrow one (focused light) starts at `FOCUSED_SCALE` times
+/// SPPM's rule and the wide one at `SPREAD_SCALE` times it; both shrink as i^((alpha - 1) / 2);
+/// `--initial-radius` sets the narrow one.
 #[test]
-fn the_merge_radius_starts_as_sppms_and_shrinks_with_alpha() {
+fn the_merge_radii_start_from_sppms_and_shrink_with_alpha() {
+    use caustic::integrator::vcm::{FOCUSED_SCALE, SPREAD_SCALE};
     let s = scene(&common::point_light_furnace(4), IntegratorKind::Vcm, 1, 1);
     let Ok(Integrator::Vcm(vcm)) = Integrator::new(&s.integrator, &s.scene, &s.settings, &RenderControl::uncancelled())
     else {
@@ -57,7 +61,10 @@ fn the_merge_radius_starts_as_sppms_and_shrinks_with_alpha() {
     // within 0.05% and 2% of the scene's diagonal (2 sqrt(3)).
     let footprint = 2.0 * (30f32.to_radians().tan()) / 8.0;
     let want = (2.0 * footprint).clamp(5e-4 * 2.0 * 3f32.sqrt(), 0.02 * 2.0 * 3f32.sqrt());
+    let want = FOCUSED_SCALE * want;
     assert!((c.initial_radius - want).abs() < 0.05 * want, "{} vs {want}", c.initial_radius);
+    assert!((c.wide_reach * FOCUSED_SCALE - SPREAD_SCALE).abs() < 1e-6, "wide reach {}", c.wide_reach);
+    const { assert!(FOCUSED_SCALE < 1.0 && SPREAD_SCALE > 1.0) };
     // r_i = r_0 (i + 1)^((alpha - 1) / 2): the area falls as i^-0.25.
     assert_eq!(c.radius(0), c.initial_radius);
     for i in [1u32, 15, 255] {

@@ -35,6 +35,7 @@
 //!   their noise (the bundled caustic box at 10 s: VCM's direct layer noise 0.0069 against
 //!   SPPM's 0.0001). Weights that are a partition of unity on every path keep the estimate
 //!   unbiased; SPPM and Jensen's photon maps take direct light from next-event estimation too.
+//!   (Merges of light straight from the light are no technique anywhere: `Reach::Direct`.)
 //! - VCM may trace fewer light paths than camera paths (`vcm::LightBudget`): a fraction rho of
 //!   the camera paths then connect to a light path, and there are rho x pixels light paths to
 //!   splat and merge. Every technique that uses a light subpath (connections with s >= 2, light
@@ -45,6 +46,20 @@
 //!   partial sums there are the s = 1 and s = 0 terms) and, inverted, where a camera-only
 //!   technique weighs the others.
 
+//! - A merge's radius depends on how the light reached the vertex (`Reach`), the same rule for
+//!   every technique's view of the path: none for light straight from the light (next-event
+//!   estimation's, which is noiseless for a point light where a merge is noisy), the narrow
+//!   radius for light that came only through mirrors and glass (a caustic, which a wide disc
+//!   would blur), and a wide one for light after a diffuse or glossy bounce (smooth, whose
+//!   merges within a narrow disc find too few light vertices: SPPM's two discs, issue 32). A
+//!   technique's density then carries its own eta = pi r^2 x light paths, and the partial sums
+//!   keep every merge term relative to a connection (`d_vc`; the report's dVM is that over the
+//!   merge's own eta, no longer one factor). A light walk knows each vertex's reach. A camera
+//!   walk counts every merge with the wide radius, right for whatever joins it further on (a
+//!   light vertex, a merge or next-event estimation's point scatters off a non-delta surface),
+//!   and keeps the latest term apart (`d_last`) for the one path it gets wrong, the one that
+//!   ends on a light (`emitter_weight`). The module's test checks all of it against the
+//!   definition with three radii in play.
 //! - Merges may be left to the camera path's first non-delta vertex alone
 //!   (`MisFactors::merge_first_only`, as SPPM gathers only there): a merge at a later camera
 //!   vertex then is no technique, the partial sums leave its terms out (`SubpathMis::scatter`'s
@@ -68,20 +83,55 @@ const MIN_COS: f64 = 1e-9;
 pub struct SubpathMis {
     /// Weight of techniques that connect or merge at this vertex's predecessor.
     pub d_vcm: f64,
-    /// Of vertex connections further back.
+    /// Of vertex connections and merges further back, relative to a connection here (each
+    /// merge with its own radius's `vm`; the report's dVM is this over the merge's).
     pub d_vc: f64,
-    /// Of vertex merges further back.
-    pub d_vm: f64,
+    /// The part of `d_vc` that is the merge at a camera walk's latest non-delta vertex, per
+    /// unit of its `vm`, negative once a delta vertex has followed it (`scatter_camera`; 0
+    /// where merging there is no technique, and on light walks).
+    pub d_last: f64,
+}
+
+/// How the light reaching a vertex came, which sets the radius of a merge there (see the module
+/// header). Both walks can tell: a light walk from its own scattering so far, a camera walk
+/// from the vertices it meets after the one it merges at (`SubpathMis::scatter_camera`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reach {
+    /// Straight from the light (the light walk's first vertex): no merge, next-event
+    /// estimation's light.
+    Direct,
+    /// Only through mirrors and glass: light that may be focused, merged within the narrow
+    /// radius.
+    Focused,
+    /// After a diffuse or glossy bounce: light that varies slowly, merged within the wide
+    /// radius.
+    Spread,
+}
+
+impl Reach {
+    /// Of a light walk's vertex: its surface vertices up to and including it (`depth`, from 1)
+    /// and whether every scattering before it was delta.
+    #[inline]
+    pub fn of(depth: u32, delta_only: bool) -> Reach {
+        if depth <= 1 {
+            Reach::Direct
+        } else if delta_only {
+            Reach::Focused
+        } else {
+            Reach::Spread
+        }
+    }
 }
 
 /// The constants of one iteration that tie connections, merges and the camera together.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MisFactors {
-    /// mis(eta) with eta = pi r^2 x light paths: merges weighed against a connection (0 without
-    /// merging: bidirectional path tracing).
+    /// mis(eta) with eta = pi r^2 x light paths: a merge weighed against a connection, at a
+    /// vertex whose light prefix is all delta (0 without merging: bidirectional path tracing).
     pub vm: f64,
-    /// mis(1 / eta): a connection weighed against merges (0 without merging).
-    pub vc: f64,
+    /// The same with the wide radius, at a vertex whose light prefix has scattered off a
+    /// non-delta surface (see the module header).
+    pub vm_wide: f64,
     /// Full-film pixels over light paths per sample index (see the module header).
     pub camera_scale: f64,
     /// mis(1 / rho): the weight of the camera-only techniques relative to those of a light
@@ -97,16 +147,24 @@ pub struct MisFactors {
 impl MisFactors {
     /// Bidirectional path tracing: connections only.
     pub fn connections_only(camera_scale: f64) -> Self {
-        MisFactors { vm: 0.0, vc: 0.0, camera_scale, camera_only: 1.0, direct_by_camera: true, merge_first_only: false }
+        MisFactors {
+            vm: 0.0,
+            vm_wide: 0.0,
+            camera_scale,
+            camera_only: 1.0,
+            direct_by_camera: true,
+            merge_first_only: false,
+        }
     }
 
-    /// Vertex connection and merging with merge radius `radius` and `light_paths` light paths
-    /// per iteration (the report's eq. 20 with one connection and `light_paths` merges).
-    pub fn with_merging(radius: f64, light_paths: f64, camera_scale: f64) -> Self {
-        let eta = std::f64::consts::PI * radius * radius * light_paths;
+    /// Vertex connection and merging with merge radii `radius` and `wide_radius` (module
+    /// header) and `light_paths` light paths per iteration (the report's eq. 20 with one
+    /// connection and `light_paths` merges).
+    pub fn with_merging(radius: f64, wide_radius: f64, light_paths: f64, camera_scale: f64) -> Self {
+        let eta = |r: f64| std::f64::consts::PI * r * r * light_paths;
         MisFactors {
-            vm: mis(eta),
-            vc: mis(1.0 / eta),
+            vm: mis(eta(radius)),
+            vm_wide: mis(eta(wide_radius)),
             camera_scale,
             camera_only: 1.0,
             direct_by_camera: true,
@@ -116,8 +174,8 @@ impl MisFactors {
 
     /// The same when only a fraction `rho` in (0, 1] of the camera paths connect to a light
     /// subpath and there are `rho` times the light paths the factors were made for (module
-    /// header). `vm`, `vc` and `camera_scale` stay those of one light path per camera path:
-    /// they weigh techniques of light subpaths against each other, whose counts all scale alike.
+    /// header). `vm` and `camera_scale` stay those of one light path per camera path: they
+    /// weigh techniques of light subpaths against each other, whose counts all scale alike.
     pub fn with_light_fraction(self, rho: f64) -> Self {
         MisFactors { camera_only: mis(1.0 / rho), ..self }
     }
@@ -130,10 +188,16 @@ impl MisFactors {
         !self.merge_first_only || first
     }
 
-    /// `vm` for a merge at a vertex, 0 where merging is no technique (`merges_at`).
+    /// `vm` of a merge at a vertex the light reached as `reach` says; 0 where merging is no
+    /// technique (`merges_at(first)`, and light straight from the light).
     #[inline]
-    fn vm_at(&self, first: bool) -> f64 {
-        if self.merges_at(first) { self.vm } else { 0.0 }
+    pub fn vm_at(&self, first: bool, reach: Reach) -> f64 {
+        match reach {
+            _ if !self.merges_at(first) => 0.0,
+            Reach::Direct => 0.0,
+            Reach::Focused => self.vm,
+            Reach::Spread => self.vm_wide,
+        }
     }
 }
 
@@ -156,7 +220,7 @@ impl SubpathMis {
         }
         // (The terms of the two camera-only techniques, scaled by their relative count.)
         let d_vc = if delta { 0.0 } else { mis(if finite { cos } else { 1.0 } / emission_pdf) * f.camera_only };
-        SubpathMis { d_vcm: mis(direct_pdf / emission_pdf) * f.camera_only, d_vc, d_vm: d_vc * f.vc }
+        SubpathMis { d_vcm: mis(direct_pdf / emission_pdf) * f.camera_only, d_vc, d_last: 0.0 }
     }
 
     /// A camera path's start: `pdf` is the density of its first direction (solid angle; for an
@@ -165,7 +229,7 @@ impl SubpathMis {
     /// count for nothing.
     pub fn camera_start(pdf: f64) -> Self {
         let d_vcm = if pdf > 0.0 { mis(1.0 / pdf) } else { 0.0 };
-        SubpathMis { d_vcm, d_vc: 0.0, d_vm: 0.0 }
+        SubpathMis { d_vcm, d_vc: 0.0, d_last: 0.0 }
     }
 
     /// Completes the start or the last scattering at the vertex the path reached, `dist2` away
@@ -178,33 +242,55 @@ impl SubpathMis {
             Some(d2) => self.d_vcm * mis(d2),
             None => self.d_vcm,
         };
-        SubpathMis { d_vcm: d_vcm / c, d_vc: self.d_vc / c, d_vm: self.d_vm / c }
+        SubpathMis { d_vcm: d_vcm / c, d_vc: self.d_vc / c, d_last: self.d_last / c }
     }
 
-    /// Scattering at the current vertex towards a direction at cosine `cos_out` to its
-    /// geometric normal, sampled with density `pdf` (solid angle); `pdf_rev` is the density of
-    /// the opposite sampling (the arriving direction sampled from the new one). A delta bounce
-    /// ignores both densities (see the module header). Eq. 34-36 and 53-55. `merges_here` says
-    /// whether a merge at the current vertex is a technique (`MisFactors::merges_at`).
+    /// Scattering at the current vertex of a light walk towards a direction at cosine
+    /// `cos_out` to its geometric normal, sampled with density `pdf` (solid angle); `pdf_rev` is
+    /// the density of the opposite sampling (the arriving direction sampled from the new one).
+    /// A delta bounce ignores both densities (see the module header). Eq. 34-36 and 53-55.
+    /// `merge_vm` is the `vm` of a merge at the current vertex (`MisFactors::vm_at`; 0 where it
+    /// is no technique).
     #[inline]
-    pub fn scatter(self, cos_out: f64, pdf: f64, pdf_rev: f64, delta: bool, f: &MisFactors, merges_here: bool) -> Self {
+    pub fn scatter(self, cos_out: f64, pdf: f64, pdf_rev: f64, delta: bool, merge_vm: f64) -> Self {
         let cos_out = cos_out.abs();
         if delta {
             let c = mis(cos_out);
-            return SubpathMis { d_vcm: 0.0, d_vc: self.d_vc * c, d_vm: self.d_vm * c };
+            return SubpathMis { d_vcm: 0.0, d_vc: self.d_vc * c, d_last: self.d_last * c };
         }
         if !(pdf > 0.0) {
             return SubpathMis::default();
         }
         let g = mis(cos_out / pdf);
         let rev = mis(pdf_rev);
-        // The merge at this vertex: vm relative to a connection, 1 relative to a merge.
-        let (vm, merge) = if merges_here { (f.vm, 1.0) } else { (0.0, 0.0) };
-        SubpathMis {
-            d_vcm: mis(1.0 / pdf),
-            d_vc: g * (self.d_vc * rev + self.d_vcm + vm),
-            d_vm: g * (self.d_vm * rev + self.d_vcm * f.vc + merge),
+        SubpathMis { d_vcm: mis(1.0 / pdf), d_vc: g * (self.d_vc * rev + self.d_vcm + merge_vm), d_last: 0.0 }
+    }
+
+    /// `scatter` for a camera walk. A merge's radius at a camera vertex depends on the light
+    /// reaching it (`Reach`), which the walk knows only for the paths it continues: whatever
+    /// joins it further on (a light vertex, a merge, next-event estimation's point) scatters
+    /// off a non-delta surface, so every merge term is counted with the wide radius. A path
+    /// that ends on a light instead (s = 0) gives the vertex nearest the light light straight
+    /// from it, or focused if mirrors and glass lie between: `d_last` keeps that vertex's term,
+    /// negated once a delta vertex follows, for `emitter_weight` to correct.
+    #[inline]
+    pub fn scatter_camera(
+        self,
+        cos_out: f64,
+        pdf: f64,
+        pdf_rev: f64,
+        delta: bool,
+        merges_here: bool,
+        f: &MisFactors,
+    ) -> Self {
+        if delta {
+            let out = self.scatter(cos_out, pdf, pdf_rev, true, 0.0);
+            return SubpathMis { d_last: -out.d_last.abs(), ..out };
         }
+        let merge_vm = if merges_here { f.vm_wide } else { 0.0 };
+        let out = self.scatter(cos_out, pdf, pdf_rev, false, merge_vm);
+        let d_last = if merges_here && pdf > 0.0 { mis(cos_out.abs() / pdf) } else { 0.0 };
+        SubpathMis { d_last, ..out }
     }
 }
 
@@ -215,8 +301,13 @@ impl SubpathMis {
 /// (there is no technique that connects a light point to the camera).
 #[inline]
 pub fn emitter_weight(cam: &SubpathMis, direct_pdf: f64, emission_pdf: f64, f: &MisFactors) -> f64 {
+    // The merge at the vertex nearest the light, which the camera walk counted with the wide
+    // radius (`SubpathMis::scatter_camera`): none for light straight from the light, the narrow
+    // radius past mirrors and glass.
+    let reach = if cam.d_last < 0.0 { f.vm } else { 0.0 };
+    let d_vc = (cam.d_vc + cam.d_last.abs() * (reach - f.vm_wide)).max(0.0);
     // Next-event estimation is camera-only as this technique is; the rest use light subpaths.
-    let w_camera = mis(direct_pdf) * cam.d_vcm + mis(emission_pdf) * cam.d_vc / f.camera_only;
+    let w_camera = mis(direct_pdf) * cam.d_vcm + mis(emission_pdf) * d_vc / f.camera_only;
     1.0 / (1.0 + w_camera)
 }
 
@@ -263,7 +354,9 @@ pub fn light_sample_weight(
     }
     let w_light = mis(bsdf_pdf / direct_pdf);
     let ratio = emission_pdf * cos_camera.abs() / (direct_pdf * cos_light.abs().max(MIN_COS));
-    let w_camera = mis(ratio) * (f.vm_at(first) + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
+    // A merge at the vertex would take light straight from the light: none.
+    let w_camera =
+        mis(ratio) * (f.vm_at(first, Reach::Direct) + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
     1.0 / (w_light + 1.0 + w_camera)
 }
 
@@ -271,11 +364,13 @@ pub fn light_sample_weight(
 /// camera vertex's BSDF density of the connection converted to area at the light vertex,
 /// `camera_rev_pdf` (solid angle) its density of the camera path's direction given the
 /// connection; `light_pdf` and `light_rev_pdf` the same at the light vertex. `first`: the
-/// camera vertex is the camera path's first non-delta one (the light vertex, behind it, is not).
+/// camera vertex is the camera path's first non-delta one (the light vertex, behind it, is not);
+/// `light_reach`: the light reaching the light vertex (`LightVertex::reach`).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn connection_weight(
     first: bool,
+    light_reach: Reach,
     cam: &SubpathMis,
     light: &SubpathMis,
     camera_pdf: f64,
@@ -284,29 +379,36 @@ pub fn connection_weight(
     light_rev_pdf: f64,
     f: &MisFactors,
 ) -> f64 {
-    let w_light = mis(camera_pdf) * (f.vm_at(false) + light.d_vcm + light.d_vc * mis(light_rev_pdf));
-    let w_camera = mis(light_pdf) * (f.vm_at(first) + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf));
+    let w_light = mis(camera_pdf) * (f.vm_at(false, light_reach) + light.d_vcm + light.d_vc * mis(light_rev_pdf));
+    // The camera vertex's light comes off the light vertex, a non-delta bounce.
+    let w_camera = mis(light_pdf) * (f.vm_at(first, Reach::Spread) + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf));
     1.0 / (w_light + 1.0 + w_camera)
 }
 
 /// Weight of connecting a light vertex to the camera (light tracing, eq. 46-47): `camera_pdf`
 /// is the density with which the camera samples the vertex (area measure, times
 /// `camera_scale`), `light_rev_pdf` the vertex's BSDF density of the light path's arriving
-/// direction given the camera's.
+/// direction given the camera's; `light_reach` as in `connection_weight`.
 #[inline]
-pub fn camera_connection_weight(light: &SubpathMis, camera_pdf: f64, light_rev_pdf: f64, f: &MisFactors) -> f64 {
-    let w_light = mis(camera_pdf) * (f.vm + light.d_vcm + light.d_vc * mis(light_rev_pdf));
+pub fn camera_connection_weight(
+    light: &SubpathMis,
+    camera_pdf: f64,
+    light_rev_pdf: f64,
+    light_reach: Reach,
+    f: &MisFactors,
+) -> f64 {
+    let w_light = mis(camera_pdf) * (f.vm_at(true, light_reach) + light.d_vcm + light.d_vc * mis(light_rev_pdf));
     1.0 / (w_light + 1.0)
 }
 
 /// Weight of merging a camera vertex with a light vertex (eq. 37-39): `camera_pdf` is the
 /// camera vertex's BSDF density of the light's arriving direction, `camera_rev_pdf` of the
-/// camera path's direction given the light's.
+/// camera path's direction given the light's; `vm` that of the merge's radius
+/// (`MisFactors::vm_at` of the light vertex's `Reach`).
 #[inline]
-pub fn merge_weight(cam: &SubpathMis, light: &SubpathMis, camera_pdf: f64, camera_rev_pdf: f64, f: &MisFactors) -> f64 {
-    let w_light = light.d_vcm * f.vc + light.d_vm * mis(camera_pdf);
-    let w_camera = cam.d_vcm * f.vc + cam.d_vm * mis(camera_rev_pdf);
-    1.0 / (w_light + 1.0 + w_camera)
+pub fn merge_weight(cam: &SubpathMis, light: &SubpathMis, camera_pdf: f64, camera_rev_pdf: f64, vm: f64) -> f64 {
+    let others = light.d_vcm + light.d_vc * mis(camera_pdf) + cam.d_vcm + cam.d_vc * mis(camera_rev_pdf);
+    1.0 / (1.0 + others / vm)
 }
 
 #[cfg(test)]
@@ -354,6 +456,8 @@ mod tests {
         camera: f64,
         /// pi r^2 light paths, or None without merging.
         eta: Option<f64>,
+        /// The same with the wide radius (module header).
+        eta_wide: f64,
         /// The fraction of camera paths that connect to a light subpath (and of light paths).
         rho: f64,
         /// `MisFactors::direct_by_camera`.
@@ -382,6 +486,7 @@ mod tests {
                 direct_w: r(0.1, 5.0),
                 camera: r(0.1, 20.0),
                 eta,
+                eta_wide: eta.unwrap_or(0.0),
                 rho: 1.0,
                 direct_by_camera: false,
                 merge_first_only: false,
@@ -407,7 +512,7 @@ mod tests {
             let f = match self.eta {
                 Some(eta) => MisFactors {
                     vm: mis(eta),
-                    vc: mis(1.0 / eta),
+                    vm_wide: mis(self.eta_wide),
                     camera_scale: 1.0,
                     camera_only: 1.0,
                     direct_by_camera: true,
@@ -507,6 +612,11 @@ mod tests {
             (1..self.n).rev().find(|&i| !self.delta[i])
         }
 
+        /// How the light reaches v_i (`Reach`).
+        fn reach(&self, i: usize) -> Reach {
+            Reach::of(i as u32, (1..i).all(|j| self.delta[j]))
+        }
+
         /// Whether a merge at v_i is a technique (`MisFactors::merges_at`).
         fn merges_at(&self, i: usize) -> bool {
             !self.merge_first_only || self.first_from_camera() == Some(i)
@@ -518,6 +628,11 @@ mod tests {
             if self.delta[i] || !self.merges_at(i) {
                 return None;
             }
+            let eta = match self.reach(i) {
+                Reach::Direct => return None,
+                Reach::Focused => eta,
+                Reach::Spread => self.eta_wide,
+            };
             let mut p = eta * self.rho;
             for j in 0..=i {
                 p *= self.fwd(j);
@@ -552,8 +667,7 @@ mod tests {
                     self.to_next[i],
                     self.to_prev[i],
                     self.delta[i],
-                    &f,
-                    f.merges_at(false),
+                    f.vm_at(false, self.reach(i)),
                 );
                 m = m.arrive(Some(self.d2[i]), self.cos_prev[i + 1]);
             }
@@ -568,7 +682,14 @@ mod tests {
             let first = if self.orthographic { None } else { Some(self.d2[n - 1]) };
             m = m.arrive(first, self.cos_next[n - 1]);
             for j in (i + 1..n).rev() {
-                m = m.scatter(self.cos_prev[j], self.to_prev[j], self.to_next[j], self.delta[j], &f, self.merges_at(j));
+                m = m.scatter_camera(
+                    self.cos_prev[j],
+                    self.to_prev[j],
+                    self.to_next[j],
+                    self.delta[j],
+                    self.merges_at(j),
+                    &f,
+                );
                 if j - 1 > i || arrive {
                     m = m.arrive(Some(self.d2[j - 1]), self.cos_next[j - 1]);
                 }
@@ -642,13 +763,20 @@ mod tests {
                 } else if s == n {
                     let light = self.light_subpath(n);
                     let g = if self.orthographic { 1.0 } else { 1.0 / self.d2[n - 1] };
-                    camera_connection_weight(&light, self.camera * self.cos_next[n - 1] * g, self.to_prev[n - 1], &f)
+                    camera_connection_weight(
+                        &light,
+                        self.camera * self.cos_next[n - 1] * g,
+                        self.to_prev[n - 1],
+                        self.reach(n - 1),
+                        &f,
+                    )
                 } else {
                     let (y, x) = (s - 1, s);
                     let light = self.light_subpath(s);
                     let cam = self.camera_subpath(x, true);
                     connection_weight(
                         self.first_from_camera() == Some(x),
+                        self.reach(y),
                         &cam,
                         &light,
                         self.to_prev[x] * self.cos_next[y] / self.d2[y],
@@ -665,7 +793,8 @@ mod tests {
                 let light = self.light_subpath(i + 1);
                 let cam = self.camera_subpath(i, true);
                 // A merge at v1 of a direct path (light vertex of depth 1) takes none.
-                let w = if direct { 0.0 } else { merge_weight(&cam, &light, self.to_prev[i], self.to_next[i], &f) };
+                let vm = f.vm_at(self.merges_at(i), self.reach(i));
+                let w = if direct { 0.0 } else { merge_weight(&cam, &light, self.to_prev[i], self.to_next[i], vm) };
                 out.push((format!("merge at v{i}"), p, w));
             }
             out
@@ -683,6 +812,11 @@ mod tests {
             let orthographic = trial % 5 == 0;
             let eta = (trial % 3 == 0).then(|| 0.01 + rng.uniform() as f64);
             let mut path = Path::random(&mut rng, n, light, orthographic, eta);
+            // A wide radius for merges after a non-delta bounce in two trials of three with
+            // merging (the same radius in the third).
+            if let Some(eta) = eta {
+                path.eta_wide = eta * [1.0, 4.0, 1.0 + 15.0 * rng.uniform() as f64][trial % 9 / 3];
+            }
             // Fewer light paths than camera paths in half the trials (with and without merging).
             path.rho = [1.0, 0.25, 1.0 / 16.0, 1.0][trial % 4];
             // Direct light left to the camera-only techniques in the odd trials (every light kind

@@ -19,7 +19,7 @@
 //! dispersive glass estimates the hero alone, times the factor once, and their weights (the
 //! densities of BSDFs lifted to the hero's index) sum to one.
 
-use super::mis::{self, MisFactors, SubpathMis};
+use super::mis::{self, MisFactors, Reach, SubpathMis};
 use crate::camera::Projection;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
@@ -129,6 +129,12 @@ impl LightVertex {
     #[inline]
     pub fn layer(&self, camera: LayerPath, joins: u32) -> usize {
         light_layer(u32::from(self.bounces), self.delta_only, camera, joins)
+    }
+
+    /// How the light reaching this vertex came, which sets a merge's radius here.
+    #[inline]
+    pub fn reach(&self) -> Reach {
+        Reach::of(self.depth, self.delta_only)
     }
 }
 
@@ -456,6 +462,7 @@ pub fn connect(
     let y_rev = reverse_pdf(scene, &y.hit, y_bsdf, y.wo, -d, Transport::Radiance, wl) as f64;
     let w = mis::connection_weight(
         x.layer.before_x(),
+        y.reach(),
         &x.mis,
         &y.mis,
         pdf_x as f64 * gy / d2,
@@ -501,7 +508,7 @@ pub fn connect_to_camera(
     // solid-angle density is pdf_dir / dist^2 for a perspective camera (and the importance
     // itself for an orthographic one, whose direction is a delta).
     let camera_pdf = (cw.importance / cw.pdf) as f64 * cw.wi.dot(y.hit.ng).abs() as f64 * ctx.factors.camera_scale;
-    let w = mis::camera_connection_weight(&y.mis, camera_pdf, rev, &ctx.factors);
+    let w = mis::camera_connection_weight(&y.mis, camera_pdf, rev, y.reach(), &ctx.factors);
     let mut layers = [Color::ZERO; 4];
     layers[y.layer(LayerPath::CAMERA, 1)] = contribution * (visible * w as f32);
     Some((cw.raster, ctx.to_film(layers)))

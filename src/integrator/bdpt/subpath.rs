@@ -105,7 +105,8 @@ pub fn trace_light_path<'a>(
             continue;
         }
         let delta = s.flags.is_specular();
-        mis = scattered(ctx, &arrived, &hit, &bsdf, wo, &s, Transport::Radiance, f.merges_at(false));
+        let (cos, pdf, rev) = scattering(ctx, &hit, &bsdf, wo, &s, Transport::Radiance);
+        mis = arrived.scatter(cos, pdf, rev, delta, f.vm_at(false, v.reach()));
         beta *= s.weight * bsdf.shading_normal_correction(wo, s.wi);
         delta_only &= delta;
         if depth >= ROULETTE_DEPTH {
@@ -126,23 +127,17 @@ pub fn trace_light_path<'a>(
     }
 }
 
-/// The partial sums of MIS after a walk that `arrived` at `hit` scattered into `s`: the reverse
-/// density is that of the other walk's transport (`reverse`), and a delta bounce has none.
-#[allow(clippy::too_many_arguments)]
+/// What MIS needs of a walk's scattering at `hit` into `s`: the cosine of the new direction to
+/// the geometric normal, the density of the sample and the reverse density, that of the other
+/// walk's transport (`reverse`; a delta bounce has none).
 #[inline]
-fn scattered(
-    ctx: &Context,
-    arrived: &SubpathMis,
-    hit: &Hit,
-    bsdf: &Bsdf,
-    wo: Vec3,
-    s: &BsdfSample,
-    reverse: Transport,
-    merges_here: bool,
-) -> SubpathMis {
-    let delta = s.flags.is_specular();
-    let rev = if delta { 0.0 } else { strategy::reverse_pdf(ctx.scene, hit, bsdf, wo, s.wi, reverse, ctx.wl.as_ref()) };
-    arrived.scatter(s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64, delta, &ctx.factors, merges_here)
+fn scattering(ctx: &Context, hit: &Hit, bsdf: &Bsdf, wo: Vec3, s: &BsdfSample, reverse: Transport) -> (f64, f64, f64) {
+    let rev = if s.flags.is_specular() {
+        0.0
+    } else {
+        strategy::reverse_pdf(ctx.scene, hit, bsdf, wo, s.wi, reverse, ctx.wl.as_ref())
+    };
+    (s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64)
 }
 
 /// Most times a camera subpath splits at glass (`Bsdf::dielectric_split`): a split traces the
@@ -305,7 +300,7 @@ pub fn trace_camera_path<'a>(
                         pending[waiting] = Some(Walk {
                             ray: hit.spawn(b.wi, ctx.ray_bias),
                             beta: beta * b.weight,
-                            mis: arrived.scatter(b.wi.dot(hit.ng) as f64, 0.0, 0.0, true, f, false),
+                            mis: arrived.scatter_camera(b.wi.dot(hit.ng) as f64, 0.0, 0.0, true, false, f),
                             wl,
                             layer: next_layer,
                             last_p: hit.p,
@@ -334,7 +329,8 @@ pub fn trace_camera_path<'a>(
                 continue;
             }
             let delta = s.flags.is_specular();
-            mis = scattered(ctx, &arrived, &hit, &bsdf, wo, &s, Transport::Importance, f.merges_at(layer.before_x()));
+            let (cos, pdf, rev) = scattering(ctx, &hit, &bsdf, wo, &s, Transport::Importance);
+            mis = arrived.scatter_camera(cos, pdf, rev, delta, f.merges_at(layer.before_x()), f);
             beta *= s.weight;
             layer.bounce(delta);
             if !delta {

@@ -12,16 +12,19 @@
 //! 2. `camera_pass`: each pixel's camera subpath takes every technique of bidirectional path
 //!    tracing with the light subpath of its own index (SmallVCM's pairing; with one light path
 //!    per m pixels, in one iteration of m) and, at each vertex
-//!    with a non-delta part, merges with every stored vertex within the iteration's radius
-//!    (`photon::grid`, a hashed grid of cells twice the radius), each merge weighted against the
-//!    connections that make the same path.
+//!    with a non-delta part, merges with every stored vertex within the iteration's radius for
+//!    that vertex's light (`photon::grid`, a hashed grid of cells twice the wider radius), each
+//!    merge weighted against the connections that make the same path.
 //!
-//! The merge radius shrinks as progressive photon mapping's does (Knaus and Zwicker 2011;
-//! SmallVCM): iteration i merges within r_i = r_0 (i + 1)^((alpha - 1) / 2) with alpha = 0.75,
-//! so the bias of merging vanishes while its variance stays bounded. r_0 is `--initial-radius`
-//! or what SPPM starts a pixel with (about two pixel footprints at the first hit, within 0.05%
-//! and 2% of the scene's size), taken at the median of a grid of camera rays: the weights need
-//! one radius per iteration for the whole image.
+//! Two radii (`mis::Reach`): light that came only through mirrors and glass (caustics) merges
+//! within the narrow one, light after a diffuse or glossy bounce within one `wide_reach` times
+//! wider, and light straight from the light not at all (next-event estimation's). Both shrink
+//! as progressive photon mapping's radius does (Knaus and Zwicker 2011; SmallVCM): iteration i
+//! merges within r_i = r_0 (i + 1)^((alpha - 1) / 2) with alpha = 0.75, so the bias of merging
+//! vanishes while its variance stays bounded. r_0 is `--initial-radius` or `FOCUSED_SCALE`
+//! times what SPPM starts a pixel with (about two pixel footprints at the first hit, within
+//! 0.05% and 2% of the scene's size), taken at the median of a grid of camera rays: the
+//! weights need one radius per iteration and kind of light for the whole image.
 //!
 //! An iteration's image is an estimate of its own (camera paths' light and splats, exact
 //! fixed-point sums in the `SplatFilm`), and a render is their mean: iteration i always has
@@ -47,8 +50,9 @@
 //! as one path's. Paths through dispersive glass keep the hero alone (`bdpt::strategy`), and
 //! light enters the film as linear sRGB; the light budget's pilot measures the sRGB luminance.
 
+use super::bdpt::mis::{self, Reach};
 use super::bdpt::strategy::{self, Context, LightVertex};
-use super::bdpt::{mis, subpath};
+use super::bdpt::subpath;
 use crate::film::splat::{DRAIN_PATHS, SplatFilm};
 use crate::film::{Film, Layers};
 use crate::material::bxdf::Transport;
@@ -76,6 +80,15 @@ const WAVELENGTH_STREAM: u64 = 0x5643_4d57_4156;
 /// Radius reduction of progressive photon mapping (SmallVCM's default).
 pub const DEFAULT_ALPHA: f32 = 0.75;
 
+/// The default merge radii over SPPM's initial radius (`scene_radius`): light focused by mirrors
+/// and glass within the narrow one, light after a diffuse or glossy bounce, which varies slowly,
+/// within the wide one (`mis::Reach`; as SPPM gathers its indirect photons in a wider disc,
+/// `sppm::INDIRECT_REACH`). Measured on the caustic box at equal time (BENCHMARKS.md, 12-05):
+/// one radius of 1x read 0.0080, these 0.0060; narrower caustics blur less and wider indirect
+/// light is less noisy, and past them noise and bias take over (0.5x and 2x read 0.0066-0.0067).
+pub const FOCUSED_SCALE: f32 = 0.7;
+pub const SPREAD_SCALE: f32 = 1.5;
+
 /// Camera rays per image axis that pick the initial radius.
 const RADIUS_PROBES: u32 = 16;
 
@@ -86,10 +99,13 @@ pub struct VcmConfig {
     pub max_depth: u32,
     /// The offset rays leave surfaces with (`IntegratorDesc::ray_bias`).
     pub ray_bias: f32,
-    /// Merge radius of the first iteration.
+    /// Merge radius of the first iteration for focused light (`mis::Reach`).
     pub initial_radius: f32,
     /// Radius reduction: r_i = r_0 (i + 1)^((alpha - 1) / 2).
     pub alpha: f32,
+    /// The wide radius over the narrow one (`SPREAD_SCALE / FOCUSED_SCALE`; 1 merges all light
+    /// alike).
+    pub wide_reach: f32,
     /// One light path per this many camera paths (`LightBudget`); `None` chooses it.
     pub light_divisor: Option<u32>,
     /// Spectral mode (`crate::spectrum::lanes`; the module header); RGB otherwise.
@@ -107,8 +123,9 @@ impl VcmConfig {
         VcmConfig {
             max_depth: desc.depth_limit(desc.kind),
             ray_bias: desc.ray_bias(scene),
-            initial_radius: desc.photon.initial_radius.unwrap_or_else(|| scene_radius(scene, settings)),
+            initial_radius: desc.photon.initial_radius.unwrap_or_else(|| FOCUSED_SCALE * scene_radius(scene, settings)),
             alpha: DEFAULT_ALPHA,
+            wide_reach: SPREAD_SCALE / FOCUSED_SCALE,
             light_divisor: None,
             spectral: desc.spectral,
             merge_first_only: false,
@@ -271,9 +288,12 @@ struct LightPaths {
     vertices: Vec<LightVertex>,
     /// Path k's vertices are `vertices[ends[k - 1]..ends[k]]` (from 0 for the first).
     ends: Vec<u32>,
+    /// The vertices merged (`build_grid`).
     grid: HashGrid,
     /// What a merge reads of each vertex, by grid slot.
     merges: Vec<MergeVertex>,
+    /// Scratch: the indices of the vertices merged while the grid is built.
+    class: Vec<u32>,
     peak_bytes: usize,
 }
 
@@ -281,6 +301,28 @@ impl LightPaths {
     fn path(&self, k: usize) -> &[LightVertex] {
         let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
         &self.vertices[start..self.ends[k] as usize]
+    }
+
+    /// Sorts the vertices merged (`mis::Reach`: not light straight from the light, next-event
+    /// estimation's) into the grid, cells twice the wider radius wide (a query overlaps at most
+    /// 2 x 2 x 2 of them). One grid for both radii: a second grid's query cost more than
+    /// reading the few focused vertices within the wide radius and leaving out those beyond
+    /// the narrow one.
+    fn build_grid(&mut self, radius: f32, origin: Vec3) {
+        let vertices = &self.vertices;
+        self.class.clear();
+        self.class.extend((0..vertices.len() as u32).filter(|&i| vertices[i as usize].reach() != Reach::Direct));
+        let class = &self.class;
+        self.grid.rebuild(class.len(), |k| (vertices[class[k] as usize].hit.p, class[k]), 2.0 * radius, origin);
+        self.merges.clear();
+        self.merges.extend(self.grid.ids().iter().map(|&i| MergeVertex::of(&vertices[i as usize])));
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.vertices.capacity() * std::mem::size_of::<LightVertex>()
+            + (self.ends.capacity() + self.class.capacity()) * 4
+            + self.grid.memory_bytes()
+            + self.merges.capacity() * std::mem::size_of::<MergeVertex>()
     }
 }
 
@@ -424,8 +466,14 @@ impl Vcm {
         // iterations where k + it is a multiple of m, so each connects in one iteration of m
         // (and its connections count m times), and every light path is used once.
         let light_paths = pixels.div_ceil(u64::from(m));
-        let factors = mis::MisFactors::with_merging(radius as f64, pixels as f64, full / pixels.max(1) as f64)
-            .with_light_fraction(1.0 / f64::from(m));
+        let wide_radius = radius * self.config.wide_reach;
+        let factors = mis::MisFactors::with_merging(
+            radius as f64,
+            wide_radius as f64,
+            pixels as f64,
+            full / pixels.max(1) as f64,
+        )
+        .with_light_fraction(1.0 / f64::from(m));
         let factors = mis::MisFactors { merge_first_only: self.config.merge_first_only, ..factors };
         let mut ctx = Context::new(scene, self.config.max_depth, self.config.ray_bias, pixels, Some(factors));
         ctx.light_scale = (full / light_paths.max(1) as f64) as f32;
@@ -439,17 +487,8 @@ impl Vcm {
         if let Some(p) = probe.as_deref_mut() {
             p.rays += light_rays;
         }
-        // Cells twice the radius wide: a query overlaps at most 2 x 2 x 2 of them.
-        let vertices = &paths.vertices;
-        let origin = scene.bounds().min.min(Vec3::ZERO);
-        paths.grid.rebuild(vertices.len(), |i| (vertices[i].hit.p, i as u32), 2.0 * radius, origin);
-        paths.merges.clear();
-        paths.merges.extend(paths.grid.ids().iter().map(|&i| MergeVertex::of(&vertices[i as usize])));
-        let bytes = paths.vertices.capacity() * std::mem::size_of::<LightVertex>()
-            + paths.ends.capacity() * 4
-            + paths.grid.memory_bytes()
-            + paths.merges.capacity() * std::mem::size_of::<MergeVertex>();
-        paths.peak_bytes = paths.peak_bytes.max(bytes);
+        paths.build_grid(radius.max(wide_radius), scene.bounds().min.min(Vec3::ZERO));
+        paths.peak_bytes = paths.peak_bytes.max(paths.memory_bytes());
         if !self.camera_pass(&ctx, driver, splats, paths, it, radius, m, probe, count) {
             return false;
         }
@@ -558,6 +597,7 @@ impl Vcm {
         probe: Option<&mut Probe>,
         count: bool,
     ) -> bool {
+        let radii = (radius, radius * self.config.wide_reach);
         let settings = driver.settings;
         let pixels = settings.pixels();
         let interrupted = AtomicBool::new(false);
@@ -589,7 +629,7 @@ impl Vcm {
                 let before = stats.total();
                 let mut layers =
                     subpath::trace_camera_path(ctx, &mut sampler, ray, own, &own_bsdfs, &mut stats, |x, layers, _| {
-                        merges += u64::from(merge(ctx, x, paths, radius, layers))
+                        merges += u64::from(merge(ctx, x, paths, radii, layers))
                     });
                 if weight != 1.0 {
                     layers = layers.map(|c| c * weight);
@@ -642,20 +682,17 @@ impl MergeVertex {
     }
 }
 
-/// Merges camera vertex `x` with every light vertex within `radius` (the report's eq. 37-39:
-/// each merge weighted against the connections and other merges that make the same path),
-/// adding the estimate by layer to `layers`.
-fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: f32, layers: &mut Layers) -> u32 {
+/// Merges camera vertex `x` with every light vertex within the merge radius of its class
+/// (`radii`: narrow and wide; the report's eq. 37-39: each merge weighted against the
+/// connections and other merges that make the same path), adding the estimate by layer to
+/// `layers`. Returns the light vertices found.
+fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radii: (f32, f32), layers: &mut Layers) -> u32 {
     // Merges only at the camera path's first non-delta vertex (`MisFactors::merge_first_only`).
     if !ctx.factors.merges_at(x.layer.before_x()) {
         return 0;
     }
-    let r2 = radius * radius;
     let mut candidates = 0;
     let p = x.hit.p;
-    // The density estimate's kernel and the number of light paths.
-    let norm = 1.0 / (std::f32::consts::PI * r2 * paths.ends.len().max(1) as f32);
-    let mut sum = [Color::ZERO; 4];
     // A Lambertian camera vertex samples its `wo` with one density from every direction above
     // it (`Bsdf::pdf_reverse` does not read the other direction there): worked out at the first
     // light vertex above it and kept, the same number `reverse_pdf` would give each.
@@ -664,13 +701,20 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
     let one = x.bsdf.one_lambert();
     let ng = x.bsdf.geometric_normal();
     let mut rev_above: Option<f32> = None;
-    // Direct light is the camera-only techniques' (`MisFactors::direct_by_camera`): no merge
-    // with a light vertex of depth 1 at the camera path's first non-delta vertex.
-    let skip_direct = ctx.factors.direct_by_camera && x.layer.before_x();
-    paths.grid.for_each_within(p, radius, |found| {
+    // The density estimate's kernel (narrow and wide) and the number of light paths.
+    let light_paths = paths.ends.len().max(1) as f32;
+    let (r2, wide_r2) = (radii.0 * radii.0, radii.1 * radii.1);
+    let norms = (1.0 / (std::f32::consts::PI * r2 * light_paths), 1.0 / (std::f32::consts::PI * wide_r2 * light_paths));
+    let mut sum = [Color::ZERO; 4];
+    paths.grid.for_each_within(p, radii.0.max(radii.1), |found| {
         let y = &paths.merges[found.slot as usize];
+        // Focused light (`Reach`) within the narrow radius.
+        let focused = y.delta_only;
+        if focused && found.d2 > r2 {
+            return;
+        }
         candidates += 1;
-        if y.depth + x.depth > ctx.max_depth + 1 || (skip_direct && y.depth == 1) {
+        if y.depth + x.depth > ctx.max_depth + 1 {
             return;
         }
         let (f, pdf) = match &one {
@@ -683,13 +727,14 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radius: 
         let reverse =
             || strategy::reverse_pdf(ctx.scene, x.hit, x.bsdf, x.wo, y.wo, Transport::Importance, ctx.wl.as_ref());
         let rev = if lambertian && y.wo.dot(ng) > 0.0 { *rev_above.get_or_insert_with(reverse) } else { reverse() };
-        let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, &ctx.factors);
+        let (vm, norm) = if focused { (ctx.factors.vm, norms.0) } else { (ctx.factors.vm_wide, norms.1) };
+        let w = mis::merge_weight(&x.mis, &y.mis, pdf as f64, rev as f64, vm);
         // Both paths past dispersive glass: the merged path takes the hero's factor once.
         sum[strategy::light_layer(y.bounces, y.delta_only, x.layer, 1)] +=
-            joined(f * y.beta * w as f32, x.hero_only, y.hero_only);
+            joined(f * y.beta * (w as f32 * norm), x.hero_only, y.hero_only);
     });
     for (l, s) in layers.iter_mut().zip(sum) {
-        *l += x.beta * s * norm;
+        *l += x.beta * s;
     }
     candidates
 }
