@@ -87,6 +87,7 @@ pub const DEFAULT_ALPHA: f32 = 0.75;
 /// one radius of 1x read 0.0080, these 0.0060; narrower caustics blur less and wider indirect
 /// light is less noisy, and past them noise and bias take over (0.5x and 2x read 0.0066-0.0067).
 pub const FOCUSED_SCALE: f32 = 0.7;
+/// The wide radius over SPPM's initial radius (`FOCUSED_SCALE` has the measurement).
 pub const SPREAD_SCALE: f32 = 1.5;
 
 /// Camera rays per image axis that pick the initial radius.
@@ -293,7 +294,7 @@ struct LightPaths {
     /// What a merge reads of each vertex, by grid slot.
     merges: Vec<MergeVertex>,
     /// Scratch: the indices of the vertices merged while the grid is built.
-    class: Vec<u32>,
+    merged: Vec<u32>,
     peak_bytes: usize,
 }
 
@@ -310,17 +311,17 @@ impl LightPaths {
     /// the narrow one.
     fn build_grid(&mut self, radius: f32, origin: Vec3) {
         let vertices = &self.vertices;
-        self.class.clear();
-        self.class.extend((0..vertices.len() as u32).filter(|&i| vertices[i as usize].reach() != Reach::Direct));
-        let class = &self.class;
-        self.grid.rebuild(class.len(), |k| (vertices[class[k] as usize].hit.p, class[k]), 2.0 * radius, origin);
+        self.merged.clear();
+        self.merged.extend((0..vertices.len() as u32).filter(|&i| vertices[i as usize].reach() != Reach::Direct));
+        let merged = &self.merged;
+        self.grid.rebuild(merged.len(), |k| (vertices[merged[k] as usize].hit.p, merged[k]), 2.0 * radius, origin);
         self.merges.clear();
         self.merges.extend(self.grid.ids().iter().map(|&i| MergeVertex::of(&vertices[i as usize])));
     }
 
     fn memory_bytes(&self) -> usize {
         self.vertices.capacity() * std::mem::size_of::<LightVertex>()
-            + (self.ends.capacity() + self.class.capacity()) * 4
+            + (self.ends.capacity() + self.merged.capacity()) * 4
             + self.grid.memory_bytes()
             + self.merges.capacity() * std::mem::size_of::<MergeVertex>()
     }
