@@ -62,8 +62,8 @@
 //!   definition with three radii in play.
 //! - Merges may be left to the camera path's first non-delta vertex alone
 //!   (`MisFactors::merge_first_only`, as SPPM gathers only there): a merge at a later camera
-//!   vertex then is no technique, the partial sums leave its terms out (`SubpathMis::scatter`'s
-//!   `merges_here`; a light subpath's vertices before its last are never that vertex, and the
+//!   vertex then is no technique, the partial sums leave its terms out (`MisFactors::vm_at`
+//!   gives 0, `SubpathMis::scatter_camera`'s `merges_here` is false; a light subpath's vertices before its last are never that vertex, and the
 //!   last is only for light tracing) and the other techniques share its paths. On the bundled
 //!   caustic box the later merges held about half the indirect light with six times the
 //!   variance of the first vertex's (BENCHMARKS.md, 12-04): their randomness is the camera's
@@ -126,11 +126,10 @@ impl Reach {
 /// The constants of one iteration that tie connections, merges and the camera together.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MisFactors {
-    /// mis(eta) with eta = pi r^2 x light paths: a merge weighed against a connection, at a
-    /// vertex whose light prefix is all delta (0 without merging: bidirectional path tracing).
+    /// mis(eta) with eta = pi r^2 x light paths: a merge weighed against a connection, with
+    /// the narrow radius (`Reach::Focused`; 0 without merging: bidirectional path tracing).
     pub vm: f64,
-    /// The same with the wide radius, at a vertex whose light prefix has scattered off a
-    /// non-delta surface (see the module header).
+    /// The same with the wide radius (`Reach::Spread`).
     pub vm_wide: f64,
     /// Full-film pixels over light paths per sample index (see the module header).
     pub camera_scale: f64,
@@ -174,8 +173,9 @@ impl MisFactors {
 
     /// The same when only a fraction `rho` in (0, 1] of the camera paths connect to a light
     /// subpath and there are `rho` times the light paths the factors were made for (module
-    /// header). `vm` and `camera_scale` stay those of one light path per camera path: they
-    /// weigh techniques of light subpaths against each other, whose counts all scale alike.
+    /// header). `vm`, `vm_wide` and `camera_scale` stay those of one light path per camera
+    /// path: they weigh techniques of light subpaths against each other, whose counts all scale
+    /// alike.
     pub fn with_light_fraction(self, rho: f64) -> Self {
         MisFactors { camera_only: mis(1.0 / rho), ..self }
     }
@@ -793,7 +793,8 @@ mod tests {
                 let light = self.light_subpath(i + 1);
                 let cam = self.camera_subpath(i, true);
                 // A merge at v1 of a direct path (light vertex of depth 1) takes none.
-                let vm = f.vm_at(self.merges_at(i), self.reach(i));
+                // (`merge` made it only where merging at v_i is a technique.)
+                let vm = f.vm_at(true, self.reach(i));
                 let w = if direct { 0.0 } else { merge_weight(&cam, &light, self.to_prev[i], self.to_next[i], vm) };
                 out.push((format!("merge at v{i}"), p, w));
             }

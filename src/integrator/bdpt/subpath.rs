@@ -140,13 +140,6 @@ fn scattering(ctx: &Context, hit: &Hit, bsdf: &Bsdf, wo: Vec3, s: &BsdfSample, r
     (s.wi.dot(hit.ng) as f64, s.pdf as f64, rev as f64)
 }
 
-/// Most times a camera subpath splits at glass (`Bsdf::dielectric_split`): a split traces the
-/// reflection and the refraction both, where a single walk picks one by the Fresnel factor. A
-/// small light's highlight on glass (E S L), or seen through a glass ball after one reflection
-/// inside it (E S S S L, three splits), is then met by every camera sample that reaches the
-/// glass, not by the few that happen to pick reflection; no light subpath can find these paths.
-/// Later glass is crossed by the usual choice, so one camera sample costs at most
-/// `GLASS_SPLITS + 1` walks. The walks run depth first, the reflection before the refraction;
 /// A walk straight through a mask's transparent part: the crossing makes no vertex, so it gives
 /// back the depth its intersection counted; false (end the walk) once more than `MAX_CROSSINGS`
 /// crossings follow one another.
@@ -156,6 +149,13 @@ fn cross_mask(depth: &mut u32, crossings: &mut usize) -> bool {
     *crossings <= MAX_CROSSINGS
 }
 
+/// Most times a camera subpath splits at glass (`Bsdf::dielectric_split`): a split traces the
+/// reflection and the refraction both, where a single walk picks one by the Fresnel factor. A
+/// small light's highlight on glass (E S L), or seen through a glass ball after one reflection
+/// inside it (E S S S L, three splits), is then met by every camera sample that reaches the
+/// glass, not by the few that happen to pick reflection; no light subpath can find these paths.
+/// Later glass is crossed by the usual choice, so one camera sample costs at most
+/// `GLASS_SPLITS + 1` walks. The walks run depth first, the reflection before the refraction;
 /// Russian roulette reads a branch's throughput without the split's factor while it stays on
 /// mirrors and glass (`Walk::roulette_scale`). Measured on `scenes/16-glossy-caustics.toml`
 /// (VCM, 10 s, six seeds; BENCHMARKS.md): RMSE 0.112 without splits, 0.103 with one, 0.101

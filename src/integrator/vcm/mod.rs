@@ -709,8 +709,8 @@ fn merge(ctx: &Context, x: &strategy::CameraVertex, paths: &LightPaths, radii: (
     let mut sum = [Color::ZERO; 4];
     paths.grid.for_each_within(p, radii.0.max(radii.1), |found| {
         let y = &paths.merges[found.slot as usize];
-        // Focused light (`Reach`) within the narrow radius.
-        let focused = y.delta_only;
+        // Focused light within the narrow radius (the grid holds no `Reach::Direct` vertex).
+        let focused = Reach::of(y.depth, y.delta_only) == Reach::Focused;
         if focused && found.d2 > r2 {
             return;
         }
