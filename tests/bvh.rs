@@ -59,6 +59,66 @@ fn bvh_matches_brute_force_on_10000_rays() {
     assert!(hits > 1000, "too few hits ({hits}) to mean anything");
 }
 
+/// Scenes of a few to a few dozen primitives, which skip the tree (all of them in packets up to
+/// eight, every box tested in turn up to 32; `Bvh`): the same closest hit, occlusion and set of
+/// primitives crossed as brute force, on either side of each size limit.
+#[test]
+fn small_scenes_match_brute_force() {
+    let mut rng = Rng32::new(77);
+    for n in [1, 3, 8, 9, 17, 18, 31, 32, 33, 40] {
+        // Larger primitives in a smaller box than `random_scene`'s, so rays cross several.
+        let prims: Vec<Primitive> = (0..n)
+            .map(|i| {
+                let v = |rng: &mut Rng32| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0;
+                let shape = match i % 3 {
+                    0 => Shape::Quad(Quad::new(v(&mut rng), v(&mut rng), v(&mut rng)).expect("random edges")),
+                    1 => Shape::Sphere(Sphere::new(v(&mut rng), 0.1 + 0.4 * rng.uniform())),
+                    _ => Shape::Triangle(Triangle::new(v(&mut rng), v(&mut rng), v(&mut rng))),
+                };
+                Primitive { shape, material: i, light: caustic::geometry::NO_LIGHT }
+            })
+            .collect();
+        let bvh = Bvh::build(prims.clone(), &[]);
+        let mut hits = 0;
+        for _ in 0..3000 {
+            // From anywhere around the primitives towards a point among them.
+            let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 6.0 - 3.0;
+            let towards = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - 1.0;
+            let ray = Ray::new(o, (towards - o).normalize());
+            let shear = RayShear::new(&ray);
+            let mut best: Option<(f32, u32)> = None;
+            let mut crossed = Vec::new();
+            for p in &prims {
+                if let Some(h) = p.shape.intersect(&ray, &shear, best.map_or(f32::INFINITY, |b| b.0)) {
+                    best = Some((h.t, p.material));
+                }
+                if p.shape.intersect(&ray, &shear, f32::INFINITY).is_some() {
+                    crossed.push(p.material);
+                }
+            }
+            let got = bvh.intersect(&ray, f32::INFINITY).map(|(i, h)| (h.t, bvh.material_light(i).0));
+            assert_eq!(got, best, "{n} primitives, ray {ray:?}");
+            assert_eq!(bvh.occluded(&ray, f32::INFINITY), best.is_some(), "{n} primitives");
+            let mut seen = Vec::new();
+            let all = bvh.for_each_crossing(&ray, f32::INFINITY, |i, _| {
+                seen.push(bvh.material_light(i).0);
+                true
+            });
+            assert_eq!(all, Some(true));
+            seen.sort_unstable();
+            seen.dedup();
+            crossed.sort_unstable();
+            assert_eq!(seen, crossed, "{n} primitives, ray {ray:?}");
+            if let Some((t, _)) = best {
+                assert!(!bvh.occluded(&ray, t * 0.999));
+                assert!(bvh.occluded(&ray, t * 1.001));
+                hits += 1;
+            }
+        }
+        assert!(hits > 100 * n.min(10), "{n} primitives: too few hits ({hits}) to mean anything");
+    }
+}
+
 #[test]
 fn degenerate_inputs_build() {
     // Empty, one primitive, and many primitives with the same centroid.

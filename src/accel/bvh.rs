@@ -7,7 +7,7 @@
 
 use super::build::{BuildPrim, build_wide};
 use super::packet::Packets;
-use super::wide::{WideNode, traverse};
+use super::wide::{WideNode, flat_nodes, scan, traverse};
 use crate::geometry::{Aabb, Ray};
 use crate::shape::{CompactShape, PrimHit, Primitives, RayShear, SurfacePoint, TriangleMesh};
 use rayon::prelude::*;
@@ -15,9 +15,16 @@ use rayon::prelude::*;
 /// Up to this many primitives every ray tests them all: no box test beats a handful of shape
 /// tests (a four-sphere Whitted scene ran 17% slower through one wide node). Closest-hit and
 /// shadow rays test them four at a time (`Packets`: 1.17x the scalar loop's speed on the
-/// caustic Cornell box's 7 primitives); for 18 quads the tree's culling won (the diffuse box ran
+/// caustic Cornell box's 7 primitives); for 18 quads culling by boxes won (the diffuse box ran
 /// 7% slower in packets; BENCHMARKS.md, issue 29).
 const LINEAR_MAX: usize = 8;
+/// Up to this many primitives every ray tests all their boxes, four at a time and in a fixed
+/// order (`wide::scan`), instead of walking a tree. A room's walls are flat boxes that a ray
+/// enters only where it meets the wall, so the boxes cull as well as a tree does, without the
+/// tree's unpredictable branches (which child, push, pop): the diffuse Cornell box's 18 quads
+/// render 1.13x as fast, with the same instruction count (BENCHMARKS.md, issue 29). A mesh of
+/// 328 triangles ran 2.3x slower this way; 15-35 primitives in open scenes ran as fast.
+const FLAT_MAX: usize = 32;
 
 pub struct Bvh {
     nodes: Vec<WideNode>,
@@ -36,6 +43,8 @@ pub struct Bvh {
     triangles: bool,
     /// For at most `LINEAR_MAX` bounded primitives: all of them, four at a time.
     packets: Option<Packets>,
+    /// For at most `FLAT_MAX` bounded primitives (and more than `LINEAR_MAX`): their boxes.
+    flat: Option<Vec<WideNode>>,
 }
 
 impl Bvh {
@@ -67,7 +76,11 @@ impl Bvh {
         let crossings_enumerable = shapes.par_iter().all(CompactShape::crossings_enumerable);
         let triangles = shapes.par_iter().any(CompactShape::uses_shear);
         let packets = (bounded <= LINEAR_MAX).then(|| Packets::new(&shapes[..bounded]));
-        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable, triangles, packets }
+        let flat = (bounded > LINEAR_MAX && bounded <= FLAT_MAX).then(|| {
+            let boxes: Vec<Aabb> = (0..bounded).map(|i| prims.bounds(i, meshes)).collect();
+            flat_nodes(&boxes)
+        });
+        Bvh { nodes, depth, bounds, shapes, bounded, prims, crossings_enumerable, triangles, packets, flat }
     }
 
     /// The unbounded primitives (planes), after the tree's.
@@ -119,6 +132,7 @@ impl Bvh {
             + self.shapes.capacity() * std::mem::size_of::<CompactShape>()
             + self.prims.memory_bytes()
             + self.packets.as_ref().map_or(0, Packets::memory_bytes)
+            + self.flat.as_ref().map_or(0, |f| f.capacity() * std::mem::size_of::<WideNode>())
     }
 
     /// Bytes held by the tree's nodes alone.
@@ -149,6 +163,16 @@ impl Bvh {
             return p.intersect(&self.shapes, ray, &shear, &mut closest).map(|(i, h)| (i as u32, h));
         }
         let mut best = None;
+        if let Some(flat) = &self.flat {
+            scan(flat, ray, &mut closest, |i, closest| {
+                if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
+                    *closest = h.t;
+                    best = Some((i, h));
+                }
+                false
+            });
+            return best.map(|(i, h)| (i as u32, h));
+        }
         let leaf = |first: usize, count: usize, closest: &mut f32| {
             for i in first..first + count {
                 if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
@@ -202,6 +226,8 @@ impl Bvh {
         let mut t = t_max;
         let stopped = if self.bounded <= LINEAR_MAX {
             leaf(0, self.bounded, &mut t)
+        } else if let Some(flat) = &self.flat {
+            scan(flat, ray, &mut t, |i, t| leaf(i, 1, t))
         } else {
             traverse::<false>(&self.nodes, self.depth, ray, &mut t, &mut leaf)
         };
@@ -229,6 +255,9 @@ impl Bvh {
         }
         if let Some(p) = &self.packets {
             return p.occluded(&self.shapes, ray, &shear, t_max);
+        }
+        if let Some(flat) = &self.flat {
+            return scan(flat, ray, &mut t, |i, t| self.shapes[i].intersect(ray, &shear, *t).is_some());
         }
         traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }

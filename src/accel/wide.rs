@@ -7,7 +7,7 @@
 //! measured slower here for camera and incoherent rays alike (BENCHMARKS.md), the decoding
 //! costing more than the memory traffic it saved.
 
-use crate::geometry::Ray;
+use crate::geometry::{Aabb, Ray};
 use crate::math::float::gamma;
 use glam::Vec4;
 
@@ -183,4 +183,44 @@ fn walk<const ORDERED: bool, const N: usize>(
             }
         }
     }
+}
+
+/// The boxes of a small scene's primitives, four to a node in primitive order, for `scan`.
+pub(super) fn flat_nodes(boxes: &[Aabb]) -> Vec<WideNode> {
+    // Largest boxes first (to lower t_max early) measured no faster on the Cornell box.
+    let order: Vec<u32> = (0..boxes.len() as u32).collect();
+    order
+        .chunks(4)
+        .map(|chunk| {
+            let rows: Vec<(Vec4, Vec4)> =
+                chunk.iter().map(|&i| (boxes[i as usize].min.extend(0.0), boxes[i as usize].max.extend(0.0))).collect();
+            let child = std::array::from_fn(|k| chunk.get(k).copied().unwrap_or(WideNode::NONE));
+            WideNode::new(&rows, child)
+        })
+        .collect()
+}
+
+/// Calls `prim(i, t_max)` for every primitive whose box (in `flat_nodes`) the ray enters before
+/// `*t_max`, in primitive order; `prim` may lower `*t_max` and returns true to stop (then so
+/// does this). No hierarchy, no stack: for a few dozen primitives whose boxes are tight (the
+/// walls of a room), testing every box four at a time visits fewer boxes than a tree does.
+#[inline(always)]
+pub(super) fn scan(
+    nodes: &[WideNode],
+    ray: &Ray,
+    t_max: &mut f32,
+    mut prim: impl FnMut(usize, &mut f32) -> bool,
+) -> bool {
+    let wr = WideRay::new(ray);
+    for node in nodes {
+        let (mut mask, _) = wr.hit(node, *t_max);
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if prim(node.child[k] as usize, t_max) {
+                return true;
+            }
+        }
+    }
+    false
 }
