@@ -364,13 +364,34 @@ fn run_chunks(
             (out, sources)
         })
         .collect();
-    hits.clear();
-    hits.reserve(parts.iter().map(|p| p.0.len()).sum());
+    concat_in_parallel(&parts, hits);
     sources.clear();
-    for (h, s) in parts {
-        hits.extend_from_slice(&h);
-        sources.extend_from_slice(&s);
+    for (_, s) in &parts {
+        sources.extend_from_slice(s);
     }
+}
+
+/// `hits` replaced by the chunks' hits in chunk order, written by all threads: a million
+/// photons store about 90 MB, and one thread copying them into fresh memory (its page faults
+/// included) took a quarter of the photon pass (BENCHMARKS.md, issue 29). Each thread fills a
+/// contiguous run of the output, finding its chunk once and then walking on.
+fn concat_in_parallel(parts: &[(Vec<PhotonHit>, Vec<u64>)], hits: &mut Vec<PhotonHit>) {
+    let mut starts = Vec::with_capacity(parts.len() + 1);
+    starts.push(0usize);
+    for (h, _) in parts {
+        starts.push(starts[starts.len() - 1] + h.len());
+    }
+    let total = starts[parts.len()];
+    hits.clear();
+    hits.par_extend((0..total).into_par_iter().map_init(
+        || usize::MAX,
+        |part, i| {
+            if *part >= parts.len() || !(starts[*part]..starts[*part + 1]).contains(&i) {
+                *part = starts.partition_point(|&s| s <= i) - 1;
+            }
+            parts[*part].0[i - starts[*part]]
+        },
+    ));
 }
 
 /// Follows one photon, appending its stored hits to `out`. In spectral mode (`wl`) `flux` holds
@@ -716,6 +737,40 @@ mod tests {
             let h = PhotonHit { p: Vec3::ZERO, dir: Vec3::Z, flux: Color::ONE.into(), flags, depth, n: Vec3::Z };
             let packed = packed_flags(&h);
             assert_eq!((packed & (DIRECT | CAUSTIC), packed_depth(packed)), (flags, u32::from(depth)));
+        }
+    }
+
+    /// The chunks' hits come out in chunk order, whatever their sizes (empty chunks included)
+    /// and however the threads split the output.
+    #[test]
+    fn chunks_concatenate_in_order() {
+        let hit = |k: usize| PhotonHit {
+            p: Vec3::splat(k as f32),
+            dir: Vec3::Z,
+            flux: Color::ONE.into(),
+            flags: 0,
+            depth: (k % 7) as u8,
+            n: Vec3::Z,
+        };
+        let mut rng = Rng32::new(5);
+        let mut next = 0;
+        let parts: Vec<(Vec<PhotonHit>, Vec<u64>)> = (0..300)
+            .map(|c| {
+                let len = if c % 5 == 0 { 0 } else { (rng.uniform() * 900.0) as usize };
+                let part = (next..next + len).map(hit).collect();
+                next += len;
+                (part, Vec::new())
+            })
+            .collect();
+        for threads in [1, 2, 3, 8] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut hits = vec![hit(999_999); 17];
+            pool.install(|| concat_in_parallel(&parts, &mut hits));
+            assert_eq!(hits.len(), next);
+            assert!(
+                hits.iter().enumerate().all(|(k, h)| h.p.x == k as f32 && h.depth == (k % 7) as u8),
+                "{threads} threads"
+            );
         }
     }
 
