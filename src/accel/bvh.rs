@@ -3,7 +3,9 @@
 //! tested with every ray. The primitives are reordered into leaf order (planes last) and their
 //! intersection data copied beside them, so each leaf is a contiguous run of at most
 //! `build::MAX_LEAF` compact shapes and a hit's index names its primitive directly, planes
-//! included.
+//! included. Small scenes skip the tree: up to `LINEAR_MAX` bounded primitives are tested in
+//! packets, up to `FLAT_MAX` through their boxes in a fixed order (the tree is still built, for
+//! the order it gives the primitives).
 
 use super::build::{BuildPrim, build_wide};
 use super::packet::Packets;
@@ -22,7 +24,7 @@ const LINEAR_MAX: usize = 8;
 /// order (`wide::scan`), instead of walking a tree. A room's walls are flat boxes that a ray
 /// enters only where it meets the wall, so the boxes cull as well as a tree does, without the
 /// tree's unpredictable branches (which child, push, pop): the diffuse Cornell box's 18 quads
-/// render 1.13x as fast, with the same instruction count (BENCHMARKS.md, issue 29). A mesh of
+/// render 1.13x as fast, with 1% more instructions (BENCHMARKS.md, issue 29). A mesh of
 /// 328 triangles ran 2.3x slower this way; 15-35 primitives in open scenes ran as fast.
 const FLAT_MAX: usize = 32;
 

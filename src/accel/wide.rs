@@ -186,15 +186,14 @@ fn walk<const ORDERED: bool, const N: usize>(
 }
 
 /// The boxes of a small scene's primitives, four to a node in primitive order, for `scan`.
+/// (Largest boxes first, to lower t_max early, measured no faster on the Cornell box.)
 pub(super) fn flat_nodes(boxes: &[Aabb]) -> Vec<WideNode> {
-    // Largest boxes first (to lower t_max early) measured no faster on the Cornell box.
-    let order: Vec<u32> = (0..boxes.len() as u32).collect();
-    order
+    boxes
         .chunks(4)
-        .map(|chunk| {
-            let rows: Vec<(Vec4, Vec4)> =
-                chunk.iter().map(|&i| (boxes[i as usize].min.extend(0.0), boxes[i as usize].max.extend(0.0))).collect();
-            let child = std::array::from_fn(|k| chunk.get(k).copied().unwrap_or(WideNode::NONE));
+        .enumerate()
+        .map(|(c, chunk)| {
+            let rows: Vec<(Vec4, Vec4)> = chunk.iter().map(|b| (b.min.extend(0.0), b.max.extend(0.0))).collect();
+            let child = std::array::from_fn(|k| if k < chunk.len() { (4 * c + k) as u32 } else { WideNode::NONE });
             WideNode::new(&rows, child)
         })
         .collect()
