@@ -6,7 +6,7 @@
 //! Its state depends only on (seed, pixel, index), so images do not depend on thread count or on
 //! how samples are split into passes.
 
-use super::sobol::sobol_pair;
+use super::sobol::{sobol_first, sobol_pair};
 use super::{Rng32, SeedPrefix, hash_seed, part_mix, permutation_element};
 use glam::Vec2;
 
@@ -183,9 +183,21 @@ impl Sampler {
         self.next_pair(false)
     }
 
+    /// A further 1-D sample: the first coordinate of `next_2d` (a Sobol pair's second is not
+    /// worked out).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        self.next_2d().x
+        if self.kind == SamplerKind::Jittered {
+            return self.next_2d().x;
+        }
+        self.next_sobol_first()
+    }
+
+    /// `next_pair(false).x` of a Sobol sampler. Out of line, as `next_pair` is.
+    #[inline(never)]
+    fn next_sobol_first(&mut self) -> f32 {
+        let scramble = self.next_scramble();
+        sobol_first(self.sobol_index(), scramble).min(ONE_MINUS_EPS)
     }
 
     /// The plain random stream of this pixel sample, for decisions that need no stratification.
@@ -202,14 +214,27 @@ impl Sampler {
         Rng32::new(self.pixel.hash(&[self.index as u64, tag]))
     }
 
-    #[inline(never)]
-    fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
+    /// The next pair's scramble (a stratum permutation's, or a Sobol sequence's seed).
+    #[inline(always)]
+    fn next_scramble(&mut self) -> u32 {
         let pair = self.pair;
         self.pair += 1;
+        if pair == 0 { self.pixel_scramble } else { scramble_mixed(self.pixel, pair, self.group_mix) }
+    }
+
+    /// The sample's index in its Sobol sequences.
+    #[inline(always)]
+    fn sobol_index(&self) -> u32 {
+        self.index & ((1 << SOBOL_INDEX_BITS) - 1)
+    }
+
+    #[inline(never)]
+    fn next_pair(&mut self, stratified_pair: bool) -> Vec2 {
         if self.kind == SamplerKind::Jittered && !stratified_pair {
+            self.pair += 1;
             return self.rng.uniform2();
         }
-        let scramble = if pair == 0 { self.pixel_scramble } else { scramble_mixed(self.pixel, pair, self.group_mix) };
+        let scramble = self.next_scramble();
         match self.kind {
             SamplerKind::Jittered => {
                 // Samples come in sets of N^2, one per stratum. Within a set, each pair visits
@@ -233,8 +258,7 @@ impl Sampler {
                 Vec2::new(((sx as f32 + j.x) * inv).min(ONE_MINUS_EPS), ((sy as f32 + j.y) * inv).min(ONE_MINUS_EPS))
             }
             SamplerKind::Sobol => {
-                let i = self.index & ((1 << SOBOL_INDEX_BITS) - 1);
-                let (x, y) = sobol_pair(i, scramble);
+                let (x, y) = sobol_pair(self.sobol_index(), scramble);
                 Vec2::new(x.min(ONE_MINUS_EPS), y.min(ONE_MINUS_EPS))
             }
         }

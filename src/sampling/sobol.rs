@@ -77,19 +77,38 @@ const fn tables() -> [[[u32; 256]; 2]; 2] {
 /// coordinate in [0, 1): `(sample(index, 0, seed), sample(index, 1, seed))` of `sobol_burley`.
 #[inline]
 pub fn sobol_pair(index: u32, seed: u32) -> (f32, f32) {
-    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
+    let (hi, lo) = shuffled_bytes(index, seed);
+    (coordinate(0, hi, lo, seed), coordinate(1, hi, lo, seed))
+}
+
+/// The first coordinate of `sobol_pair(index, seed)`, bit for bit, without the second's work
+/// (a 1-D sample reads only it).
+#[inline]
+pub fn sobol_first(index: u32, seed: u32) -> f32 {
+    let (hi, lo) = shuffled_bytes(index, seed);
+    coordinate(0, hi, lo, seed)
+}
+
+/// The top two bytes of the reversed, shuffled index (the index is below 2^16).
+#[inline(always)]
+fn shuffled_bytes(index: u32, seed: u32) -> (usize, usize) {
+    use sobol_burley::parts::{hash, owen_scramble_rev};
     debug_assert!(index < 1 << 16);
     let index_rev = u32::from(REVERSED_BYTES[(index & 0xff) as usize]) << 24
         | u32::from(REVERSED_BYTES[((index >> 8) & 0xff) as usize]) << 16;
     let shuffled = owen_scramble_rev(index_rev, hash(seed ^ 0x79c6_8e4a));
-    let (hi, lo) = ((shuffled >> 24) as usize, ((shuffled >> 16) & 0xff) as usize);
-    let x = TABLES[0][0][hi] ^ TABLES[0][1][lo];
-    let y = TABLES[1][0][hi] ^ TABLES[1][1][lo];
-    // The crate's per-dimension scramble seeds for dimensions 0 and 1.
+    ((shuffled >> 24) as usize, ((shuffled >> 16) & 0xff) as usize)
+}
+
+/// Dimension `d` (0 or 1) of the point whose shuffled index bytes are `hi`, `lo`, scrambled
+/// with the crate's per-dimension seed.
+#[inline(always)]
+fn coordinate(d: usize, hi: usize, lo: usize, seed: u32) -> f32 {
+    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
+    const DIMENSION_SEEDS: [u32; 2] = [0x912f_69ba, 0x174f_18ab];
+    let x = TABLES[d][0][hi] ^ TABLES[d][1][lo];
     let s = seed.wrapping_mul(0x9c8f_2d3b);
-    let x = owen_scramble_rev(x, hash(s ^ 0x912f_69ba));
-    let y = owen_scramble_rev(y, hash(s ^ 0x174f_18ab));
-    (u32_to_f32_norm(reverse(x)), u32_to_f32_norm(reverse(y)))
+    u32_to_f32_norm(reverse(owen_scramble_rev(x, hash(s ^ DIMENSION_SEEDS[d]))))
 }
 
 #[cfg(test)]
@@ -101,6 +120,15 @@ mod tests {
         let mut rng = crate::sampling::Rng32::new(3);
         for x in [0u32, 1, 0x8000_0000, u32::MAX, 0x1234_5678].into_iter().chain((0..10_000).map(|_| rng.next_u32())) {
             assert_eq!(reverse(x), x.reverse_bits(), "{x:#x}");
+        }
+    }
+
+    #[test]
+    fn first_coordinate_alone_equals_the_pairs() {
+        let mut rng = crate::sampling::Rng32::new(11);
+        for _ in 0..200_000 {
+            let (index, seed) = (rng.next_u32() & 0xffff, rng.next_u32());
+            assert_eq!(sobol_first(index, seed).to_bits(), sobol_pair(index, seed).0.to_bits(), "{index} {seed}");
         }
     }
 
