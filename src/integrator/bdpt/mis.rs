@@ -45,7 +45,6 @@
 //!   weigh `camera_only` = mis(1 / rho) more, which enters at the light subpath's start (its
 //!   partial sums there are the s = 1 and s = 0 terms) and, inverted, where a camera-only
 //!   technique weighs the others.
-
 //! - A merge's radius depends on how the light reached the vertex (`Reach`), the same rule for
 //!   every technique's view of the path: none for light straight from the light (next-event
 //!   estimation's, which is noiseless for a point light where a merge is noisy), the narrow
@@ -335,11 +334,10 @@ pub fn direct_light_sample_weight(bsdf_pdf: f64, direct_pdf: f64) -> f64 {
 /// distance, for a directional light 1, SmallVCM's conventions), `emission_pdf` the density
 /// of the light emitting towards the vertex (times its choice probability), `cos_camera` and
 /// `cos_light` the cosines at the vertex (geometric normal) and at the light (1 for lights
-/// without a surface); `first` whether the vertex is the camera path's first non-delta one.
+/// without a surface).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn light_sample_weight(
-    first: bool,
     cam: &SubpathMis,
     bsdf_pdf: f64,
     bsdf_rev_pdf: f64,
@@ -354,9 +352,9 @@ pub fn light_sample_weight(
     }
     let w_light = mis(bsdf_pdf / direct_pdf);
     let ratio = emission_pdf * cos_camera.abs() / (direct_pdf * cos_light.abs().max(MIN_COS));
-    // A merge at the vertex would take light straight from the light: none.
-    let w_camera =
-        mis(ratio) * (f.vm_at(first, Reach::Direct) + cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
+    // No merge term: a merge at the vertex would take light straight from the light, which is
+    // no technique (`Reach::Direct`).
+    let w_camera = mis(ratio) * (cam.d_vcm + cam.d_vc * mis(bsdf_rev_pdf)) / f.camera_only;
     1.0 / (w_light + 1.0 + w_camera)
 }
 
@@ -750,7 +748,6 @@ mod tests {
                     };
                     let bsdf = if self.delta_light() { 0.0 } else { self.to_prev[1] };
                     light_sample_weight(
-                        self.first_from_camera() == Some(1),
                         &cam,
                         bsdf,
                         self.to_next[1],

@@ -407,7 +407,6 @@ pub fn light_sample(ctx: &Context, x: &CameraVertex, u_pick: f32, u: Vec2, stats
     let rev = reverse_pdf(scene, x.hit, x.bsdf, x.wo, ds.wi, Transport::Importance, ctx.wl.as_ref());
     let pick_e = scene.light_picker.prob(li) as f64;
     let w = mis::light_sample_weight(
-        x.layer.before_x(),
         &x.mis,
         bsdf_pdf,
         rev as f64,
