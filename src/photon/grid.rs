@@ -71,8 +71,15 @@ fn insert_sorted(list: &mut [u32; 8], n: usize, b: u32) {
 
 impl HashGrid {
     /// Sorts `n` points into the grid again, reusing its buffers (an iteration allocates no new
-    /// grid): `point(i)` is the i-th point's position and id. Cells are `cell` wide from `origin`.
-    pub fn rebuild(&mut self, n: usize, point: impl Fn(usize) -> (Vec3, u32), cell: f32, origin: Vec3) {
+    /// grid): `points()` gives each point's position and id, the same `n` in the same order on
+    /// each call. Cells are `cell` wide from `origin`.
+    pub fn rebuild<I: Iterator<Item = (Vec3, u32)>>(
+        &mut self,
+        n: usize,
+        points: impl Fn() -> I,
+        cell: f32,
+        origin: Vec3,
+    ) {
         let size = n.next_power_of_two().max(1);
         let mask = size as u64 - 1;
         // Buckets are worked out twice (to count, then to place) rather than kept: a buffer of
@@ -80,8 +87,8 @@ impl HashGrid {
         let bucket = |p: Vec3| (crate::sampling::mix64(cell_key(Self::coords(p, origin, cell))) & mask) as usize;
         self.starts.clear();
         self.starts.resize(size + 1, 0);
-        for i in 0..n {
-            self.starts[bucket(point(i).0) + 1] += 1;
+        for (p, _) in points().take(n) {
+            self.starts[bucket(p) + 1] += 1;
         }
         for b in 0..size {
             self.starts[b + 1] += self.starts[b];
@@ -94,8 +101,7 @@ impl HashGrid {
         self.ids.resize(n, 0);
         // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
         // starts are then one bucket behind, and shifting them back restores them.
-        for i in 0..n {
-            let (p, id) = point(i);
+        for (p, id) in points().take(n) {
             let b = bucket(p);
             let k = self.starts[b] as usize;
             (self.xs[k], self.ys[k], self.zs[k]) = (p.x, p.y, p.z);
@@ -270,7 +276,8 @@ mod tests {
         for (cell, r) in [(0.6, 0.3), (0.3, 0.3), (0.05, 0.3)] {
             let mut grid = HashGrid::default();
             // Ids other than the index, to tell them from slots.
-            grid.rebuild(points.len(), |i| (points[i], 3 * i as u32 + 1), cell, Vec3::splat(-2.0));
+            let numbered = || points.iter().enumerate().map(|(i, &p)| (p, 3 * i as u32 + 1));
+            grid.rebuild(points.len(), numbered, cell, Vec3::splat(-2.0));
             for q in 0..300 {
                 let p = if q % 2 == 0 {
                     Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0

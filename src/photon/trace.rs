@@ -11,9 +11,10 @@
 //!   only for L S+ D paths, emitted in batches until enough are stored or a cap is reached.
 //!
 //! Photon `i` of a pass draws its random numbers from a stream seeded by (seed, pass, i), and
-//! photons are traced in fixed chunks whose results are joined in order, so the maps are the
-//! same for any thread count.
+//! photons are traced in fixed chunks whose hits are read in chunk order (`PhotonHits`), so
+//! the maps are the same for any thread count.
 
+use super::hits::PhotonHits;
 use crate::geometry::Ray;
 use crate::light::Light;
 use crate::material::bsdf::Bsdf;
@@ -85,7 +86,7 @@ pub struct PhotonHit {
 #[derive(Clone, Debug, Default)]
 pub struct PhotonPass {
     /// Stored hits, flux already divided by the number emitted.
-    pub hits: Vec<PhotonHit>,
+    pub hits: PhotonHits,
     pub emitted: u64,
     /// The caustic pass stopped at its emission cap before storing the requested number.
     pub capped: bool,
@@ -164,7 +165,7 @@ pub const MAX_BOUNCES: u32 = 64;
 /// Traces `n_emit` photons from the scene's lights (chosen in proportion to power); rays leave
 /// surfaces with offset `bias`.
 pub fn trace_global(scene: &Scene, n_emit: u64, seed: u64, bias: f32, watch: Watch) -> PhotonPass {
-    let mut hits = Vec::new();
+    let mut hits = PhotonHits::default();
     trace_global_into(scene, n_emit, seed, bias, Store::All, PhotonColour::Rgb, watch, &mut hits);
     PhotonPass { hits, emitted: n_emit, capped: false, cancelled: watch.cancelled() }
 }
@@ -182,7 +183,7 @@ pub fn trace_global_into(
     store: Store,
     colour: PhotonColour,
     watch: Watch,
-    hits: &mut Vec<PhotonHit>,
+    hits: &mut PhotonHits,
 ) {
     // Every photon's stream is hash_seed(&[seed, 1, i]); the shared parts are mixed once.
     let stream = SeedPrefix::new(&[seed, 1]);
@@ -215,7 +216,7 @@ pub fn trace_global_into(
 /// Traces caustic photons aimed at the bounding spheres `targets` (of mirrors, metals and glass:
 /// `specular_targets`) until exactly `n_store` are stored, or `cap` have been emitted.
 ///
-/// Photons are emitted in index order (in parallel chunks joined in order), so "the first
+/// Photons are emitted in index order (in parallel chunks read in order), so "the first
 /// `n_store` hits" is the same set on any thread count. As in Jensen's photon tracing loop (emit
 /// until enough are stored, then scale the stored photons by 1 / the number emitted), every
 /// stored photon's power is divided by the photons emitted up to and including the one that
@@ -236,7 +237,7 @@ pub fn trace_caustic(
     if targets.is_empty() || n_store == 0 {
         return PhotonPass::default();
     }
-    let mut hits = Vec::new();
+    let mut hits = PhotonHits::default();
     // The photon index of each stored hit, to know how many were emitted up to the last one.
     let mut sources: Vec<u64> = Vec::new();
     let mut emitted = 0u64;
@@ -247,7 +248,7 @@ pub fn trace_caustic(
     let stream = SeedPrefix::new(&[seed, 2]);
     while (hits.len() as u64) < n_store && emitted < cap && !watch.cancelled() {
         let n = batch.min(cap - emitted);
-        let (mut h, mut s) = (Vec::new(), Vec::new());
+        let (mut h, mut s) = (PhotonHits::default(), Vec::new());
         run_chunks(
             emitted,
             n,
@@ -273,7 +274,7 @@ pub fn trace_caustic(
             &mut h,
             &mut s,
         );
-        hits.extend(h);
+        hits.append(h);
         sources.extend(s);
         emitted += n;
         watch.advance(n);
@@ -302,10 +303,11 @@ struct Emitted {
     light: u32,
 }
 
-/// Emits photons `first .. first + n` in fixed chunks, in parallel, joined in index order into
-/// `hits` (replacing what it held), each stored flux multiplied by `scale` (1 / photons emitted,
-/// when known beforehand). Once the watch's cancel flag is set, chunks not yet started are
-/// skipped. For the caustic map, `sources` receives the index of the photon that made each hit.
+/// Emits photons `first .. first + n` in fixed chunks, in parallel, each chunk's hits into its
+/// own buffer of `hits` (its old contents replaced, its buffers reused), each stored flux
+/// multiplied by `scale` (1 / photons emitted, when known beforehand). Once the watch's cancel
+/// flag is set, chunks not yet started are skipped. For the caustic map, `sources` receives the
+/// index of the photon that made each hit.
 #[allow(clippy::too_many_arguments)]
 fn run_chunks(
     first: u64,
@@ -317,81 +319,53 @@ fn run_chunks(
     scale: f32,
     bias: f32,
     watch: Watch,
-    hits: &mut Vec<PhotonHit>,
+    hits: &mut PhotonHits,
     sources: &mut Vec<u64>,
 ) {
-    let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<(Vec<PhotonHit>, Vec<u64>)> = (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            // Room for one stored hit per global photon (a closed room stores one or two), so
-            // threads do not take turns in the allocator growing their buffers; caustic photons
-            // are mostly not stored.
-            let mut out = Vec::with_capacity(match store {
-                Store::All => 2 * CHUNK as usize,
-                Store::Indirect => CHUNK as usize,
-                Store::Media | Store::Volume => 4 * CHUNK as usize,
-                Store::Caustic => 0,
-            });
-            let mut sources = Vec::new();
-            if watch.cancelled() {
-                return (out, sources);
-            }
-            let start = first + c * CHUNK;
-            let end = (start + CHUNK).min(first + n);
-            for i in start..end {
-                if let Some((e, p_light, mut rng)) = emit(i) {
-                    let mut flux = e.flux / p_light;
-                    // Spectral photons draw their wavelengths after everything RGB ones draw at
-                    // emission, so RGB photons are as they were.
-                    let wl = (colour != PhotonColour::Rgb).then(|| Wavelengths::sample(rng.uniform()));
-                    if let Some(wl) = &wl {
-                        flux = scene.emission_in(flux, e.light, Some(wl));
-                    }
-                    if flux.max_element() > 0.0 && flux.is_finite() {
-                        let xyz = colour == PhotonColour::SpectralXyz;
-                        trace_photon(scene, e.ray, flux, &mut rng, store, bias, wl, xyz, &mut out);
-                        if store == Store::Caustic {
-                            sources.resize(out.len(), i);
-                        }
+    let chunks = n.div_ceil(CHUNK) as usize;
+    let mut chunk_sources: Vec<Vec<u64>> = vec![Vec::new(); chunks];
+    hits.reset(chunks).par_iter_mut().zip(&mut chunk_sources).enumerate().for_each(|(c, (out, sources))| {
+        // Room for one stored hit per global photon (a closed room stores one or two), so
+        // threads do not take turns in the allocator growing their buffers; caustic photons
+        // are mostly not stored.
+        out.reserve(match store {
+            Store::All => 2 * CHUNK as usize,
+            Store::Indirect => CHUNK as usize,
+            Store::Media | Store::Volume => 4 * CHUNK as usize,
+            Store::Caustic => 0,
+        });
+        if watch.cancelled() {
+            return;
+        }
+        let start = first + c as u64 * CHUNK;
+        let end = (start + CHUNK).min(first + n);
+        for i in start..end {
+            if let Some((e, p_light, mut rng)) = emit(i) {
+                let mut flux = e.flux / p_light;
+                // Spectral photons draw their wavelengths after everything RGB ones draw at
+                // emission, so RGB photons are as they were.
+                let wl = (colour != PhotonColour::Rgb).then(|| Wavelengths::sample(rng.uniform()));
+                if let Some(wl) = &wl {
+                    flux = scene.emission_in(flux, e.light, Some(wl));
+                }
+                if flux.max_element() > 0.0 && flux.is_finite() {
+                    let xyz = colour == PhotonColour::SpectralXyz;
+                    trace_photon(scene, e.ray, flux, &mut rng, store, bias, wl, xyz, out);
+                    if store == Store::Caustic {
+                        sources.resize(out.len(), i);
                     }
                 }
             }
-            if scale != 1.0 {
-                out.iter_mut().for_each(|h| h.flux = (h.flux.get() * scale).into());
-            }
-            watch.advance(end - start);
-            (out, sources)
-        })
-        .collect();
-    concat_in_parallel(&parts, hits);
+        }
+        if scale != 1.0 {
+            out.iter_mut().for_each(|h| h.flux = (h.flux.get() * scale).into());
+        }
+        watch.advance(end - start);
+    });
     sources.clear();
-    for (_, s) in &parts {
+    for s in &chunk_sources {
         sources.extend_from_slice(s);
     }
-}
-
-/// `hits` replaced by the chunks' hits in chunk order, written by all threads: a million
-/// photons store about 90 MB, and one thread copying them into fresh memory (its page faults
-/// included) took a quarter of the photon pass (BENCHMARKS.md, issue 29). Each thread fills a
-/// contiguous run of the output, finding its chunk once and then walking on.
-fn concat_in_parallel(parts: &[(Vec<PhotonHit>, Vec<u64>)], hits: &mut Vec<PhotonHit>) {
-    let mut starts = Vec::with_capacity(parts.len() + 1);
-    starts.push(0usize);
-    for (h, _) in parts {
-        starts.push(starts[starts.len() - 1] + h.len());
-    }
-    let total = starts[parts.len()];
-    hits.clear();
-    hits.par_extend((0..total).into_par_iter().map_init(
-        || usize::MAX,
-        |part, i| {
-            if *part >= parts.len() || !(starts[*part]..starts[*part + 1]).contains(&i) {
-                *part = starts.partition_point(|&s| s <= i) - 1;
-            }
-            parts[*part].0[i - starts[*part]]
-        },
-    ));
 }
 
 /// Follows one photon, appending its stored hits to `out`. In spectral mode (`wl`) `flux` holds
@@ -737,40 +711,6 @@ mod tests {
             let h = PhotonHit { p: Vec3::ZERO, dir: Vec3::Z, flux: Color::ONE.into(), flags, depth, n: Vec3::Z };
             let packed = packed_flags(&h);
             assert_eq!((packed & (DIRECT | CAUSTIC), packed_depth(packed)), (flags, u32::from(depth)));
-        }
-    }
-
-    /// The chunks' hits come out in chunk order, whatever their sizes (empty chunks included)
-    /// and however the threads split the output.
-    #[test]
-    fn chunks_concatenate_in_order() {
-        let hit = |k: usize| PhotonHit {
-            p: Vec3::splat(k as f32),
-            dir: Vec3::Z,
-            flux: Color::ONE.into(),
-            flags: 0,
-            depth: (k % 7) as u8,
-            n: Vec3::Z,
-        };
-        let mut rng = Rng32::new(5);
-        let mut next = 0;
-        let parts: Vec<(Vec<PhotonHit>, Vec<u64>)> = (0..300)
-            .map(|c| {
-                let len = if c % 5 == 0 { 0 } else { (rng.uniform() * 900.0) as usize };
-                let part = (next..next + len).map(hit).collect();
-                next += len;
-                (part, Vec::new())
-            })
-            .collect();
-        for threads in [1, 2, 3, 8] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let mut hits = vec![hit(999_999); 17];
-            pool.install(|| concat_in_parallel(&parts, &mut hits));
-            assert_eq!(hits.len(), next);
-            assert!(
-                hits.iter().enumerate().all(|(k, h)| h.p.x == k as f32 && h.depth == (k % 7) as u8),
-                "{threads} threads"
-            );
         }
     }
 

@@ -81,7 +81,7 @@ const RADIUS_PROBES: usize = 256;
 
 /// Moves the volume photons out of `hits` (which keeps the surface ones) into photon records:
 /// flags 0 and the depth (a volume photon's depth 0 marks it as single scattering).
-pub(super) fn split_volume(hits: &mut Vec<PhotonHit>) -> Vec<Photon> {
+pub(super) fn split_volume(hits: &mut crate::photon::PhotonHits) -> Vec<Photon> {
     let mut volume = Vec::new();
     hits.retain(|h| {
         let v = h.flags & trace::VOLUME != 0;

@@ -5,7 +5,7 @@
 use super::{IRRADIANCE_STRIDE, RECORD_LEVELS, disc_radius2};
 use crate::math::{Color, PackedColor};
 use crate::photon::trace::{self, Watch};
-use crate::photon::{Gathered, Photon, PhotonMap};
+use crate::photon::{Gathered, Photon, PhotonHits, PhotonMap};
 use std::f32::consts::PI;
 
 /// Irradiance records at every `IRRADIANCE_STRIDE`-th global photon: a map of their positions
@@ -13,7 +13,7 @@ use std::f32::consts::PI;
 /// (facing the same way and near its tangent plane) of at most `depth - j` bounces for each
 /// level j; `None` when cancelled.
 pub(super) fn precompute_irradiance(
-    hits: &[trace::PhotonHit],
+    hits: &PhotonHits,
     map: &PhotonMap,
     k: usize,
     max_r: f32,
@@ -22,7 +22,7 @@ pub(super) fn precompute_irradiance(
 ) -> Option<(PhotonMap, Vec<[PackedColor; RECORD_LEVELS - 1]>)> {
     use rayon::prelude::*;
     let records: Vec<Photon> =
-        hits.par_iter().step_by(IRRADIANCE_STRIDE).map(|h| Photon::new(h.p, h.n, Color::ZERO, 0)).collect();
+        hits.iter().step_by(IRRADIANCE_STRIDE).map(|h| Photon::new(h.p, h.n, Color::ZERO, 0)).collect();
     let mut records = PhotonMap::build_cancellable(records, watch.cancel)?;
     // Packed (12 bytes a level): the records are RGB in either mode.
     let levels: Vec<[PackedColor; RECORD_LEVELS]> = records

@@ -23,7 +23,8 @@ use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_t
 use crate::integrator::sphere_bounds::SphereBounds;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, Vec2, Vec3};
-use crate::photon::trace::{self, PhotonHit};
+use crate::photon::PhotonHits;
+use crate::photon::trace;
 use crate::render::{RayStats, RenderSettings};
 use crate::scene::Scene;
 use crate::spectrum::Wavelengths;
@@ -40,14 +41,14 @@ const PILOT_PHOTONS: u64 = 1 << 16;
 /// One iteration's volume photons and the radius they are gathered within.
 pub(super) struct VolumePhotons {
     pub grid: PhotonGrid,
-    pub hits: Vec<PhotonHit>,
+    pub hits: PhotonHits,
     pub r: f32,
 }
 
 impl VolumePhotons {
     /// Moves the volume photons out of `hits` (which keeps the surface ones) into a grid for
     /// iteration `it` (from 0), whose radius is `r1` shrunk by Knaus and Zwicker's schedule.
-    pub fn split(hits: &mut Vec<PhotonHit>, r1: f32, alpha: f32, it: u32, origin: Vec3) -> Self {
+    pub fn split(hits: &mut PhotonHits, r1: f32, alpha: f32, it: u32, origin: Vec3) -> Self {
         let mut volume = Vec::new();
         hits.retain(|h| {
             let v = h.flags & trace::VOLUME != 0;
@@ -57,7 +58,8 @@ impl VolumePhotons {
             !v
         });
         let r = r1 * ((it + 1) as f32).powf((alpha - 1.0) / 3.0);
-        let grid = PhotonGrid::build(&volume, 2.0 * r, origin);
+        let mut volume = PhotonHits::from_vec(volume);
+        let grid = PhotonGrid::build(&mut volume, 2.0 * r, origin);
         VolumePhotons { grid, hits: volume, r }
     }
 
@@ -77,7 +79,7 @@ impl VolumePhotons {
         let bounds = SphereBounds::probe(scene, p, self.r, u);
         let mut sum = Color::ZERO;
         self.grid.for_each_within(p, self.r, |found| {
-            let ph = &self.hits[found.index as usize];
+            let ph = self.grid.photon(&self.hits, found);
             if u32::from(ph.depth) <= max_depth && bounds.keeps(ph.p) {
                 sum += ph.flux.get() * phase.p(wo, -ph.dir);
             }
@@ -97,7 +99,7 @@ pub(super) fn first_volume_radius(scene: &Scene, photons_per_iter: u64, seed: u6
     let diag = if bounds.is_empty() || !bounds.diagonal().is_finite() { 1.0 } else { bounds.diagonal() };
     let fallback = 0.01 * diag;
     let n = photons_per_iter.clamp(1, PILOT_PHOTONS);
-    let mut hits = Vec::new();
+    let mut hits = PhotonHits::default();
     let watch = trace::Watch::none();
     trace::trace_global_into(scene, n, seed, bias, trace::Store::Media, trace::PhotonColour::Rgb, watch, &mut hits);
     let bounded = !bounds.is_empty() && bounds.diagonal().is_finite();

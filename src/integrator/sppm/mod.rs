@@ -40,6 +40,7 @@ use crate::geometry::Hit;
 use crate::material::bsdf::Bsdf;
 use crate::material::bxdf::Transport;
 use crate::math::{Color, PackedColor, Vec3, luminance};
+use crate::photon::PhotonHits;
 use crate::photon::trace::{self, PhotonHit, Watch};
 use crate::render::{Driver, PassOutcome, RayStats, RenderControl, RenderOutput, RenderSettings};
 use crate::sampling::Sampler;
@@ -308,8 +309,8 @@ impl Sppm {
             pixels: vec![PixelStats::default(); n_pixels],
             wide: Vec::new(),
             points: Vec::new(),
-            hits: Vec::new(),
-            grid: PhotonGrid::build(&[], 1.0, Vec3::ZERO),
+            hits: PhotonHits::default(),
+            grid: PhotonGrid::build(&mut PhotonHits::default(), 1.0, Vec3::ZERO),
             layers: if settings.layers { vec![PixelLayers::default(); n_pixels] } else { Vec::new() },
             peak_bytes: 0,
             budget: PhotonBudget::new(&self.config),
@@ -477,10 +478,10 @@ impl Sppm {
             + state.wide.len() * std::mem::size_of::<Disc>()
             + state.layers.len() * std::mem::size_of::<PixelLayers>()
             + vps.capacity() * std::mem::size_of::<Option<VisiblePoint>>()
-            + hits.capacity() * std::mem::size_of::<PhotonHit>();
+            + hits.memory_bytes();
         let mut photon_dev = 0;
         if cell > 0.0 && !hits.is_empty() {
-            state.grid.rebuild(&hits, cell, scene.bounds().min.min(Vec3::ZERO));
+            state.grid.rebuild(&mut hits, cell, scene.bounds().min.min(Vec3::ZERO));
             let grid = &state.grid;
             bytes += grid.memory_bytes();
             let layers = optional_of(&mut state.layers, n_pixels);
@@ -642,7 +643,7 @@ struct Gathered {
 /// surfaces) within `r` and the others within `r_wide`. Every
 /// photon within a disc counts in its M (Hachisuka and Jensen 2009; pbrt-v4), whether or not
 /// the BSDF passes its light.
-fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGrid, hits: &[PhotonHit]) -> Gathered {
+fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGrid, hits: &PhotonHits) -> Gathered {
     let mut g = Gathered::default();
     let bsdf = scene.bsdf(&v.at.hit(), v.wo);
     let p = v.at.p;
@@ -691,7 +692,7 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
             let passes = c != Color::ZERO;
             grid.for_each_within(p, reach, |found| {
                 let Some(in_wide) = disc_of(&mut g, found, wide, r2) else { return };
-                let ph = &hits[found.index as usize];
+                let ph = grid.photon(hits, found);
                 let wi = -ph.dir;
                 if passes && ph.depth <= v.photon_depth && wi.dot(ng) > 0.0 && wi.dot(ns) > 0.0 {
                     add(&mut g, in_wide, c, ph);
@@ -701,7 +702,7 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
         None => {
             grid.for_each_within(p, reach, |found| {
                 let Some(in_wide) = disc_of(&mut g, found, wide, r2) else { return };
-                let ph = &hits[found.index as usize];
+                let ph = grid.photon(hits, found);
                 if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
                     return;
                 }
@@ -733,7 +734,7 @@ struct State {
     /// iterations).
     points: Vec<Option<VisiblePoint>>,
     /// This iteration's photons (a buffer kept between iterations).
-    hits: Vec<PhotonHit>,
+    hits: PhotonHits,
     grid: PhotonGrid,
     /// Per-pixel layers, empty unless asked for.
     layers: Vec<PixelLayers>,
@@ -829,19 +830,20 @@ mod tests {
         let scene = grey_quad();
         let v = centre_point(&scene);
         let hit = |p: Vec3, dir: Vec3| PhotonHit { p, dir, flux: Color::ONE.into(), flags: 0, depth: 0, n: Vec3::Z };
-        let hits = [
-            hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z), // in range, from above: lit
+        let lit = hit(Vec3::new(0.1, 0.0, 0.0), -Vec3::Z);
+        let mut hits = PhotonHits::from_vec(vec![
+            lit,                                     // in range, from above: lit
             hit(Vec3::new(0.0, -0.2, 0.0), Vec3::Z), // in range, from below: no light, counted
             hit(Vec3::new(0.0, 0.0, 0.0), Vec3::X),  // grazing: no light, counted
             hit(Vec3::new(0.6, 0.0, 0.0), -Vec3::Z), // out of range
-        ];
-        let grid = PhotonGrid::build(&hits, 0.5, Vec3::splat(-1.0));
+        ]);
+        let grid = PhotonGrid::build(&mut hits, 0.5, Vec3::splat(-1.0));
         let g = gather(&scene, &v, 0.5, 0.0, &grid, &hits);
         assert_eq!(g.m_near, 3);
         assert!((g.near.r() - 0.5 / PI).abs() < 1e-6, "{g:?}");
         // A photon of more bounces than the point allows is counted in M but brings no light.
-        let deep = [PhotonHit { depth: 3, ..hits[0] }];
-        let grid = PhotonGrid::build(&deep, 0.5, Vec3::splat(-1.0));
+        let mut deep = PhotonHits::from_vec(vec![PhotonHit { depth: 3, ..lit }]);
+        let grid = PhotonGrid::build(&mut deep, 0.5, Vec3::splat(-1.0));
         let g = gather(&scene, &VisiblePoint { photon_depth: 2, ..v }, 0.5, 0.0, &grid, &deep);
         assert_eq!((g.m_near, g.near), (1, Color::ZERO));
         let g = gather(&scene, &VisiblePoint { photon_depth: 3, ..v }, 0.5, 0.0, &grid, &deep);
@@ -860,14 +862,14 @@ mod tests {
             depth: 1,
             n: Vec3::Z,
         };
-        let hits = [
+        let mut hits = PhotonHits::from_vec(vec![
             hit(0.1, 0),                                // indirect within r: the wide disc's
             hit(0.4, 0),                                // indirect within the wide disc only
             hit(0.15, trace::CAUSTIC | trace::FOCUSED), // caustic within r: the near disc's
             hit(0.5, trace::FOCUSED),                   // focused beyond r: left out
             hit(0.7, 0),                                // beyond both
-        ];
-        let grid = PhotonGrid::build(&hits, 1.2, Vec3::splat(-1.0));
+        ]);
+        let grid = PhotonGrid::build(&mut hits, 1.2, Vec3::splat(-1.0));
         let f = 0.5 / PI;
         let g = gather(&scene, &v, 0.2, 0.6, &grid, &hits);
         // M of the near disc: every photon within r; of the wide disc: its own photons.
@@ -875,8 +877,8 @@ mod tests {
         assert!((g.near.r() - f).abs() < 1e-6 && g.near_caustic == g.near, "{g:?}");
         assert!((g.wide.r() - 2.0 * f).abs() < 1e-6, "{g:?}");
         // Light through a glossy surface only (focused, not a caustic) stays near too.
-        let glossy = [hit(0.1, trace::FOCUSED)];
-        let grid_glossy = PhotonGrid::build(&glossy, 1.2, Vec3::splat(-1.0));
+        let mut glossy = PhotonHits::from_vec(vec![hit(0.1, trace::FOCUSED)]);
+        let grid_glossy = PhotonGrid::build(&mut glossy, 1.2, Vec3::splat(-1.0));
         let g = gather(&scene, &v, 0.2, 0.6, &grid_glossy, &glossy);
         assert!((g.m_near, g.m_wide) == (1, 0) && (g.near.r() - f).abs() < 1e-6 && g.near_caustic == Color::ZERO);
         // Without a wide disc: every photon within r in the near one.
