@@ -677,6 +677,7 @@ impl RayIntegrator for PhotonIntegrator {
         let wl = c.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
         let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS).with_wavelengths(wl);
         let mut rgb = [Color::ZERO; 4];
+        let mut slot = None;
         loop {
             let direct = |hit: &Hit,
                           bsdf: &Bsdf,
@@ -692,7 +693,7 @@ impl RayIntegrator for PhotonIntegrator {
                 }
             };
             let add = |k: usize, l: Color| layers[k] += l;
-            let v = match walk.next_vertex(scene, c.max_depth, c.ray_bias, sampler, stats, add, direct) {
+            let v = match walk.next_vertex(scene, c.max_depth, c.ray_bias, sampler, stats, add, direct, &mut slot) {
                 Some(Stop::Surface(v)) => v,
                 Some(Stop::Medium(m)) => {
                     // Light scattered in a medium goes where SPPM puts it (`sppm::media`).
@@ -721,7 +722,7 @@ impl RayIntegrator for PhotonIntegrator {
                 rgb_bsdf = scene.bsdf(hit, wo);
                 (&rgb_bsdf, walk.beta_rgb())
             } else {
-                (&v.bsdf, walk.beta)
+                (v.bsdf, walk.beta)
             };
             let out = if c.spectral { &mut rgb } else { &mut layers };
             let photon_depth = trace::photon_depth_limit(c.max_depth, v.bounce).unwrap_or(0);

@@ -575,6 +575,7 @@ impl Sppm {
         let mut walk = CameraWalk::new(ray, Color::splat(weight)).with_wavelengths(wl);
         let mut ld = Color::ZERO;
         let mut ld_layers = [Color::ZERO; 4];
+        let mut bsdf = None;
         loop {
             let add = |k: usize, l: Color| {
                 ld += l;
@@ -591,7 +592,8 @@ impl Sppm {
                 let (u_pick, u) = (sampler.next_1d(), sampler.next_2d());
                 direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, wl, stats)
             };
-            let v = match walk.next_vertex(scene, config.max_depth, config.ray_bias, &mut sampler, stats, add, direct) {
+            let (max_depth, bias) = (config.max_depth, config.ray_bias);
+            let v = match walk.next_vertex(scene, max_depth, bias, &mut sampler, stats, add, direct, &mut bsdf) {
                 Some(Stop::Surface(v)) => v,
                 Some(Stop::Medium(_)) | None => break,
             };
