@@ -12,6 +12,7 @@
 
 use crate::math::Vec3;
 use glam::Vec4;
+use rayon::prelude::*;
 
 /// Entries past the points in each coordinate array, so that a bucket's last four-wide load
 /// stays within it.
@@ -31,6 +32,22 @@ pub struct HashGrid {
     ys: Vec<f32>,
     zs: Vec<f32>,
     ids: Vec<u32>,
+    /// Each point's bucket while the grid is sorted.
+    buckets: Vec<u32>,
+}
+
+/// Points below which a sort is not split between threads.
+const PART_MIN: usize = 8192;
+
+/// `v` split into consecutive runs of the given lengths (which sum to at most its length).
+fn split_runs<T>(mut v: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut runs = Vec::new();
+    for len in lengths {
+        let (run, rest) = std::mem::take(&mut v).split_at_mut(len);
+        runs.push(run);
+        v = rest;
+    }
+    runs
 }
 
 /// A point a query found: its slot (its place in the grid's order: data kept in `ids()` order
@@ -71,24 +88,37 @@ fn insert_sorted(list: &mut [u32; 8], n: usize, b: u32) {
 
 impl HashGrid {
     /// Sorts `n` points into the grid again, reusing its buffers (an iteration allocates no new
-    /// grid): `points()` gives each point's position and id, the same `n` in the same order on
-    /// each call. Cells are `cell` wide from `origin`.
+    /// grid): `points(range)` gives the positions and ids of the points in `range` of `0..n`,
+    /// the same on each call. Cells are `cell` wide from `origin`.
+    ///
+    /// A counting sort, on all threads: each point's bucket is worked out once, by runs of
+    /// points; then each thread places the points of one run of buckets, whose slots are a run
+    /// of their own, scanning the points in order. The slots are those of a sort on one thread.
     pub fn rebuild<I: Iterator<Item = (Vec3, u32)>>(
         &mut self,
         n: usize,
-        points: impl Fn() -> I,
+        points: impl Fn(std::ops::Range<usize>) -> I + Sync,
         cell: f32,
         origin: Vec3,
     ) {
         let size = n.next_power_of_two().max(1);
         let mask = size as u64 - 1;
-        // Buckets are worked out twice (to count, then to place) rather than kept: a buffer of
-        // them was a tenth of SPPM's memory.
-        let bucket = |p: Vec3| (crate::sampling::mix64(cell_key(Self::coords(p, origin, cell))) & mask) as usize;
+        let bucket = |p: Vec3| (crate::sampling::mix64(cell_key(Self::coords(p, origin, cell))) & mask) as u32;
+        let parts = rayon::current_num_threads().clamp(1, n.div_ceil(PART_MIN).max(1));
+        let run = |k: usize| n * k / parts..n * (k + 1) / parts;
+        self.buckets.clear();
+        self.buckets.resize(n, 0);
+        split_runs(&mut self.buckets, (0..parts).map(|k| run(k).len())).into_par_iter().enumerate().for_each(
+            |(k, out)| {
+                for (b, (p, _)) in out.iter_mut().zip(points(run(k))) {
+                    *b = bucket(p);
+                }
+            },
+        );
         self.starts.clear();
         self.starts.resize(size + 1, 0);
-        for (p, _) in points().take(n) {
-            self.starts[bucket(p) + 1] += 1;
+        for &b in &self.buckets {
+            self.starts[b as usize + 1] += 1;
         }
         for b in 0..size {
             self.starts[b + 1] += self.starts[b];
@@ -99,15 +129,41 @@ impl HashGrid {
         }
         self.ids.clear();
         self.ids.resize(n, 0);
+        // Part k places the buckets from edges[k], whose slots start at about k n / parts.
+        let edges: Vec<usize> =
+            (0..=parts)
+                .map(|k| {
+                    if k == parts {
+                        size
+                    } else {
+                        self.starts[..size].partition_point(|&s| (s as usize) < run(k).start)
+                    }
+                })
+                .collect();
+        let buckets_of = |k: usize| edges[k + 1] - edges[k];
+        let slots_of = |k: usize| (self.starts[edges[k + 1]] - self.starts[edges[k]]) as usize;
+        let slot_runs: Vec<usize> = (0..parts).map(slots_of).collect();
+        let (xs, ys, zs) = (
+            split_runs(&mut self.xs[..n], slot_runs.iter().copied()),
+            split_runs(&mut self.ys[..n], slot_runs.iter().copied()),
+            split_runs(&mut self.zs[..n], slot_runs.iter().copied()),
+        );
+        let ids = split_runs(&mut self.ids, slot_runs.iter().copied());
         // Each bucket's start moves up as it is filled, ending at the next bucket's start; the
         // starts are then one bucket behind, and shifting them back restores them.
-        for (p, id) in points().take(n) {
-            let b = bucket(p);
-            let k = self.starts[b] as usize;
-            (self.xs[k], self.ys[k], self.zs[k]) = (p.x, p.y, p.z);
-            self.ids[k] = id;
-            self.starts[b] += 1;
-        }
+        let cursors = split_runs(&mut self.starts[..size], (0..parts).map(buckets_of));
+        let buckets = &self.buckets;
+        let work: Vec<_> = cursors.into_iter().zip(xs).zip(ys).zip(zs).zip(ids).enumerate().collect();
+        work.into_par_iter().for_each(|(k, ((((cursors, xs), ys), zs), ids))| {
+            let (first, base) = (edges[k], cursors.first().copied().unwrap_or(0) as usize);
+            for (&b, (p, id)) in buckets.iter().zip(points(0..n)) {
+                let Some(cursor) = (b as usize).checked_sub(first).and_then(|j| cursors.get_mut(j)) else { continue };
+                let slot = *cursor as usize - base;
+                (xs[slot], ys[slot], zs[slot]) = (p.x, p.y, p.z);
+                ids[slot] = id;
+                *cursor += 1;
+            }
+        });
         self.starts.copy_within(0..size, 1);
         self.starts[0] = 0;
         (self.cell, self.origin, self.mask) = (cell, origin, mask);
@@ -120,7 +176,12 @@ impl HashGrid {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        (self.xs.capacity() + self.ys.capacity() + self.zs.capacity() + self.ids.capacity() + self.starts.capacity())
+        (self.xs.capacity()
+            + self.ys.capacity()
+            + self.zs.capacity()
+            + self.ids.capacity()
+            + self.starts.capacity()
+            + self.buckets.capacity())
             * 4
     }
 
@@ -245,6 +306,41 @@ impl HashGrid {
 mod tests {
     use super::*;
 
+    /// The sort on several threads puts every point in the slot the sort on one thread does,
+    /// with points crowded into a few cells (long buckets on either side of a part's edge) and
+    /// spread over many.
+    #[test]
+    fn threads_sort_points_into_the_same_slots() {
+        let mut rng = crate::sampling::Rng32::new(17);
+        let mut points: Vec<Vec3> =
+            (0..40_000).map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0 - 2.0).collect();
+        points.extend((0..30_000).map(|_| Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.01));
+        let numbered = |r: std::ops::Range<usize>| {
+            let first = r.start;
+            points[r].iter().enumerate().map(move |(i, &p)| (p, (first + i) as u32))
+        };
+        let sorted = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut grid = HashGrid::default();
+            pool.install(|| grid.rebuild(points.len(), numbered, 0.3, Vec3::splat(-2.0)));
+            grid
+        };
+        let one = sorted(1);
+        for threads in [2, 3, 8] {
+            let many = sorted(threads);
+            assert_eq!(many.ids(), one.ids(), "{threads} threads");
+            assert_eq!(many.starts, one.starts, "{threads} threads");
+            assert!(many.xs == one.xs && many.ys == one.ys && many.zs == one.zs, "{threads} threads");
+        }
+        // Each slot holds its own point, and each bucket's points are in point order.
+        for (slot, &id) in one.ids().iter().enumerate() {
+            assert_eq!(Vec3::new(one.xs[slot], one.ys[slot], one.zs[slot]), points[id as usize]);
+        }
+        for b in one.starts.windows(2) {
+            assert!(one.ids[b[0] as usize..b[1] as usize].is_sorted());
+        }
+    }
+
     #[test]
     fn floor_clamped_is_the_library_floor() {
         let floor = |v: f32| v.floor().clamp(-1e6, 1e6) as i32;
@@ -276,7 +372,10 @@ mod tests {
         for (cell, r) in [(0.6, 0.3), (0.3, 0.3), (0.05, 0.3)] {
             let mut grid = HashGrid::default();
             // Ids other than the index, to tell them from slots.
-            let numbered = || points.iter().enumerate().map(|(i, &p)| (p, 3 * i as u32 + 1));
+            let numbered = |r: std::ops::Range<usize>| {
+                let first = r.start;
+                points[r].iter().enumerate().map(move |(i, &p)| (p, 3 * (first + i) as u32 + 1))
+            };
             grid.rebuild(points.len(), numbered, cell, Vec3::splat(-2.0));
             for q in 0..300 {
                 let p = if q % 2 == 0 {

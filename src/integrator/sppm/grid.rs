@@ -37,13 +37,15 @@ impl PhotonGrid {
     /// new grid).
     pub(super) fn rebuild(&mut self, hits: &mut PhotonHits, cell: f32, origin: Vec3) {
         let ids = hits.ids();
-        let points = || {
-            hits.chunks().iter().enumerate().flat_map(move |(c, chunk)| {
+        let hits = &*hits;
+        let points = |r: std::ops::Range<usize>| {
+            let all = hits.chunks().iter().enumerate().flat_map(move |(c, chunk)| {
                 chunk.iter().enumerate().map(move |(k, h)| {
                     let focused = if h.flags & crate::photon::trace::FOCUSED != 0 { FOCUSED_BIT } else { 0 };
                     (h.p, ids.id(c, k) | focused)
                 })
-            })
+            });
+            all.skip(r.start).take(r.len())
         };
         self.grid.rebuild(hits.len(), points, cell, origin);
         self.ids = ids;

@@ -314,7 +314,7 @@ impl LightPaths {
         self.merged.clear();
         self.merged.extend((0..vertices.len() as u32).filter(|&i| vertices[i as usize].reach() != Reach::Direct));
         let merged = &self.merged;
-        let points = || merged.iter().map(|&i| (vertices[i as usize].hit.p, i));
+        let points = |r: std::ops::Range<usize>| merged[r].iter().map(|&i| (vertices[i as usize].hit.p, i));
         self.grid.rebuild(merged.len(), points, 2.0 * radius, origin);
         self.merges.clear();
         self.merges.extend(self.grid.ids().iter().map(|&i| MergeVertex::of(&vertices[i as usize])));
