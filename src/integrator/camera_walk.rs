@@ -143,8 +143,10 @@ impl CameraWalk {
     }
 
     /// The walk in spectral mode at wavelengths `wl` (see the module docs); `None` keeps RGB.
-    pub fn with_wavelengths(self, wl: Option<Wavelengths>) -> Self {
-        CameraWalk { wl, ..self }
+    #[inline]
+    pub fn with_wavelengths(mut self, wl: Option<Wavelengths>) -> Self {
+        self.wl = wl;
+        self
     }
 
     /// The path's wavelengths (spectral mode) or `None` (RGB).
@@ -181,8 +183,10 @@ impl CameraWalk {
 
     /// The walk marching through homogeneous media with `steps` vertices per segment (see the
     /// module docs; 0 takes free flights).
-    pub fn with_march(self, steps: u32) -> Self {
-        CameraWalk { march_steps: steps, ..self }
+    #[inline]
+    pub fn with_march(mut self, steps: u32) -> Self {
+        self.march_steps = steps;
+        self
     }
 
     /// Step `i` of marching the segment of the current ray through homogeneous medium `m` up to

@@ -141,9 +141,11 @@ impl Sppm {
         (x, y): (u32, u32),
         it: u32,
         volume: &VolumePhotons,
+        point: &mut Option<VisiblePoint>,
         stats: &mut RayStats,
     ) -> CameraSample {
         let config = &self.config;
+        *point = None;
         let bias = config.ray_bias;
         let (mut sampler, mut ray, weight) = settings.camera_sample(scene, x, y, it);
         // In spectral mode the wavelengths take the first dimension after the camera's, as in
@@ -254,15 +256,15 @@ impl Sppm {
                     Some(wl) => wl.throughput_to_srgb(beta),
                     None => beta,
                 };
-                let point = VisiblePoint {
+                *point = Some(VisiblePoint {
                     at: Shading::of(&hit),
                     wo,
                     beta: (beta / q).into(),
                     layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,
-                };
+                });
                 let (ld, ld_layers) = to_rgb(wl.as_ref(), ld, ld_layers, rgb);
-                return CameraSample { ld, ld_layers, point: Some((point, dist)) };
+                return CameraSample { ld, ld_layers, dist: Some(dist) };
             }
             if last {
                 break;
@@ -280,7 +282,7 @@ impl Sppm {
             ray.medium = medium;
         }
         let (ld, ld_layers) = to_rgb(wl.as_ref(), ld, ld_layers, rgb);
-        CameraSample { ld, ld_layers, point: None }
+        CameraSample { ld, ld_layers, dist: None }
     }
 }
 

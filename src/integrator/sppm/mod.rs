@@ -264,13 +264,14 @@ impl Shading {
     }
 }
 
-/// What one iteration's camera sample of a pixel found.
+/// What one iteration's camera sample of a pixel found, besides its visible point (written
+/// straight into the pixel's slot: moved out through a return value, it was copied twice).
 struct CameraSample {
     /// Emitted and directly sampled light, in all and by layer.
     ld: Color,
     ld_layers: Layers,
-    /// The visible point, and its distance from the camera (for a pixel's first radius).
-    point: Option<(VisiblePoint, f32)>,
+    /// With a visible point, its distance from the camera (for a pixel's first radius).
+    dist: Option<f32>,
 }
 
 impl Sppm {
@@ -416,8 +417,8 @@ impl Sppm {
                 let mut stats = RayStats::default();
                 let xy = (k as u32 % w, k as u32 / w);
                 let sample = match &volume {
-                    None => self.camera_sample(scene, settings, xy, it, &mut stats),
-                    Some(v) => self.camera_sample_media(scene, settings, xy, it, v, &mut stats),
+                    None => self.camera_sample(scene, settings, xy, it, point, &mut stats),
+                    Some(v) => self.camera_sample_media(scene, settings, xy, it, v, point, &mut stats),
                 };
                 let mut nonfinite = 0u64;
                 let mut dev = 0;
@@ -434,12 +435,11 @@ impl Sppm {
                 } else {
                     nonfinite = 1;
                 }
-                if let Some((_, dist)) = sample.point
+                if let Some(dist) = sample.dist
                     && px.near.r == 0.0
                 {
                     px.near.r = config.initial_radius.unwrap_or_else(|| initial_radius(scene, dist, diag));
                 }
-                *point = sample.point.map(|(v, _)| v);
                 (stats, nonfinite, dev, u64::from(point.is_some()))
             })
             .reduce(
@@ -565,9 +565,11 @@ impl Sppm {
         settings: &RenderSettings,
         (x, y): (u32, u32),
         it: u32,
+        point: &mut Option<VisiblePoint>,
         stats: &mut RayStats,
     ) -> CameraSample {
         let config = &self.config;
+        *point = None;
         let (mut sampler, ray, weight) = settings.camera_sample(scene, x, y, it);
         // The filter weight scales everything this sample finds (pbrt-v4's SPPM does the same).
         // In spectral mode the wavelengths take the first dimension after the camera's.
@@ -610,19 +612,16 @@ impl Sppm {
             let photon_depth = trace::photon_depth_limit(config.max_depth, v.bounce).unwrap_or(0);
             // The photons' light is RGB: the camera path's filter weights it as a colour.
             let (ld, ld_layers) = (walk.to_rgb(ld), ld_layers.map(|l| walk.to_rgb(l)));
-            let point = Some((
-                VisiblePoint {
-                    at: Shading::of(&v.hit),
-                    wo: v.wo,
-                    beta: (walk.beta_rgb() / q).into(),
-                    layer: walk.layer,
-                    photon_depth: photon_depth.min(u8::MAX.into()) as u8,
-                },
-                walk.dist,
-            ));
-            return CameraSample { ld, ld_layers, point };
+            *point = Some(VisiblePoint {
+                at: Shading::of(&v.hit),
+                wo: v.wo,
+                beta: (walk.beta_rgb() / q).into(),
+                layer: walk.layer,
+                photon_depth: photon_depth.min(u8::MAX.into()) as u8,
+            });
+            return CameraSample { ld, ld_layers, dist: Some(walk.dist) };
         }
-        CameraSample { ld: walk.to_rgb(ld), ld_layers: ld_layers.map(|l| walk.to_rgb(l)), point: None }
+        CameraSample { ld: walk.to_rgb(ld), ld_layers: ld_layers.map(|l| walk.to_rgb(l)), dist: None }
     }
 }
 
