@@ -134,6 +134,7 @@ fn percentile(values: &mut [f32], q: f64) -> f32 {
 
 impl Sppm {
     /// `camera_sample` in a scene with media: see the module's notes.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn camera_sample_media(
         &self,
         scene: &Scene,
