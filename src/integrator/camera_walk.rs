@@ -91,12 +91,12 @@ pub struct MediumVertex {
     pub marching: bool,
 }
 
-/// A surface the walk stopped at, whose light the integrator estimates. Its BSDF stays in the
-/// slot the caller gave `next_vertex`: a BSDF holds its lobes (hundreds of bytes), and
-/// returning it by value copied it three to five times per camera path (`memcpy` was 4% of
-/// SPPM's time).
+/// A surface the walk stopped at, whose light the integrator estimates. Its hit and BSDF stay
+/// in the `VertexSlot` the caller gave `next_vertex`: a BSDF holds its lobes (hundreds of
+/// bytes), and returning it by value copied it three to five times per camera path (`memcpy`
+/// was 4% of SPPM's time); the hit's copies stalled on the stores that had just written it.
 pub struct WalkVertex<'v, 's> {
-    pub hit: Hit,
+    pub hit: &'v Hit,
     pub bsdf: &'v Bsdf<'s>,
     /// Towards the viewer.
     pub wo: Vec3,
@@ -106,9 +106,16 @@ pub struct WalkVertex<'v, 's> {
     pub last: bool,
 }
 
-/// Where `at_surface` stopped: a `WalkVertex` but for its BSDF, which is in the caller's slot.
+/// Where a camera walk keeps the surface it stopped at (see `WalkVertex`); one per walk, kept
+/// by the caller.
+#[derive(Default)]
+pub struct VertexSlot<'s> {
+    hit: Option<Hit>,
+    bsdf: Option<Bsdf<'s>>,
+}
+
+/// Where `at_surface` stopped: a `WalkVertex` but for its hit and BSDF, which are in the slot.
 struct SurfaceStop {
-    hit: Hit,
     wo: Vec3,
     bounce: u32,
     last: bool,
@@ -116,10 +123,10 @@ struct SurfaceStop {
 
 impl SurfaceStop {
     #[inline(always)]
-    fn with<'v, 's>(self, slot: &'v Option<Bsdf<'s>>) -> WalkVertex<'v, 's> {
-        let SurfaceStop { hit, wo, bounce, last } = self;
-        // `at_surface` made the BSDF in the slot before stopping.
-        let Some(bsdf) = slot else { unreachable!("a surface stop without its BSDF") };
+    fn with<'v, 's>(self, slot: &'v VertexSlot<'s>) -> WalkVertex<'v, 's> {
+        let SurfaceStop { wo, bounce, last } = self;
+        // `at_surface` put both in the slot before stopping.
+        let (Some(hit), Some(bsdf)) = (&slot.hit, &slot.bsdf) else { unreachable!("a surface stop without its hit") };
         WalkVertex { hit, bsdf, wo, bounce, last }
     }
 }
@@ -233,7 +240,7 @@ impl CameraWalk {
     /// `add(layer, light)`, and so does `direct(hit, bsdf, wo, medium, sampler, stats)` times
     /// the throughput at every surface with a non-delta part (`medium` the one the walk arrived
     /// in). `None` when the path ends first. The BSDF of each surface met is made in `slot`,
-    /// where a surface vertex's stays.
+    /// where a surface vertex's stays with its hit.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub fn next_vertex<'v, 's>(
@@ -245,7 +252,7 @@ impl CameraWalk {
         stats: &mut RayStats,
         mut add: impl FnMut(usize, Color),
         mut direct: impl FnMut(&Hit, &Bsdf, Vec3, u32, Option<&Wavelengths>, &mut Sampler, &mut RayStats) -> Color,
-        slot: &'v mut Option<Bsdf<'s>>,
+        slot: &'v mut VertexSlot<'s>,
     ) -> Option<Stop<'v, 's>> {
         loop {
             if let Some((hit, u, i)) = self.march.take() {
@@ -336,7 +343,7 @@ impl CameraWalk {
         stats: &mut RayStats,
         add: &mut impl FnMut(usize, Color),
         direct: &mut impl FnMut(&Hit, &Bsdf, Vec3, u32, Option<&Wavelengths>, &mut Sampler, &mut RayStats) -> Color,
-        slot: &mut Option<Bsdf<'s>>,
+        slot: &mut VertexSlot<'s>,
     ) -> Option<Option<SurfaceStop>> {
         self.dist += hit.t;
         let wo = -self.ray.d;
@@ -350,7 +357,7 @@ impl CameraWalk {
                 return Some(None);
             }
         }
-        let bsdf = &*slot.insert(scene.bsdf_for(&hit, wo, self.wl.as_mut(), &mut self.beta));
+        let bsdf = &*slot.bsdf.insert(scene.bsdf_for(&hit, wo, self.wl.as_mut(), &mut self.beta));
         if scene.has_media() && bsdf.is_invisible() {
             // A medium's boundary: straight on, into the medium beyond, not a bounce.
             self.spawn(scene, &hit, self.ray.d, bias);
@@ -388,7 +395,8 @@ impl CameraWalk {
             self.spawn(scene, &hit, s.wi, bias);
             return None;
         }
-        Some(Some(SurfaceStop { hit, wo, bounce: depth + 1, last }))
+        slot.hit = Some(hit);
+        Some(Some(SurfaceStop { wo, bounce: depth + 1, last }))
     }
 
     /// The medium the walk is in (`NO_MEDIUM` for vacuum).

@@ -26,7 +26,7 @@
 //! path counts only photons of at most `max_depth - b` bounces, so every light path keeps to
 //! the limit the path tracer keeps to (`trace::photon_depth_limit`).
 
-use super::camera_walk::{CameraWalk, Stop};
+use super::camera_walk::{CameraWalk, Stop, VertexSlot};
 use super::lighting::EveryLight;
 use crate::film::Layers;
 use crate::geometry::{Hit, Ray};
@@ -677,7 +677,7 @@ impl RayIntegrator for PhotonIntegrator {
         let wl = c.spectral.then(|| Wavelengths::sample(sampler.next_1d()));
         let mut walk = CameraWalk::new(ray, Color::ONE).with_march(media::MARCH_STEPS).with_wavelengths(wl);
         let mut rgb = [Color::ZERO; 4];
-        let mut slot = None;
+        let mut slot = VertexSlot::default();
         loop {
             let direct = |hit: &Hit,
                           bsdf: &Bsdf,
@@ -714,7 +714,7 @@ impl RayIntegrator for PhotonIntegrator {
                 }
                 None => break,
             };
-            let (hit, wo, layer) = (&v.hit, v.wo, walk.layer);
+            let (hit, wo, layer) = (v.hit, v.wo, walk.layer);
             // The estimates read the RGB BSDF and weight by the path's filter as a colour; in RGB
             // mode these are the vertex's BSDF and the throughput themselves.
             let rgb_bsdf;

@@ -32,7 +32,7 @@ mod budget;
 mod grid;
 mod media;
 
-use super::camera_walk::{CameraWalk, Stop};
+use super::camera_walk::{CameraWalk, Stop, VertexSlot};
 use super::layers::LayerPath;
 use super::lighting::direct_light;
 use crate::film::{Film, Image, Layers};
@@ -577,7 +577,7 @@ impl Sppm {
         let mut walk = CameraWalk::new(ray, Color::splat(weight)).with_wavelengths(wl);
         let mut ld = Color::ZERO;
         let mut ld_layers = [Color::ZERO; 4];
-        let mut bsdf = None;
+        let mut slot = VertexSlot::default();
         loop {
             let add = |k: usize, l: Color| {
                 ld += l;
@@ -595,7 +595,7 @@ impl Sppm {
                 direct_light(scene, hit, bsdf, wo, u_pick, u, config.ray_bias, false, wl, stats)
             };
             let (max_depth, bias) = (config.max_depth, config.ray_bias);
-            let v = match walk.next_vertex(scene, max_depth, bias, &mut sampler, stats, add, direct, &mut bsdf) {
+            let v = match walk.next_vertex(scene, max_depth, bias, &mut sampler, stats, add, direct, &mut slot) {
                 Some(Stop::Surface(v)) => v,
                 Some(Stop::Medium(_)) | None => break,
             };
@@ -604,7 +604,7 @@ impl Sppm {
             if choice >= q {
                 let sample = v.bsdf.sample_delta(v.wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance);
                 let Some(s) = sample else { break };
-                walk.follow_delta(scene, &v.hit, &s, config.ray_bias);
+                walk.follow_delta(scene, v.hit, &s, config.ray_bias);
                 walk.beta /= 1.0 - q;
                 continue;
             }
@@ -613,7 +613,7 @@ impl Sppm {
             // The photons' light is RGB: the camera path's filter weights it as a colour.
             let (ld, ld_layers) = (walk.to_rgb(ld), ld_layers.map(|l| walk.to_rgb(l)));
             *point = Some(VisiblePoint {
-                at: Shading::of(&v.hit),
+                at: Shading::of(v.hit),
                 wo: v.wo,
                 beta: (walk.beta_rgb() / q).into(),
                 layer: walk.layer,
