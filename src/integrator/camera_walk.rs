@@ -268,7 +268,7 @@ impl CameraWalk {
                     return None;
                 }
                 if let Some(stop) =
-                    self.at_surface(scene, hit, max_depth, bias, sampler, stats, &mut add, &mut direct, slot)
+                    self.at_surface(scene, &hit, max_depth, bias, sampler, stats, &mut add, &mut direct, slot)
                 {
                     return stop.map(|s| Stop::Surface(s.with(slot)));
                 }
@@ -315,7 +315,8 @@ impl CameraWalk {
                     return None;
                 }
             }
-            let Some(hit) = hit else {
+            // Read where the intersection wrote it (a copy stalled on those stores).
+            let Some(hit) = &hit else {
                 if !self.lit_by_light_sample {
                     add(self.layer.emitted(), self.beta * scene.environment_in(self.ray.d, self.wl.as_ref()));
                 }
@@ -336,7 +337,7 @@ impl CameraWalk {
     fn at_surface<'s>(
         &mut self,
         scene: &'s Scene,
-        hit: Hit,
+        hit: &Hit,
         max_depth: u32,
         bias: f32,
         sampler: &mut Sampler,
@@ -349,18 +350,18 @@ impl CameraWalk {
         let wo = -self.ray.d;
         if hit.is_emitter() {
             if hit.is_front(self.ray.d) && !self.lit_by_light_sample {
-                let le = scene.emission_in(scene.emitted(&hit, wo), hit.light, self.wl.as_ref());
+                let le = scene.emission_in(scene.emitted(hit, wo), hit.light, self.wl.as_ref());
                 add(self.layer.emitted(), self.beta * le);
             }
             // A reflecting emitter (one with a BSDF) also reflects.
-            if scene.bsdf(&hit, wo).is_black() {
+            if scene.bsdf(hit, wo).is_black() {
                 return Some(None);
             }
         }
-        let bsdf = &*slot.bsdf.insert(scene.bsdf_for(&hit, wo, self.wl.as_mut(), &mut self.beta));
+        let bsdf = &*slot.bsdf.insert(scene.bsdf_for(hit, wo, self.wl.as_mut(), &mut self.beta));
         if scene.has_media() && bsdf.is_invisible() {
             // A medium's boundary: straight on, into the medium beyond, not a bounce.
-            self.spawn(scene, &hit, self.ray.d, bias);
+            self.spawn(scene, hit, self.ray.d, bias);
             return None;
         }
         // This surface is bounce depth + 1: lit only within the depth limit.
@@ -377,10 +378,10 @@ impl CameraWalk {
             let Some(s) = bsdf.sample(wo, sampler.next_1d(), sampler.next_2d(), Transport::Radiance) else {
                 return Some(None);
             };
-            self.follow_delta(scene, &hit, &s, bias);
+            self.follow_delta(scene, hit, &s, bias);
             return None;
         }
-        let l = direct(&hit, bsdf, wo, self.ray.medium, self.wl.as_ref(), sampler, stats);
+        let l = direct(hit, bsdf, wo, self.ray.medium, self.wl.as_ref(), sampler, stats);
         add(self.layer.direct(), self.beta * l);
         if bsdf.is_glossy_only() && !last {
             // Ray-traced glossy reflection: one sampled direction carries the rest.
@@ -392,10 +393,10 @@ impl CameraWalk {
             self.layer.bounce(delta);
             self.lit_by_light_sample = !delta;
             self.glossy_prefix |= !delta;
-            self.spawn(scene, &hit, s.wi, bias);
+            self.spawn(scene, hit, s.wi, bias);
             return None;
         }
-        slot.hit = Some(hit);
+        slot.hit = Some(*hit);
         Some(Some(SurfaceStop { wo, bounce: depth + 1, last }))
     }
 

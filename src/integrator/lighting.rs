@@ -212,13 +212,13 @@ pub fn transmittance_through_media(
                 return tr;
             }
         }
-        let Some(h) = hit else { return tr };
-        let pass = scene.materials.transparency(&h, h.is_front(-wi));
+        let Some(h) = &hit else { return tr };
+        let pass = scene.materials.transparency(h, h.is_front(-wi));
         if !(pass > 0.0) {
             return Color::ZERO;
         }
         tr *= pass;
-        let next = scene.medium_after(&h, wi, ray.medium);
+        let next = scene.medium_after(h, wi, ray.medium);
         ray = h.spawn(wi, bias);
         ray.medium = next;
     }

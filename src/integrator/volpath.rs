@@ -158,12 +158,12 @@ impl RayIntegrator for VolPathTracer {
                 layers[layer.emitted()] += beta * scene.emission_in(le, li, wl.as_ref()) * w;
             }
             // The ray leaves the scene.
-            let Some(hit) = hit else { break };
+            let Some(hit) = &hit else { break };
             let wo = -ray.d;
-            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
+            let bsdf = scene.bsdf_for(hit, wo, wl.as_mut(), &mut beta);
             if bsdf.is_invisible() {
                 // A medium's boundary: straight on, into the medium beyond, not a bounce.
-                let medium = scene.medium_after(&hit, ray.d, ray.medium);
+                let medium = scene.medium_after(hit, ray.d, ray.medium);
                 ray = hit.spawn(ray.d, self.ray_bias);
                 ray.medium = medium;
                 continue;
@@ -186,7 +186,7 @@ impl RayIntegrator for VolPathTracer {
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, dist| {
                             if has_media {
-                                let medium = scene.medium_after(&hit, wi, ray.medium);
+                                let medium = scene.medium_after(hit, wi, ray.medium);
                                 let tr = transmittance_through_media(
                                     scene,
                                     hit.origin(),
@@ -211,7 +211,7 @@ impl RayIntegrator for VolPathTracer {
             let u = sampler.next_2d();
             let Some(s) = bsdf.sample(wo, uc, u, Transport::Radiance) else { break };
             beta *= s.weight;
-            let medium = scene.medium_after(&hit, s.wi, ray.medium);
+            let medium = scene.medium_after(hit, s.wi, ray.medium);
             if s.flags.is_null() {
                 // A mask's transparent part: passed like a null boundary.
                 ray = hit.spawn(s.wi, self.ray_bias);

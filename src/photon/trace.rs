@@ -443,9 +443,10 @@ pub fn trace_photon(
                 return;
             }
         }
-        let Some(hit) = hit else { return };
+        // Read where the intersection wrote it (a copy stalled on those stores).
+        let Some(hit) = &hit else { return };
         let wo = -ray.d;
-        let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut flux);
+        let bsdf = scene.bsdf_for(hit, wo, wl.as_mut(), &mut flux);
         // Plain emitters absorb; a reflecting emitter (one with a BSDF) scatters like any surface.
         if bsdf.is_black() {
             return;
@@ -501,7 +502,7 @@ pub fn trace_photon(
             }
         }
         flux = scattered;
-        let medium = scene.medium_after(&hit, wi, ray.medium);
+        let medium = scene.medium_after(hit, wi, ray.medium);
         ray = hit.spawn(wi, bias);
         ray.medium = medium;
     }

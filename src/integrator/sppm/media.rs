@@ -191,18 +191,18 @@ impl Sppm {
                     break;
                 }
             }
-            let Some(hit) = hit else {
+            let Some(hit) = &hit else {
                 add(layer.emitted(), beta * scene.environment_in(ray.d, wl.as_ref()));
                 break;
             };
             dist += hit.t;
             let wo = -ray.d;
             if hit.is_emitter() && hit.is_front(ray.d) {
-                add(layer.emitted(), beta * scene.emission_in(scene.emitted(&hit, wo), hit.light, wl.as_ref()));
+                add(layer.emitted(), beta * scene.emission_in(scene.emitted(hit, wo), hit.light, wl.as_ref()));
             }
-            let bsdf = scene.bsdf_for(&hit, wo, wl.as_mut(), &mut beta);
+            let bsdf = scene.bsdf_for(hit, wo, wl.as_mut(), &mut beta);
             if bsdf.is_invisible() {
-                let medium = scene.medium_after(&hit, ray.d, ray.medium);
+                let medium = scene.medium_after(hit, ray.d, ray.medium);
                 ray = hit.spawn(ray.d, bias);
                 ray.medium = medium;
                 continue;
@@ -224,7 +224,7 @@ impl Sppm {
                         wl.as_ref(),
                         |wi, mis| bsdf_scatter(&bsdf, wo, wi, mis),
                         |wi, d| {
-                            let m = scene.medium_after(&hit, wi, ray.medium);
+                            let m = scene.medium_after(hit, wi, ray.medium);
                             let w = wl.as_ref();
                             let tr = transmittance_through_media(
                                 scene,
@@ -258,7 +258,7 @@ impl Sppm {
                     None => beta,
                 };
                 *point = Some(VisiblePoint {
-                    at: Shading::of(&hit),
+                    at: Shading::of(hit),
                     wo,
                     beta: (beta / q).into(),
                     layer,
@@ -274,7 +274,7 @@ impl Sppm {
                 break;
             };
             beta *= s.weight / (1.0 - q);
-            let medium = scene.medium_after(&hit, s.wi, ray.medium);
+            let medium = scene.medium_after(hit, s.wi, ray.medium);
             if !s.flags.is_null() {
                 depth += 1;
                 layer.bounce(true);
