@@ -16,7 +16,7 @@
 //! light from the lights: direct in-scattering comes from them, not from light samples.
 
 use super::grid::PhotonGrid;
-use super::{CameraSample, Shading, Sppm, VisiblePoint};
+use super::{CameraSample, PointSurface, Shading, Sppm, VisiblePoint};
 use crate::geometry::NO_MEDIUM;
 use crate::integrator::layers::LayerPath;
 use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_through_media};
@@ -258,8 +258,7 @@ impl Sppm {
                     None => beta,
                 };
                 *point = Some(VisiblePoint {
-                    at: Shading::of(hit),
-                    wo,
+                    surface: PointSurface::General { at: Shading::of(hit), wo },
                     beta: (beta / q).into(),
                     layer,
                     photon_depth: photon_depth.min(u8::MAX.into()) as u8,

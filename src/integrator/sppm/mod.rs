@@ -216,12 +216,10 @@ struct PixelLayers {
 /// A camera path's first non-specular hit. It keeps the hit, not its BSDF: the BSDF is made
 /// again from the hit when the pixel gathers (the same BSDF, once per pixel and iteration), as a
 /// BSDF with its lobes inline is three times the size of the hit and a point per pixel is most of
-/// SPPM's memory.
+/// SPPM's memory. A Lambertian surface keeps what the gather reads of its BSDF instead.
 #[derive(Clone, Copy)]
 struct VisiblePoint {
-    /// What the BSDF is made from (`Shading::hit`).
-    at: Shading,
-    wo: Vec3,
+    surface: PointSurface,
     /// The throughput as RGB (in spectral mode too: `CameraWalk::beta_rgb`).
     beta: PackedColor,
     /// The layers of the light gathered there.
@@ -229,6 +227,31 @@ struct VisiblePoint {
     /// Most scattering events a photon gathered there may have had, so that whole paths keep
     /// to the depth limit (`trace::photon_depth_limit`).
     photon_depth: u8,
+}
+
+/// What the gather reads of a visible point's surface.
+#[derive(Clone, Copy)]
+enum PointSurface {
+    /// One Lambertian lobe seen from above both its normals (RGB mode): the BSDF's value, the
+    /// same for every direction above, and its shading and geometric normals, taken from the
+    /// camera path's BSDF, so that the gather makes none (making it was a tenth of the gather).
+    Lambert { p: Vec3, ns: Vec3, ng: Vec3, f: Color },
+    /// Any other surface: what its BSDF is made from again (`Shading::hit`) and the direction
+    /// towards the viewer.
+    General { at: Shading, wo: Vec3 },
+}
+
+impl PointSurface {
+    /// The surface at `hit` of BSDF `bsdf` (made for the viewer at `wo`); `rgb` when that is
+    /// the BSDF the gather would make (not a spectral path's lifted one).
+    fn of(hit: &Hit, bsdf: &Bsdf, wo: Vec3, rgb: bool) -> Self {
+        let (ns, ng) = (bsdf.normal(), bsdf.geometric_normal());
+        if rgb && bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0 {
+            PointSurface::Lambert { p: hit.p, ns, ng, f: bsdf.f(wo, ns, Transport::Radiance) }
+        } else {
+            PointSurface::General { at: Shading::of(hit), wo }
+        }
+    }
 }
 
 /// The part of a hit its BSDF is made from: a hit without its distance, error bound and light.
@@ -613,8 +636,7 @@ impl Sppm {
             // The photons' light is RGB: the camera path's filter weights it as a colour.
             let (ld, ld_layers) = (walk.to_rgb(ld), ld_layers.map(|l| walk.to_rgb(l)));
             *point = Some(VisiblePoint {
-                at: Shading::of(v.hit),
-                wo: v.wo,
+                surface: PointSurface::of(v.hit, v.bsdf, v.wo, !config.spectral),
                 beta: (walk.beta_rgb() / q).into(),
                 layer: walk.layer,
                 photon_depth: photon_depth.min(u8::MAX.into()) as u8,
@@ -646,14 +668,19 @@ struct Gathered {
 /// the BSDF passes its light.
 fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGrid, hits: &PhotonHits) -> Gathered {
     let mut g = Gathered::default();
-    let bsdf = scene.bsdf(&v.at.hit(), v.wo);
-    let p = v.at.p;
-    // Photons from behind pass only through a transmitting surface (rough glass).
-    let both_sides = bsdf.flags().is_transmission();
-    let (ns, ng) = (bsdf.normal(), bsdf.geometric_normal());
     // A Lambertian BSDF's value is the same for every direction above the surface: worked out
     // once (the same value `f` gives each photon), not per photon.
-    let constant = (bsdf.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| bsdf.f(v.wo, ns, Transport::Radiance));
+    let made;
+    let (p, ns, ng, constant, general) = match &v.surface {
+        PointSurface::Lambert { p, ns, ng, f } => (*p, *ns, *ng, Some(*f), None),
+        PointSurface::General { at, wo } => {
+            made = scene.bsdf(&at.hit(), *wo);
+            let (ns, ng) = (made.normal(), made.geometric_normal());
+            let constant =
+                (made.lambert_albedo().is_some() && ns.dot(ng) > 0.0).then(|| made.f(*wo, ns, Transport::Radiance));
+            (at.p, ns, ng, constant, Some((&made, *wo)))
+        }
+    };
     let wide = r_wide > 0.0;
     let r2 = r * r;
     let reach = if wide { r_wide.max(r) } else { r };
@@ -701,13 +728,16 @@ fn gather(scene: &Scene, v: &VisiblePoint, r: f32, r_wide: f32, grid: &PhotonGri
             });
         }
         None => {
+            let Some((bsdf, wo)) = general else { unreachable!("a Lambertian point has its constant") };
+            // Photons from behind pass only through a transmitting surface (rough glass).
+            let both_sides = bsdf.flags().is_transmission();
             grid.for_each_within(p, reach, |found| {
                 let Some(in_wide) = disc_of(&mut g, found, wide, r2) else { return };
                 let ph = grid.photon(hits, found);
                 if (!both_sides && ph.dir.dot(ns) >= 0.0) || ph.depth > v.photon_depth {
                     return;
                 }
-                let f = bsdf.f(v.wo, -ph.dir, Transport::Radiance);
+                let f = bsdf.f(wo, -ph.dir, Transport::Radiance);
                 if f != Color::ZERO {
                     add(&mut g, in_wide, f, ph);
                 }
@@ -818,8 +848,7 @@ mod tests {
     fn centre_point(scene: &Scene) -> VisiblePoint {
         let hit = scene.intersect(&crate::geometry::Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z), f32::INFINITY);
         VisiblePoint {
-            at: Shading::of(&hit.unwrap()),
-            wo: Vec3::Z,
+            surface: PointSurface::General { at: Shading::of(&hit.unwrap()), wo: Vec3::Z },
             beta: Color::ONE.into(),
             layer: LayerPath::CAMERA,
             photon_depth: trace::MAX_PHOTON_DEPTH as u8,
@@ -842,6 +871,12 @@ mod tests {
         let g = gather(&scene, &v, 0.5, 0.0, &grid, &hits);
         assert_eq!(g.m_near, 3);
         assert!((g.near.r() - 0.5 / PI).abs() < 1e-6, "{g:?}");
+        // Kept as a Lambertian surface (what the gather reads of the camera path's BSDF), the
+        // point gathers the same, bit for bit.
+        let PointSurface::General { at, wo } = v.surface else { unreachable!() };
+        let surface = PointSurface::of(&at.hit(), &scene.bsdf(&at.hit(), wo), wo, true);
+        assert!(matches!(surface, PointSurface::Lambert { .. }));
+        assert_eq!(gather(&scene, &VisiblePoint { surface, ..v }, 0.5, 0.0, &grid, &hits), g);
         // A photon of more bounces than the point allows is counted in M but brings no light.
         let mut deep = PhotonHits::from_vec(vec![PhotonHit { depth: 3, ..lit }]);
         let grid = PhotonGrid::build(&mut deep, 0.5, Vec3::splat(-1.0));
