@@ -165,17 +165,7 @@ impl Bvh {
             return p.intersect(&self.shapes, ray, &shear, &mut closest).map(|(i, h)| (i as u32, h));
         }
         let mut best = None;
-        if let Some(flat) = &self.flat {
-            scan(flat, ray, &mut closest, |i, closest| {
-                if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
-                    *closest = h.t;
-                    best = Some((i, h));
-                }
-                false
-            });
-            return best.map(|(i, h)| (i as u32, h));
-        }
-        let leaf = |first: usize, count: usize, closest: &mut f32| {
+        let mut leaf = |first: usize, count: usize, closest: &mut f32| {
             for i in first..first + count {
                 if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
                     *closest = h.t;
@@ -184,7 +174,11 @@ impl Bvh {
             }
             false
         };
-        traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
+        if let Some(flat) = &self.flat {
+            scan(flat, ray, &mut closest, |i, closest| leaf(i, 1, closest));
+        } else {
+            traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
+        }
         best.map(|(i, h)| (i as u32, h))
     }
 
@@ -259,7 +253,7 @@ impl Bvh {
             return p.occluded(&self.shapes, ray, &shear, t_max);
         }
         if let Some(flat) = &self.flat {
-            return scan(flat, ray, &mut t, |i, t| self.shapes[i].intersect(ray, &shear, *t).is_some());
+            return scan(flat, ray, &mut t, |i, t| leaf(i, 1, t));
         }
         traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }

@@ -16,7 +16,8 @@
 //! light from the lights: direct in-scattering comes from them, not from light samples.
 
 use super::grid::PhotonGrid;
-use super::{CameraSample, PointSurface, Shading, Sppm, VisiblePoint};
+use super::point::{PointSurface, Shading, VisiblePoint};
+use super::{CameraSample, Sppm};
 use crate::geometry::NO_MEDIUM;
 use crate::integrator::layers::LayerPath;
 use crate::integrator::lighting::{bsdf_scatter, light_sample_at, transmittance_through_media};
