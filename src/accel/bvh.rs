@@ -9,9 +9,9 @@
 
 use super::build::{BuildPrim, build_wide};
 use super::packet::Packets;
-use super::wide::{WideNode, flat_nodes, scan, traverse};
+use super::wide::{SCAN_MAX, WideNode, flat_nodes, scan, traverse};
 use crate::geometry::{Aabb, Ray};
-use crate::shape::{CompactShape, PrimHit, Primitives, RayShear, SurfacePoint, TriangleMesh};
+use crate::shape::{CompactShape, PrimHit, Primitives, RayShear, SurfacePoint, TriangleMesh, intersect_quad};
 use rayon::prelude::*;
 
 /// Up to this many primitives every ray tests them all: no box test beats a handful of shape
@@ -27,6 +27,7 @@ const LINEAR_MAX: usize = 8;
 /// render 1.13x as fast, with 1% more instructions (BENCHMARKS.md, issue 29). A mesh of
 /// 328 triangles ran 2.3x slower this way; 15-35 primitives in open scenes ran as fast.
 const FLAT_MAX: usize = 32;
+const _: () = assert!(FLAT_MAX <= SCAN_MAX);
 
 pub struct Bvh {
     nodes: Vec<WideNode>,
@@ -165,18 +166,24 @@ impl Bvh {
             return p.intersect(&self.shapes, ray, &shear, &mut closest).map(|(i, h)| (i as u32, h));
         }
         let mut best = None;
-        let mut leaf = |first: usize, count: usize, closest: &mut f32| {
-            for i in first..first + count {
-                if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
+        if let Some(flat) = &self.flat {
+            scan(flat, ray, &mut closest, |i, closest| {
+                if let Some(h) = self.flat_intersect(i, ray, &shear, *closest) {
                     *closest = h.t;
                     best = Some((i, h));
                 }
-            }
-            false
-        };
-        if let Some(flat) = &self.flat {
-            scan(flat, ray, &mut closest, |i, closest| leaf(i, 1, closest));
+                false
+            });
         } else {
+            let leaf = |first: usize, count: usize, closest: &mut f32| {
+                for i in first..first + count {
+                    if let Some(h) = self.shapes[i].intersect(ray, &shear, *closest) {
+                        *closest = h.t;
+                        best = Some((i, h));
+                    }
+                }
+                false
+            };
             traverse::<true>(&self.nodes, self.depth, ray, &mut closest, leaf);
         }
         best.map(|(i, h)| (i as u32, h))
@@ -237,6 +244,17 @@ impl Bvh {
         Some(!stopped)
     }
 
+    /// Primitive `i`'s test in a flat scan. A room is mostly quads: their test is made in the
+    /// scan's loop and the other shapes' out of line, so the loop holds no call for a quad
+    /// (a call makes the loop save and reload its vector registers).
+    #[inline(always)]
+    fn flat_intersect(&self, i: usize, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
+        match &self.shapes[i] {
+            CompactShape::Quad([p0, e1, e2]) => intersect_quad(*p0, *e1, *e2, ray, t_max),
+            other => intersect_other(other, ray, shear, t_max),
+        }
+    }
+
     /// True when anything is hit in (0, t_max). Stops at the first hit found.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
@@ -253,8 +271,14 @@ impl Bvh {
             return p.occluded(&self.shapes, ray, &shear, t_max);
         }
         if let Some(flat) = &self.flat {
-            return scan(flat, ray, &mut t, |i, t| leaf(i, 1, t));
+            return scan(flat, ray, &mut t, |i, t| self.flat_intersect(i, ray, &shear, *t).is_some());
         }
         traverse::<false>(&self.nodes, self.depth, ray, &mut t, leaf)
     }
+}
+
+/// `CompactShape::intersect` out of line (`Bvh::flat_intersect`).
+#[inline(never)]
+fn intersect_other(shape: &CompactShape, ray: &Ray, shear: &RayShear, t_max: f32) -> Option<PrimHit> {
+    shape.intersect(ray, shear, t_max)
 }
