@@ -29,7 +29,7 @@ pub const MAX_CROSSINGS: usize = 64;
 /// along the first ray; scenes whose crossings cannot be enumerated that way (instances,
 /// cylinders) walk them one closest hit at a time, passing as many.
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 pub fn transmittance(
     scene: &Scene,
     from: RayOrigin,
@@ -38,9 +38,9 @@ pub fn transmittance(
     bias: f32,
     see_through: bool,
     stats: &mut RayStats,
-    mut pass: impl FnMut(u32, &Crossing) -> f32,
+    pass: impl FnMut(u32, &Crossing) -> f32,
 ) -> f32 {
-    let mut ray = from.spawn(wi, bias);
+    let ray = from.spawn(wi, bias);
     // Stop just short of the light so a light's own surface does not shadow it.
     let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
     let target = from.p + wi * dist;
@@ -49,6 +49,24 @@ pub fn transmittance(
     if !see_through {
         return if scene.occluded(&ray, t_max(&ray)) { 0.0 } else { 1.0 };
     }
+    transmittance_through(scene, ray, target, dist, wi, bias, stats, pass)
+}
+
+/// `transmittance` through surfaces that pass light, from its first ray on: out of line, so
+/// the usual shadow ray (one occlusion test) is made in the caller, without a call.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn transmittance_through(
+    scene: &Scene,
+    mut ray: crate::geometry::Ray,
+    target: Vec3,
+    dist: f32,
+    wi: Vec3,
+    bias: f32,
+    stats: &mut RayStats,
+    mut pass: impl FnMut(u32, &Crossing) -> f32,
+) -> f32 {
+    let t_max = |ray: &crate::geometry::Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
     let mut through = 1.0f32;
     let tm = t_max(&ray);
     if !(tm > 0.0) {
@@ -91,7 +109,7 @@ pub fn mask_transparency(scene: &Scene, crossing: &Crossing, wi: Vec3) -> f32 {
 }
 
 /// The transmittance a physical integrator's shadow ray sees: through masks' transparent parts.
-#[inline]
+#[inline(always)]
 pub fn visibility(scene: &Scene, from: RayOrigin, wi: Vec3, dist: f32, bias: f32, stats: &mut RayStats) -> f32 {
     transmittance(scene, from, wi, dist, bias, scene.materials.has_masks, stats, |_, c| mask_transparency(scene, c, wi))
 }
