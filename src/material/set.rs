@@ -379,10 +379,17 @@ impl Materials {
 }
 
 /// The shading frame for `lobes`: isotropic lobes need only the normal (a frame from it alone
-/// saves the Gram-Schmidt step and a sphere's dp/du); anisotropic ones follow dp/du.
-#[inline]
+/// saves the Gram-Schmidt step and a sphere's dp/du); anisotropic ones follow dp/du. The usual
+/// case is made in the caller: a frame returned from a call is written to memory in pieces and
+/// read back whole, and the read waits for the writes.
+#[inline(always)]
 fn frame_for(h: &Hit, lobes: &Lobes) -> Frame {
-    if lobes.is_isotropic() { Frame::from_z(h.ns) } else { h.shading_frame() }
+    if lobes.is_isotropic() { Frame::from_z(h.ns) } else { anisotropic_frame(h) }
+}
+
+#[inline(never)]
+fn anisotropic_frame(h: &Hit) -> Frame {
+    h.shading_frame()
 }
 
 /// The frame of `base` tilted to the local normal `n_local`, as Mitsuba 3 builds it: a normal
