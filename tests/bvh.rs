@@ -99,6 +99,17 @@ fn small_scenes_match_brute_force() {
             let got = bvh.intersect(&ray, f32::INFINITY).map(|(i, h)| (h.t, bvh.material_light(i).0));
             assert_eq!(got, best, "{n} primitives, ray {ray:?}");
             assert_eq!(bvh.occluded(&ray, f32::INFINITY), best.is_some(), "{n} primitives");
+            // A finite end, which prunes boxes entered beyond it (the flat scan's second pass).
+            let t_max = 6.0 * rng.uniform();
+            let mut within: Option<(f32, u32)> = None;
+            for p in &prims {
+                if let Some(h) = p.shape.intersect(&ray, &shear, within.map_or(t_max, |b| b.0)) {
+                    within = Some((h.t, p.material));
+                }
+            }
+            let got = bvh.intersect(&ray, t_max).map(|(i, h)| (h.t, bvh.material_light(i).0));
+            assert_eq!(got, within, "{n} primitives, t_max {t_max}, ray {ray:?}");
+            assert_eq!(bvh.occluded(&ray, t_max), within.is_some(), "{n} primitives, t_max {t_max}");
             let mut seen = Vec::new();
             let all = bvh.for_each_crossing(&ray, f32::INFINITY, |i, _| {
                 seen.push(bvh.material_light(i).0);
