@@ -41,7 +41,8 @@ pub fn transmittance(
     mut pass: impl FnMut(u32, &Crossing) -> f32,
 ) -> f32 {
     let mut ray = from.spawn(wi, bias);
-    // Stop just short of the light so a light's own surface does not shadow it.
+    // Stop just short of the light so a light's own surface does not shadow it. (`visibility`
+    // makes the same first ray and end for its usual case: keep the two alike.)
     let dist = if dist.is_finite() { dist * (1.0 - 1e-4) } else { dist };
     let target = from.p + wi * dist;
     let t_max = |ray: &crate::geometry::Ray| if dist.is_finite() { (target - ray.o).dot(wi) } else { f32::INFINITY };
@@ -407,5 +408,39 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
         let r = a / b;
         let r2 = r * r;
         r2 / (1.0 + r2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::Options;
+    use crate::sampling::Rng32;
+
+    /// `visibility`'s usual shadow ray (a scene without masks) is `transmittance`'s first ray and
+    /// occlusion test, made again for speed: the two agree bit for bit, rays counted alike.
+    #[test]
+    fn visibility_without_masks_is_transmittance() {
+        let text = include_str!("../../scenes/11-cornell-area.toml");
+        let mut desc = crate::scene::load_scene_str(text, "box.toml", std::path::Path::new(".")).unwrap();
+        desc.apply(&Options::default());
+        let scene = desc.build().unwrap().scene;
+        assert!(!scene.materials.has_masks);
+        let mut rng = Rng32::new(5);
+        let (mut blocked, mut open) = (0, 0);
+        for k in 0..20_000 {
+            let p = Vec3::new(rng.uniform() * 5.56, rng.uniform() * 5.49, rng.uniform() * 5.59);
+            let ng = Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5).normalize();
+            let from = RayOrigin { p, p_error: Vec3::splat(1e-5), ng };
+            let wi = Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5).normalize();
+            let dist = if k % 10 == 0 { f32::INFINITY } else { 6.0 * rng.uniform() };
+            let (mut a, mut b) = (RayStats::default(), RayStats::default());
+            let v = visibility(&scene, from, wi, dist, 1e-4, &mut a);
+            let t = transmittance(&scene, from, wi, dist, 1e-4, false, &mut b, |_, _| 1.0);
+            assert_eq!(v.to_bits(), t.to_bits(), "from {from:?} along {wi:?}, {dist}");
+            assert_eq!((a.rays, a.shadow_rays), (b.rays, b.shadow_rays));
+            if v == 0.0 { blocked += 1 } else { open += 1 }
+        }
+        assert!(blocked > 1000 && open > 1000, "blocked {blocked}, open {open}");
     }
 }
