@@ -414,17 +414,13 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::options::Options;
     use crate::sampling::Rng32;
 
     /// `visibility`'s usual shadow ray (a scene without masks) is `transmittance`'s first ray and
     /// occlusion test, made again for speed: the two agree bit for bit, rays counted alike.
     #[test]
     fn visibility_without_masks_is_transmittance() {
-        let text = include_str!("../../scenes/11-cornell-area.toml");
-        let mut desc = crate::scene::load_scene_str(text, "box.toml", std::path::Path::new(".")).unwrap();
-        desc.apply(&Options::default());
-        let scene = desc.build().unwrap().scene;
+        let scene = crate::scene::test_scenes::from_toml(include_str!("../../scenes/11-cornell-area.toml"));
         assert!(!scene.materials.has_masks);
         let mut rng = Rng32::new(5);
         let (mut blocked, mut open) = (0, 0);

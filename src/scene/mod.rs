@@ -11,6 +11,8 @@ pub mod error;
 pub mod footprint;
 pub mod mitsuba;
 pub mod native;
+#[cfg(test)]
+pub(crate) mod test_scenes;
 pub mod volume_file;
 
 pub use desc::{BuiltScene, LoadOptions, SceneDescription};

@@ -8,36 +8,12 @@ use crate::material::bxdf::Transport;
 use crate::math::Vec3;
 use crate::sampling::chi2::{Chi2Config, chi2_directions};
 use crate::scene::Scene;
+use crate::scene::test_scenes::quad_of;
 use crate::spectrum::Wavelengths;
 
 /// Where the tests' ray meets the quad.
 fn hit_of(scene: &Scene) -> crate::geometry::Hit {
     scene.intersect(&Ray::new(Vec3::new(0.1, 0.05, 1.0), -Vec3::Z), f32::INFINITY).unwrap()
-}
-
-/// A scene of one quad of material `material` (TOML) in the plane z = 0, facing +z.
-fn quad_of(material: &str) -> Scene {
-    let text = format!(
-        r#"
-[camera]
-eye = [0, 0, 3]
-look_at = [0, 0, 0]
-[materials.m]
-{material}
-[[lights]]
-type = "point"
-position = [0, 0, 2]
-[[objects]]
-type = "quad"
-corner = [-1, -1, 0]
-edge1 = [2, 0, 0]
-edge2 = [0, 2, 0]
-material = "m"
-"#
-    );
-    let mut desc = crate::scene::load_scene_str(&text, "quad.toml", std::path::Path::new(".")).unwrap();
-    desc.apply(&crate::options::Options::default());
-    desc.build().unwrap().scene
 }
 
 #[test]

@@ -201,27 +201,7 @@ mod tests {
 
     /// A scene of one grey (albedo 0.5) quad in the plane z = 0, facing +z.
     fn grey_quad() -> Scene {
-        let text = r#"
-            [camera]
-            eye = [0, 0, 3]
-            look_at = [0, 0, 0]
-            [materials.grey]
-            type = "diffuse"
-            color = [0.5, 0.5, 0.5]
-            kd = 1
-            [[lights]]
-            type = "point"
-            position = [0, 0, 2]
-            [[objects]]
-            type = "quad"
-            corner = [-1, -1, 0]
-            edge1 = [2, 0, 0]
-            edge2 = [0, 2, 0]
-            material = "grey"
-        "#;
-        let mut desc = crate::scene::load_scene_str(text, "quad.toml", std::path::Path::new(".")).unwrap();
-        desc.apply(&crate::options::Options::default());
-        desc.build().unwrap().scene
+        crate::scene::test_scenes::quad_of("type = \"diffuse\"\ncolor = [0.5, 0.5, 0.5]\nkd = 1")
     }
 
     /// The visible point at the quad's centre, seen from straight above.
