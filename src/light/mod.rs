@@ -397,7 +397,11 @@ impl Light {
         if s.n.dot(-wi) <= 0.0 {
             return None;
         }
-        let radiance = radiance * self.texture_factor(s.uv, -wi, textures);
+        // An untextured light (the usual kind) needs no call to learn its factor is 1.
+        let radiance = match self {
+            Light::Area { texture: None, .. } => radiance,
+            _ => radiance * self.texture_factor(s.uv, -wi, textures),
+        };
         Some(LightSample { wi, dist, radiance, pdf, delta: false })
     }
 
