@@ -49,7 +49,8 @@ struct RayLanes {
 
 impl RayLanes {
     fn new(rays: &[Ray]) -> Self {
-        let mut r = RayLanes { o: [[0.0; LANES]; 3], d: [[0.0; LANES]; 3], t: [f32::INFINITY; LANES], quad: [u32::MAX; LANES] };
+        let mut r =
+            RayLanes { o: [[0.0; LANES]; 3], d: [[0.0; LANES]; 3], t: [f32::INFINITY; LANES], quad: [u32::MAX; LANES] };
         for (l, ray) in rays.iter().enumerate() {
             for a in 0..3 {
                 r.o[a][l] = ray.o[a];
@@ -77,13 +78,7 @@ fn closest_in_lanes(quads: &[LaneQuad], r: &mut RayLanes) {
             let qz = (o[2] + d[2] * t) - p0z;
             let u = (c0 * (qy * e2z - e2y * qz) + c1 * (qz * e2x - e2z * qx) + c2 * (qx * e2y - e2x * qy)) * q.inv;
             let v = (c0 * (e1y * qz - qy * e1z) + c1 * (e1z * qx - qz * e1x) + c2 * (e1x * qy - qx * e1y)) * q.inv;
-            let hit = (denom != 0.0)
-                & (t > 0.0)
-                & (t < r.t[l])
-                & (0.0 <= u)
-                & (u <= 1.0)
-                & (0.0 <= v)
-                & (v <= 1.0);
+            let hit = (denom != 0.0) & (t > 0.0) & (t < r.t[l]) & (0.0..=1.0).contains(&u) & (0.0..=1.0).contains(&v);
             r.t[l] = if hit { t } else { r.t[l] };
             r.quad[l] = if hit { qi as u32 } else { r.quad[l] };
         }
@@ -108,7 +103,8 @@ fn trace_lanes(
     t: &mut [f32],
     quad: &mut [u32],
 ) {
-    for ((chunk, t), quad) in rays.chunks_exact(LANES).zip(t.chunks_exact_mut(LANES)).zip(quad.chunks_exact_mut(LANES)) {
+    for ((chunk, t), quad) in rays.chunks_exact(LANES).zip(t.chunks_exact_mut(LANES)).zip(quad.chunks_exact_mut(LANES))
+    {
         let mut r = RayLanes::new(chunk);
         kernel(quads, &mut r);
         t.copy_from_slice(&r.t);
@@ -132,7 +128,13 @@ fn main() {
         .map(|i| match bvh.prims().get(i, &scene.meshes).shape {
             Shape::Quad(q) => {
                 let c = q.e1.cross(q.e2);
-                LaneQuad { p0: q.p0.into(), e1: q.e1.into(), e2: q.e2.into(), c: c.into(), inv: 1.0 / c.length_squared() }
+                LaneQuad {
+                    p0: q.p0.into(),
+                    e1: q.e1.into(),
+                    e2: q.e2.into(),
+                    c: c.into(),
+                    inv: 1.0 / c.length_squared(),
+                }
             }
             _ => panic!("the Cornell box is made of quads"),
         })
@@ -160,7 +162,12 @@ fn main() {
     for (k, ray) in rays.iter().enumerate() {
         let (i, ht) = bvh.intersect_tree(ray, f32::INFINITY).map_or((u32::MAX, f32::INFINITY), |(i, h)| (i, h.t));
         if (i, ht.to_bits()) != (quad[k], t[k].to_bits()) {
-            assert!((ht - t[k]).abs() <= 1e-6 * ht.max(1.0), "ray {k}: lanes found quad {} at {}, the scan {i} at {ht}", quad[k], t[k]);
+            assert!(
+                (ht - t[k]).abs() <= 1e-6 * ht.max(1.0),
+                "ray {k}: lanes found quad {} at {}, the scan {i} at {ht}",
+                quad[k],
+                t[k]
+            );
             near_ties += 1;
         }
     }
@@ -193,7 +200,11 @@ fn main() {
         let mut found = vec![0u32; rays.len()];
         // SAFETY: the processor has AVX2.
         unsafe { rows_avx2(&rows, &rays, &mut found) };
-        let differ = rays.iter().zip(&found).filter(|(r, f)| bvh.intersect_tree(r, f32::INFINITY).map_or(u32::MAX, |h| h.0) != **f).count();
+        let differ = rays
+            .iter()
+            .zip(&found)
+            .filter(|(r, f)| bvh.intersect_tree(r, f32::INFINITY).map_or(u32::MAX, |h| h.0) != **f)
+            .count();
         assert!(differ == near_ties, "eight quads at a time: {differ} closest hits differ from the scan's");
         // SAFETY: as above.
         let across = best_of(&mut || unsafe { rows_avx2(&rows, black_box(&rays), &mut found) });
@@ -246,7 +257,8 @@ fn closest_of_row(rows: &QuadRows, ray: &Ray) -> (u32, f32) {
             let qz = (o.z + d.z * t) - p0z;
             let u = (c0 * (qy * e2z - e2y * qz) + c1 * (qz * e2x - e2z * qx) + c2 * (qx * e2y - e2x * qy)) * inv;
             let v = (c0 * (e1y * qz - qy * e1z) + c1 * (e1z * qx - qz * e1x) + c2 * (e1x * qy - qx * e1y)) * inv;
-            let hit = (denom != 0.0) & (t > 0.0) & (t < best_t[l]) & (0.0 <= u) & (u <= 1.0) & (0.0 <= v) & (v <= 1.0);
+            let hit =
+                (denom != 0.0) & (t > 0.0) & (t < best_t[l]) & (0.0..=1.0).contains(&u) & (0.0..=1.0).contains(&v);
             best_t[l] = if hit { t } else { best_t[l] };
             best_i[l] = if hit { (ri * LANES + l) as u32 } else { best_i[l] };
         }
